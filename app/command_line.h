@@ -1,0 +1,26 @@
+#pragma once
+// Shared pieces of the `voxmorph` subcommands: registration, progress on
+// stderr, JSON output.
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <string>
+
+namespace vox::app {
+
+// Each subcommand adds itself to the application (one file per command).
+void addInfoCommand(CLI::App& app);
+void addSynthCommand(CLI::App& app);
+
+// Prints progress of long operations on stderr ("stage: 42%"), rewriting the
+// line on a terminal and printing every 10% otherwise.
+void installStderrProgress(bool quiet);
+
+// Writes `json` (indented) atomically to `path`, or to stdout for "-".
+void writeJson(const std::string& path, const nlohmann::json& json);
+
+// Human-readable number with thousands separators: 7161276 -> "7,161,276".
+std::string withThousands(std::uint64_t n);
+
+}  // namespace vox::app

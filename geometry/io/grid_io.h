@@ -1,0 +1,63 @@
+#pragma once
+// Label grid formats: NIfTI-1 (.nii, .nii.gz), MetaImage (.mha, .mhd + raw,
+// optionally zlib-compressed), NRRD (.nrrd, .nhdr; raw or gzip), INR (.inr,
+// .inr.gz). Format is chosen by extension.
+//
+// Readers accept integer voxel types (and float types holding integers) and
+// widen to uint16; anything else is an InputError naming the file and the
+// fault. Writers are atomic (AtomicFile) and store uint8 when every label fits,
+// uint16 otherwise.
+
+#include "geometry/label_grid.h"
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+namespace vox {
+
+enum class GridFormat { Nifti, MetaImage, Nrrd, Inr };
+
+// Throws InputError(path, "unknown grid format ...") for other extensions.
+GridFormat gridFormatFromPath(const std::string& path);
+bool hasGridExtension(const std::string& path);
+
+LabelGrid readGrid(const std::string& path);
+void writeGrid(const std::string& path, const LabelGrid& grid);
+
+// Per-format entry points (what readGrid / writeGrid dispatch to).
+LabelGrid readNifti(const std::string& path);
+void writeNifti(const std::string& path, const LabelGrid& grid);
+LabelGrid readMetaImage(const std::string& path);
+void writeMetaImage(const std::string& path, const LabelGrid& grid);
+LabelGrid readNrrd(const std::string& path);
+void writeNrrd(const std::string& path, const LabelGrid& grid);
+LabelGrid readInr(const std::string& path);
+void writeInr(const std::string& path, const LabelGrid& grid);
+
+// Streaming access by whole z-slices, for grids that do not fit in memory.
+// Slices must be requested in non-decreasing order for compressed files.
+class GridSliceReader {
+public:
+  virtual ~GridSliceReader() = default;
+  virtual const GridGeometry& geometry() const = 0;
+  // Reads `count` slices starting at slice k0 into out (count * nx * ny labels).
+  virtual void readSlices(std::int64_t k0, std::int64_t count, Label* out) = 0;
+};
+// Supported for NIfTI (.nii, .nii.gz) and MetaImage with raw data.
+std::unique_ptr<GridSliceReader> openGridSlices(const std::string& path);
+
+// Writes a grid slice by slice to a temporary file; commit() renames it into
+// place once every slice was written. Destroying it without commit() removes
+// the temporary.
+class GridSliceWriter {
+public:
+  virtual ~GridSliceWriter() = default;
+  virtual void writeSlices(const Label* in, std::int64_t count) = 0;
+  virtual void commit() = 0;
+};
+// Supported for NIfTI (.nii, .nii.gz, gzip streamed) and MetaImage (.mha/.mhd
+// + .raw). `maxLabel` decides the stored type (uint8 when <= 255).
+std::unique_ptr<GridSliceWriter> createGridSlices(const std::string& path, const GridGeometry& geometry, Label maxLabel);
+
+}  // namespace vox

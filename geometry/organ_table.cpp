@@ -1,0 +1,94 @@
+#include "geometry/organ_table.h"
+
+#include "geometry/error.h"
+#include "geometry/io/atomic_file.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+namespace vox {
+
+namespace {
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return s;
+}
+}  // namespace
+
+OrganTable OrganTable::read(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "cannot open organ table");
+  OrganTable table;
+  std::string line;
+  int lineNo = 0;
+  while (std::getline(in, line)) {
+    ++lineNo;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    std::istringstream ss(line);
+    std::vector<std::string> tok;
+    for (std::string t; ss >> t;) tok.push_back(t);
+    if (tok.empty() || !std::all_of(tok[0].begin(), tok[0].end(), [](unsigned char c) { return std::isdigit(c); })) continue;
+    const std::string where = "line " + std::to_string(lineNo);
+    if (tok.size() < 4) throw InputError(path, where + ": expected 'ID name tissue density'");
+    Organ o;
+    try {
+      std::size_t used = 0;
+      const long id = std::stol(tok[0]);
+      o.tissue = std::stoi(tok[tok.size() - 2], &used);
+      if (used != tok[tok.size() - 2].size()) throw std::invalid_argument("tissue");
+      o.density = std::stod(tok.back(), &used);
+      if (used != tok.back().size()) throw std::invalid_argument("density");
+      if (id < 1 || id > 65535) throw InputError(path, where + ": organ ID " + tok[0] + " is outside 1..65535");
+      o.id = int(id);
+    } catch (const std::logic_error&) {
+      throw InputError(path, where + ": expected 'ID name tissue density'");
+    }
+    if (!std::isfinite(o.density) || o.density <= 0.0) throw InputError(path, where + ": density must be positive");
+    for (std::size_t t = 1; t + 2 < tok.size(); ++t) o.name += (t > 1 ? " " : "") + tok[t];
+    if (table.organs_.count(o.id)) throw InputError(path, where + ": duplicate organ ID " + std::to_string(o.id));
+    table.organs_[o.id] = std::move(o);
+  }
+  if (in.bad()) throw InputError(path, "read error");
+  if (table.organs_.empty()) throw InputError(path, "no organ lines found (expected 'ID name tissue density')");
+  return table;
+}
+
+const Organ* OrganTable::find(int id) const {
+  const auto it = organs_.find(id);
+  return it == organs_.end() ? nullptr : &it->second;
+}
+
+double OrganTable::mass(int id, std::uint64_t voxels, double voxelVolumeMm3) const {
+  const Organ* o = find(id);
+  // mm^3 -> cm^3 is 1e-3; density in g/cm^3.
+  return o ? double(voxels) * voxelVolumeMm3 * 1e-3 * o->density : 0.0;
+}
+
+std::vector<int> OrganTable::idsMatching(const std::vector<std::string>& substrings) const {
+  std::vector<int> ids;
+  for (const auto& [id, o] : organs_) {
+    const std::string n = lower(o.name);
+    for (const auto& s : substrings)
+      if (n.find(lower(s)) != std::string::npos) {
+        ids.push_back(id);
+        break;
+      }
+  }
+  return ids;
+}
+
+void OrganTable::write(const std::string& path) const {
+  std::string out = "Organ table\n\nOrgan Organ                                          Tissue Density\nID                                                   number\n";
+  char line[256];
+  for (const auto& [id, o] : organs_) {
+    std::snprintf(line, sizeof line, "%-5d %-48s %5d %8.3f\n", id, o.name.c_str(), o.tissue, o.density);
+    out += line;
+  }
+  writeFileAtomic(path, out);
+}
+
+}  // namespace vox

@@ -1,0 +1,37 @@
+#include "geometry/progress.h"
+
+#include <mutex>
+
+namespace vox {
+
+namespace {
+std::mutex gMutex;
+ProgressSink gSink;
+}  // namespace
+
+void setProgressSink(ProgressSink sink) {
+  std::lock_guard lock(gMutex);
+  gSink = std::move(sink);
+}
+
+void reportProgress(std::string_view stage, double fraction) {
+  std::lock_guard lock(gMutex);
+  if (gSink) gSink(stage, fraction);
+}
+
+ProgressCounter::ProgressCounter(std::string_view stage, double total) : stage_(stage), total_(total > 0 ? total : 1.0) {
+  reportProgress(stage_, 0.0);
+}
+
+void ProgressCounter::advance(double units) {
+  done_ += units;
+  const int percent = int(100.0 * done_ / total_);
+  if (percent != lastPercent_ && percent < 100) {
+    lastPercent_ = percent;
+    reportProgress(stage_, done_ / total_);
+  }
+}
+
+void ProgressCounter::finish() { reportProgress(stage_, 1.0); }
+
+}  // namespace vox

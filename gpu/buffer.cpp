@@ -1,0 +1,108 @@
+#include "gpu/buffer.h"
+
+#include "geometry/error.h"
+#include "gpu/command.h"
+#include "gpu/vk_check.h"
+
+#include <cstring>
+#include <utility>
+
+namespace vox::gpu {
+
+Buffer::Buffer(Context& context, std::uint64_t bytes, MemoryIntent intent, VkBufferUsageFlags extraUsage)
+    : context_(&context), size_(bytes) {
+  if (bytes == 0) throw RuntimeFailure("GPU buffer of zero bytes requested");
+  if (bytes > context.info().maxAllocationSize)
+    throw RuntimeFailure("GPU buffer of " + std::to_string(bytes) + " bytes exceeds the device's allocation limit of " +
+                         std::to_string(context.info().maxAllocationSize) + " bytes");
+  VkDevice dev = context.device();
+  VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+  bci.size = bytes;
+  bci.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT | extraUsage;
+  bci.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  VOX_VK(vkCreateBuffer(dev, &bci, nullptr, &buffer_));
+  try {
+    VkMemoryRequirements req;
+    vkGetBufferMemoryRequirements(dev, buffer_, &req);
+    std::uint32_t type = 0;
+    const VkMemoryPropertyFlags hostBits = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+    switch (intent) {
+      case MemoryIntent::Device: type = context.findMemoryType(req.memoryTypeBits, 0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT); break;
+      case MemoryIntent::Upload: type = context.findMemoryType(req.memoryTypeBits, hostBits); break;
+      case MemoryIntent::Readback: type = context.findMemoryType(req.memoryTypeBits, hostBits, VK_MEMORY_PROPERTY_HOST_CACHED_BIT); break;
+    }
+    VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+    mai.allocationSize = req.size;
+    mai.memoryTypeIndex = type;
+    VOX_VK(vkAllocateMemory(dev, &mai, nullptr, &memory_));
+    VOX_VK(vkBindBufferMemory(dev, buffer_, memory_, 0));
+    if ((context.memoryTypeFlags(type) & hostBits) == hostBits) VOX_VK(vkMapMemory(dev, memory_, 0, VK_WHOLE_SIZE, 0, &mapped_));
+  } catch (...) {
+    release();
+    throw;
+  }
+}
+
+Buffer::~Buffer() { release(); }
+
+void Buffer::release() {
+  if (!context_) return;
+  VkDevice dev = context_->device();
+  if (mapped_) vkUnmapMemory(dev, memory_);
+  if (buffer_) vkDestroyBuffer(dev, buffer_, nullptr);
+  if (memory_) vkFreeMemory(dev, memory_, nullptr);
+  mapped_ = nullptr;
+  buffer_ = VK_NULL_HANDLE;
+  memory_ = VK_NULL_HANDLE;
+  context_ = nullptr;
+  size_ = 0;
+}
+
+Buffer::Buffer(Buffer&& o) noexcept
+    : context_(std::exchange(o.context_, nullptr)),
+      buffer_(std::exchange(o.buffer_, VK_NULL_HANDLE)),
+      memory_(std::exchange(o.memory_, VK_NULL_HANDLE)),
+      size_(std::exchange(o.size_, 0)),
+      mapped_(std::exchange(o.mapped_, nullptr)) {}
+
+Buffer& Buffer::operator=(Buffer&& o) noexcept {
+  if (this != &o) {
+    release();
+    context_ = std::exchange(o.context_, nullptr);
+    buffer_ = std::exchange(o.buffer_, VK_NULL_HANDLE);
+    memory_ = std::exchange(o.memory_, VK_NULL_HANDLE);
+    size_ = std::exchange(o.size_, 0);
+    mapped_ = std::exchange(o.mapped_, nullptr);
+  }
+  return *this;
+}
+
+void Buffer::upload(const void* src, std::uint64_t bytes, std::uint64_t offset) {
+  if (bytes == 0) return;
+  if (offset + bytes > size_) throw RuntimeFailure("GPU buffer upload out of range");
+  if (mapped_) {
+    std::memcpy(static_cast<char*>(mapped_) + offset, src, bytes);
+    return;
+  }
+  Buffer staging(*context_, bytes, MemoryIntent::Upload);
+  std::memcpy(staging.mapped(), src, bytes);
+  CommandBatch batch(*context_);
+  batch.copy(staging, *this, bytes, 0, offset);
+  batch.submitAndWait();
+}
+
+void Buffer::download(void* dst, std::uint64_t bytes, std::uint64_t offset) const {
+  if (bytes == 0) return;
+  if (offset + bytes > size_) throw RuntimeFailure("GPU buffer download out of range");
+  if (mapped_) {
+    std::memcpy(dst, static_cast<const char*>(mapped_) + offset, bytes);
+    return;
+  }
+  Buffer staging(*context_, bytes, MemoryIntent::Readback);
+  CommandBatch batch(*context_);
+  batch.copy(*this, staging, bytes, offset, 0);
+  batch.submitAndWait();
+  std::memcpy(dst, staging.mapped(), bytes);
+}
+
+}  // namespace vox::gpu

@@ -1,0 +1,48 @@
+#pragma once
+// Device buffers with a memory intent. Every buffer can be bound as a storage
+// buffer and used as a transfer source and destination.
+
+#include "gpu/context.h"
+
+#include <cstdint>
+
+namespace vox::gpu {
+
+enum class MemoryIntent {
+  Device,    // fastest for the GPU; host access goes through a staging copy
+  Upload,    // host-visible, written by the CPU, read by the GPU
+  Readback,  // host-visible and cached, written by the GPU, read by the CPU
+};
+
+class Buffer {
+public:
+  Buffer() = default;
+  // Throws RuntimeFailure when `bytes` exceeds the device's allocation limit.
+  Buffer(Context& context, std::uint64_t bytes, MemoryIntent intent, VkBufferUsageFlags extraUsage = 0);
+  ~Buffer();
+  Buffer(Buffer&& other) noexcept;
+  Buffer& operator=(Buffer&& other) noexcept;
+  Buffer(const Buffer&) = delete;
+  Buffer& operator=(const Buffer&) = delete;
+
+  std::uint64_t size() const { return size_; }
+  VkBuffer handle() const { return buffer_; }
+  bool valid() const { return buffer_ != VK_NULL_HANDLE; }
+  // Host pointer when the memory is host visible, else nullptr.
+  void* mapped() const { return mapped_; }
+
+  // Host <-> buffer copies; staged through a temporary buffer when the memory
+  // is not host visible. Must not overlap GPU work that uses the same range.
+  void upload(const void* src, std::uint64_t bytes, std::uint64_t offset = 0);
+  void download(void* dst, std::uint64_t bytes, std::uint64_t offset = 0) const;
+
+private:
+  void release();
+  Context* context_ = nullptr;
+  VkBuffer buffer_ = VK_NULL_HANDLE;
+  VkDeviceMemory memory_ = VK_NULL_HANDLE;
+  std::uint64_t size_ = 0;
+  void* mapped_ = nullptr;
+};
+
+}  // namespace vox::gpu

@@ -1,0 +1,83 @@
+#pragma once
+// CommandBatch: records compute dispatches, copies and timestamps into one
+// command buffer, submits it and waits. Reusable after submitAndWait().
+
+#include "gpu/buffer.h"
+#include "gpu/context.h"
+#include "gpu/image.h"
+#include "gpu/pipeline.h"
+
+#include <cstdint>
+#include <initializer_list>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace vox::gpu {
+
+// One descriptor of a dispatch, in binding order.
+struct Binding {
+  const Buffer* buffer = nullptr;
+  std::uint64_t offset = 0;
+  std::uint64_t range = VK_WHOLE_SIZE;
+  const Image3D* image = nullptr;
+
+  static Binding storage(const Buffer& b, std::uint64_t offset = 0, std::uint64_t range = VK_WHOLE_SIZE) {
+    return {&b, offset, range, nullptr};
+  }
+  static Binding uniform(const Buffer& b, std::uint64_t offset = 0, std::uint64_t range = VK_WHOLE_SIZE) {
+    return {&b, offset, range, nullptr};
+  }
+  static Binding image3D(const Image3D& img) { return {nullptr, 0, 0, &img}; }
+};
+
+struct Timing {
+  std::string label;
+  double ms = 0.0;  // since the batch's first timestamp
+};
+
+class CommandBatch {
+public:
+  explicit CommandBatch(Context& context, std::uint32_t maxTimestamps = 64);
+  ~CommandBatch();
+  CommandBatch(const CommandBatch&) = delete;
+  CommandBatch& operator=(const CommandBatch&) = delete;
+
+  void dispatch(const ComputePipeline& pipeline, std::initializer_list<Binding> bindings, const void* push,
+                std::uint32_t pushBytes, std::uint32_t groupsX, std::uint32_t groupsY = 1, std::uint32_t groupsZ = 1);
+  template <class Push>
+  void dispatch(const ComputePipeline& pipeline, std::initializer_list<Binding> bindings, const Push& push,
+                std::uint32_t groupsX, std::uint32_t groupsY = 1, std::uint32_t groupsZ = 1) {
+    dispatch(pipeline, bindings, &push, sizeof(Push), groupsX, groupsY, groupsZ);
+  }
+
+  // Makes all earlier shader and transfer writes visible to later shader,
+  // transfer and host accesses.
+  void barrier();
+  void copy(const Buffer& src, Buffer& dst, std::uint64_t bytes, std::uint64_t srcOffset = 0, std::uint64_t dstOffset = 0);
+  void copy(const Buffer& src, Image3D& dst);
+  void copy(const Image3D& src, Buffer& dst);
+  void fill(Buffer& dst, std::uint32_t value, std::uint64_t offset = 0, std::uint64_t bytes = VK_WHOLE_SIZE);
+  void transitionToGeneral(Image3D& image);
+  // Records a GPU timestamp (ignored when the queue has none).
+  void timestamp(std::string label);
+
+  void submitAndWait();
+  // Timestamps of the last submission.
+  const std::vector<Timing>& timings() const { return timings_; }
+
+  VkCommandBuffer handle() const { return cmd_; }
+
+private:
+  void begin();
+  Context& context_;
+  VkCommandBuffer cmd_ = VK_NULL_HANDLE;
+  VkFence fence_ = VK_NULL_HANDLE;
+  VkQueryPool queries_ = VK_NULL_HANDLE;
+  std::uint32_t maxTimestamps_ = 0;
+  std::vector<std::string> labels_;
+  std::vector<Timing> timings_;
+  bool recording_ = false;
+};
+
+}  // namespace vox::gpu

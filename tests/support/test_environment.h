@@ -1,0 +1,30 @@
+#pragma once
+// Paths and process helpers for the test suites.
+
+#include <string>
+
+namespace vox::test {
+
+// assets/<name> in the source tree.
+std::string assetPath(const std::string& name);
+// A fresh empty directory for the current test (under the build tree).
+std::string tempDir();
+// The built `voxmorph` executable.
+std::string voxmorphBinary();
+// Debian's python3 (with nibabel and meshio), or "" when missing.
+std::string python();
+
+struct CommandResult {
+  int exitCode = -1;
+  std::string out;  // stdout
+  std::string err;  // stderr
+};
+// Runs `command` through /bin/sh and captures its output.
+CommandResult runCommand(const std::string& command);
+// Shell-quotes one argument.
+std::string quote(const std::string& s);
+
+// Every regular file in `dir` (names only), sorted.
+std::string listFiles(const std::string& dir);
+
+}  // namespace vox::test
