@@ -1,0 +1,71 @@
+#pragma once
+// CPU reference of the transfer-mesh-guided ray caster (thesis chapter 5):
+// the same algorithm as shaders/raycast.comp, in double precision. Tests
+// compare the GPU kernel with it.
+//
+// Per pixel:
+//  1. Clip the ray to the cells of G' and to the kept side of the cutting
+//     planes (conservatively: half a cell of slack).
+//  2. Find the first front-facing boundary face of the deformed TM it hits
+//     (boundary BVH); no hit means background.
+//  3. Walk G''s cells with the 3D DDA (Algorithm 2), starting just before the
+//     entry point (a voxel whose centre is inside the TM may be crossed
+//     before the ray reaches the TM surface). For each cell whose centre is
+//     kept by the cutting planes, locate the centre by walking from the
+//     current tet through face neighbours towards the face with the most
+//     negative barycentric coordinate (eq. 5.1-5.2), map it to the source
+//     grid by barycentric interpolation of the rest coordinates, and fetch
+//     the label. The first visible label is shaded with the normal of the
+//     cell face the ray crossed.
+//  4. When a walk leaves the mesh (the centre is outside it, e.g. the ray
+//     passed between two limbs), the walk restarts from the next boundary
+//     face through which the ray re-enters the mesh; once the ray has been
+//     outside for two cells it jumps to that entry, or stops when there is
+//     none.
+// Limitation: a voxel whose centre is inside the TM but whose cube the ray
+// only crosses more than half a cell (diagonal) before the TM surface, or
+// while outside the TM for more than two cells, is missed. Both happen only
+// for rays grazing the TM surface (silhouettes).
+
+#include "geometry/label_grid.h"
+#include "geometry/render/palette.h"
+#include "geometry/render/raycast_scene.h"
+#include "geometry/render/rgb_image.h"
+
+#include <cstdint>
+
+namespace vox {
+
+struct RaycastStats {
+  std::uint64_t rays = 0;
+  std::uint64_t hits = 0;          // rays that found a visible voxel
+  std::uint64_t cells = 0;         // DDA cells visited
+  std::uint64_t walkSteps = 0;     // tets visited by point location
+  std::uint64_t entryQueries = 0;  // boundary BVH queries
+  std::uint64_t failedWalks = 0;   // locations that left the mesh or ran out of steps
+};
+
+// What one ray found.
+struct RayResult {
+  bool hit = false;
+  Index3 cell{0, 0, 0};     // render-frame cell of the visible voxel
+  Label label = 0;
+  int axis = 0;             // axis of the crossed cell face
+  int step = 0;             // +-1: the ray's direction along that axis
+  std::int32_t tet = -1;    // tet containing the cell centre
+};
+
+RayResult traceRayReference(const LabelGrid& source, const RaycastMesh& mesh, const RaycastFrame& frame,
+                            const std::vector<TetFactors>& factors, const RaycastView& view, const Palette& palette,
+                            const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, const RaycastLimits& limits,
+                            RaycastStats* stats = nullptr);
+
+// Shades a ray result: label colour times (ambient + (1 - ambient) Lambert).
+Rgb shadeRay(const RayResult& r, const RaycastView& view, const Palette& palette, const RaycastShading& shading);
+
+// The whole image (rows in parallel on the available cores).
+RgbImage raycastReference(const LabelGrid& source, const RaycastMesh& mesh, const RaycastFrame& frame, const RaycastView& view,
+                          const Palette& palette, const RaycastShading& shading = {}, const RaycastLimits& limits = {},
+                          RaycastStats* stats = nullptr);
+
+}  // namespace vox
