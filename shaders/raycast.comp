@@ -318,8 +318,18 @@ Hit trace(vec3 e, vec3 d, uint pixel) {
             res.step = int(dda.step[dda.axis]);
             return res;
           }
-        } else if (failStart == kInf) {
-          failStart = dda.tEnter;
+        } else {
+          // Only the centre may be outside while the ray still runs inside
+          // the mesh (it grazes the surface): then follow the ray's midpoint
+          // in this cell, and do not count the cell as outside.
+          const float mid = 0.5 * (dda.tEnter + ddaExit(dda));
+          int rayTet = tet;
+          if (mid > keyT && locate(e + mid * d, rayTet, cache, lambda)) {
+            tet = rayTet;
+            failStart = kInf;
+          } else if (failStart == kInf) {
+            failStart = dda.tEnter;
+          }
         }
       }
       ++cells;

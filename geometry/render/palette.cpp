@@ -64,7 +64,14 @@ constexpr std::array kNamedColors = {
     NamedColor{"adipose", 0.96, 0.86, 0.52},    NamedColor{"fat", 0.96, 0.86, 0.52},
     NamedColor{"muscle", 0.72, 0.24, 0.22},     NamedColor{"air", 0.80, 0.90, 0.95},
     NamedColor{"nasal", 0.84, 0.66, 0.66},      NamedColor{"trachea", 0.80, 0.70, 0.74},
-    NamedColor{"bronchi", 0.80, 0.70, 0.74},
+    NamedColor{"bronchi", 0.80, 0.70, 0.74},    NamedColor{"residual", 0.86, 0.74, 0.58},
+    NamedColor{"rectum", 0.82, 0.62, 0.44},     NamedColor{"spinal cord", 0.96, 0.90, 0.62},
+    NamedColor{"tongue", 0.84, 0.42, 0.48},     NamedColor{"mucosa", 0.84, 0.42, 0.48},
+    NamedColor{"breast", 0.96, 0.80, 0.74},     NamedColor{"adrenal", 0.90, 0.64, 0.30},
+    NamedColor{"ureter", 0.90, 0.82, 0.40},     NamedColor{"gland", 0.80, 0.58, 0.70},
+    NamedColor{"thymus", 0.80, 0.58, 0.70},     NamedColor{"tonsil", 0.80, 0.58, 0.70},
+    NamedColor{"prostate", 0.78, 0.48, 0.60},   NamedColor{"testis", 0.78, 0.48, 0.60},
+    NamedColor{"ovary", 0.78, 0.48, 0.60},      NamedColor{"uterus", 0.78, 0.48, 0.60},
 };
 
 std::string lower(std::string s) {

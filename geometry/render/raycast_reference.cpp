@@ -169,12 +169,26 @@ struct Tracer {
       for (const Eigen::Vector4d& cut : view.cuts) removed |= cut.head<3>().dot(c) > cut[3];
       if (!removed) {
         double lambda[4];
-        bool found = false;
+        bool found = false, rayInside = false;
+        const double mid = 0.5 * (dda.tEnter + dda.tExit());
         for (;;) {
+          const std::int32_t start = tet;
           found = locate(c, tet, lambda);
           if (found) break;
-          // 4. The centre is not reachable from here: retry from the next
-          // entry face once the ray has (almost) reached it.
+          // 4. The walk left the mesh. If the ray itself is inside the mesh in
+          // this cell, the centre is outside (the ray grazes the surface) or
+          // across a concavity from where the walk went: walk along the ray
+          // into the cell first, then to the centre.
+          std::int32_t rayTet = start;
+          if (mid > key.t && locate(e + mid * d, rayTet, lambda)) {
+            rayInside = true;
+            tet = rayTet;
+            found = locate(c, rayTet, lambda);
+            if (found) tet = rayTet;
+            break;
+          }
+          // The ray is outside: retry from the next entry face once the ray
+          // has (almost) reached it.
           if (dda.tEnter <= key.t) break;
           queryNext();
           if (!next.valid() || next.t - margin > dda.tExit() || entries >= limits.maxEntries) break;
@@ -195,7 +209,10 @@ struct Tracer {
           }
         } else {
           ++stats.failedWalks;
-          if (failStart == kInf) failStart = dda.tEnter;
+          // A cell counts as outside only when the ray is outside in it, past
+          // the entry point (before it, in the margin, failures are expected).
+          if (rayInside) failStart = kInf;
+          else if (failStart == kInf && dda.tEnter > key.t) failStart = dda.tEnter;
         }
       }
       if (failStart != kInf && dda.tExit() > std::max(failStart, key.t) + 2.0 * margin) {

@@ -17,15 +17,20 @@
 //     grid by barycentric interpolation of the rest coordinates, and fetch
 //     the label. The first visible label is shaded with the normal of the
 //     cell face the ray crossed.
-//  4. When a walk leaves the mesh (the centre is outside it, e.g. the ray
+//  4. When a centre cannot be located (it is outside the mesh, e.g. the ray
 //     passed between two limbs), the walk restarts from the next boundary
-//     face through which the ray re-enters the mesh; once the ray has been
-//     outside for two cells it jumps to that entry, or stops when there is
-//     none.
-// Limitation: a voxel whose centre is inside the TM but whose cube the ray
-// only crosses more than half a cell (diagonal) before the TM surface, or
-// while outside the TM for more than two cells, is missed. Both happen only
-// for rays grazing the TM surface (silhouettes).
+//     face through which the ray re-enters the mesh, once the ray has (almost)
+//     reached it. If the ray's own point in that cell is inside the mesh, only
+//     the centre is outside (the ray grazes the surface) and the walk follows
+//     the ray. Once the ray has been outside for two cells past its latest
+//     entry it jumps to the next entry, or stops when there is none.
+// Limitation: a voxel whose centre is inside the TM but which the ray crosses
+// only outside the TM, more than half a cell diagonal before the entry point
+// or after it has left the TM for two cells, is missed. This happens only
+// where rays graze the TM surface (silhouettes, and surfaces nearly parallel
+// to the ray in index space, e.g. the tops of 8 mm slices seen from the side);
+// tests/geometry/render_raycast_test.cpp checks that every pixel where the
+// rendering differs from the rasterized grid's is such a case.
 
 #include "geometry/label_grid.h"
 #include "geometry/render/palette.h"
