@@ -288,14 +288,29 @@ Hit trace(vec3 e, vec3 d, uint pixel) {
         removed = removed || dot(vec3(P.cuts[4 * k], P.cuts[4 * k + 1], P.cuts[4 * k + 2]), c) > P.cuts[4 * k + 3];
       if (!removed) {
         vec4 lambda;
-        bool found = false;
+        bool found = false, rayInside = false;
+        const float mid = 0.5 * (dda.tEnter + ddaExit(dda));
         for (;;) {
+          const int start = tet;
           found = locate(c, tet, cache, lambda);
           if (found) break;
-          // 4. Not reachable from here: once past the current entry point,
-          // retry from the next entry face if the ray has (almost) reached it.
+          // 4. The walk left the mesh. If the ray itself is inside the mesh
+          // in this cell, the centre is outside (the ray grazes the surface)
+          // or across a concavity from where the walk went: walk along the
+          // ray into the cell first, then to the centre.
+          int rayTet = start;
+          if (mid > keyT && locate(e + mid * d, rayTet, cache, lambda)) {
+            rayInside = true;
+            tet = rayTet;
+            found = locate(c, rayTet, cache, lambda);
+            if (found) tet = rayTet;
+            break;
+          }
+          // The ray is outside: retry from the next entry face once the ray
+          // has (almost) reached it.
           if (dda.tEnter <= keyT) break;
           if (!nextKnown) {
+            tet = start;  // the cell is processed again, identically, after the query
             needQuery = true;
             break;
           }
@@ -318,18 +333,12 @@ Hit trace(vec3 e, vec3 d, uint pixel) {
             res.step = int(dda.step[dda.axis]);
             return res;
           }
-        } else {
-          // Only the centre may be outside while the ray still runs inside
-          // the mesh (it grazes the surface): then follow the ray's midpoint
-          // in this cell, and do not count the cell as outside.
-          const float mid = 0.5 * (dda.tEnter + ddaExit(dda));
-          int rayTet = tet;
-          if (mid > keyT && locate(e + mid * d, rayTet, cache, lambda)) {
-            tet = rayTet;
-            failStart = kInf;
-          } else if (failStart == kInf) {
-            failStart = dda.tEnter;
-          }
+        } else if (rayInside) {
+          // A cell counts as outside only when the ray is outside in it, past
+          // the entry point (before it, in the margin, failures are expected).
+          failStart = kInf;
+        } else if (failStart == kInf && dda.tEnter > keyT) {
+          failStart = dda.tEnter;
         }
       }
       ++cells;
