@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cctype>
 #include <charconv>
+#include <cstdio>
 #include <cmath>
 #include <filesystem>
 
@@ -81,6 +82,12 @@ Index3 parseDims(const std::string& source, const std::string& field, std::strin
     throw InputError(source, field + ": expected 3 dimensions, found " + std::to_string(words.size()) +
                                  " (only 3-D grids are supported)");
   return {parseInteger(source, field, words[0]), parseInteger(source, field, words[1]), parseInteger(source, field, words[2])};
+}
+
+std::string realText(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%g", v);
+  return buf;
 }
 
 std::string readPrefix(std::FILE* file, std::size_t limit) {

@@ -27,6 +27,9 @@ std::vector<double> parseReals(const std::string& source, const std::string& fie
 // Three whitespace-separated integers (grid dimensions; not yet range-checked).
 Index3 parseDims(const std::string& source, const std::string& field, std::string_view text);
 
+// A number as "%g" prints it, for messages.
+std::string realText(double v);
+
 // Up to `limit` bytes from the start of `file` (headers are looked for in them).
 std::string readPrefix(std::FILE* file, std::size_t limit);
 

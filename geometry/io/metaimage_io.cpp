@@ -123,7 +123,7 @@ MetaLayout interpretMetaHeader(const std::string& path, const MetaHeader& h) {
     const auto s = parseReals(path, "ElementSpacing", *v, 3);
     for (int a = 0; a < 3; ++a) {
       if (!(s[a] > 0.0))
-        throw InputError(path, "ElementSpacing along axis " + std::to_string(a) + " is " + std::to_string(s[a]) + " (must be positive)");
+        throw InputError(path, "ElementSpacing along axis " + std::to_string(a) + " is " + realText(s[a]) + " (must be positive)");
       spacing[a] = s[a];
     }
   }

@@ -46,12 +46,14 @@ struct ZnzCloser {
 };
 using ZnzHandle = std::unique_ptr<znzptr, ZnzCloser>;
 
-// zlib's state of a gzip stream: Z_OK, Z_BUF_ERROR (it ended early) or an error.
-int gzipState(znzFile f, std::string& message) {
+// zlib's state of a gzip stream: Z_OK, Z_BUF_ERROR (it ended early) or an
+// error, with zlib's message stripped of the "<path>: " it starts with.
+int gzipState(znzFile f, const std::string& path, std::string& message) {
   if (!f || !f->withz || !f->zfptr) return Z_OK;
   int code = Z_OK;
   const char* msg = gzerror(f->zfptr, &code);
   message = msg ? msg : "";
+  if (message.compare(0, path.size() + 2, path + ": ") == 0) message.erase(0, path.size() + 2);
   return code;
 }
 
@@ -86,7 +88,7 @@ public:
     while ((got = znzread(scratch.data(), 1, scratch.size(), file_.get())) == scratch.size()) {
     }
     std::string message;
-    const int state = gzipState(file_.get(), message);
+    const int state = gzipState(file_.get(), path_, message);
     if (state == Z_BUF_ERROR) throw InputError(path_, "gzip data is truncated (" + message + ")");
     if (state != Z_OK || got > scratch.size()) throwIfCorrupt();
   }
@@ -94,7 +96,7 @@ public:
 private:
   void throwIfCorrupt() const {
     std::string message;
-    const int state = gzipState(file_.get(), message);
+    const int state = gzipState(file_.get(), path_, message);
     if (state != Z_OK && state != Z_BUF_ERROR) throw InputError(path_, "corrupt gzip data (" + message + ")");
   }
 
@@ -172,9 +174,11 @@ NiftiLayout parseNiftiHeader(const std::string& path, ByteReader& in) {
   checkGridDims(path, dims);
 
   NiftiLayout layout;
-  if (!niftiVoxelType(h.datatype, layout.encoding.type))
+  if (!niftiVoxelType(h.datatype, layout.encoding.type)) {
+    if (!nifti_datatype_is_valid(h.datatype, 1)) throw InputError(path, "datatype " + std::to_string(h.datatype) + " is not a NIfTI-1 type");
     throw InputError(path, "datatype " + std::to_string(h.datatype) + " (" + nifti_datatype_string(h.datatype) +
                                ") is not supported for labels (expected an integer or float type)");
+  }
   layout.encoding.bigEndian = swapped ? std::endian::native == std::endian::little : std::endian::native == std::endian::big;
 
   for (int a = 1; a <= 3; ++a)

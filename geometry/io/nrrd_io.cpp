@@ -201,7 +201,7 @@ NrrdLayout interpretNrrdHeader(const std::string& path, const NrrdHeader& h) {
     const auto s = parseReals(path, "spacings", *v, 3);
     for (int a = 0; a < 3; ++a) {
       if (!(s[a] > 0.0))
-        throw InputError(path, "spacings: spacing along axis " + std::to_string(a) + " is " + std::to_string(s[a]) + " (must be positive)");
+        throw InputError(path, "spacings: spacing along axis " + std::to_string(a) + " is " + realText(s[a]) + " (must be positive)");
       linear(a, a) = s[a];
     }
   }
