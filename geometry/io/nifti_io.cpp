@@ -5,7 +5,9 @@
 
 // niftilib is built with zlib; declaring it exposes znzptr::zfptr, whose
 // gzerror() tells a truncated archive from a corrupt one.
+#ifndef HAVE_ZLIB
 #define HAVE_ZLIB 1
+#endif
 #include <nifti1_io.h>
 #include <znzlib.h>
 
