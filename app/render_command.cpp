@@ -119,7 +119,8 @@ void addRenderCommand(CLI::App& app) {
   cmd->add_option("--size", o->size, "Image size WIDTHxHEIGHT (default 640x480)");
   cmd->add_option("--cut", o->cuts,
                   "Cutting plane (repeatable: one per axis and one free plane): \"x>120mm\" removes the voxels whose centre "
-                  "has x > 120 mm, \"z<400\" those below 400 mm, \"plane=nx,ny,nz,d\" those with n.c > d");
+                  "has x > 120 mm, \"z<400\" those below 400 mm, \"plane=nx,ny,nz,d\" those with n.c > d")
+      ->allow_extra_args(false);
   cmd->add_option("--hide", o->hide, "Labels to hide: \"5,7,10-20\", or organ-name substrings with --organs (\"skin,adipose\")");
   cmd->add_option("--organs", o->organs, "Organ table (ID name tissue density): colours by organ name");
   cmd->add_flag("--cpu", o->cpu, "Render with the CPU reference instead of the GPU");

@@ -1,7 +1,7 @@
 #pragma once
 // PNG images through libpng: 8-bit RGB out, any PNG in (converted to 8-bit RGB).
 
-#include "geometry/render/rgb_image.h"
+#include "geometry/rgb_image.h"
 
 #include <string>
 

@@ -3,7 +3,7 @@
 
 #include "geometry/label_grid.h"
 #include "geometry/organ_table.h"
-#include "geometry/render/rgb_image.h"
+#include "geometry/rgb_image.h"
 
 #include <string>
 #include <vector>

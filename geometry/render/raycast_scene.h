@@ -15,7 +15,7 @@
 #include "geometry/render/boundary_bvh.h"
 #include "geometry/render/camera.h"
 #include "geometry/render/cutting_planes.h"
-#include "geometry/render/rgb_image.h"
+#include "geometry/rgb_image.h"
 #include "geometry/tet_mesh.h"
 
 #include <Eigen/Core>

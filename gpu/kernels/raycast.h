@@ -15,7 +15,7 @@
 #include "geometry/label_grid.h"
 #include "geometry/render/palette.h"
 #include "geometry/render/raycast_scene.h"
-#include "geometry/render/rgb_image.h"
+#include "geometry/rgb_image.h"
 #include "gpu/buffer.h"
 #include "gpu/command.h"
 #include "gpu/context.h"

@@ -1,4 +1,4 @@
-#include "geometry/render/rgb_image.h"
+#include "geometry/rgb_image.h"
 
 #include "geometry/error.h"
 
