@@ -209,6 +209,20 @@ void ddaAdvance(inout Dda s) {
 
 // ---------------------------------------------------------------------- ray
 
+// Cap of the margin before an entry point, in half cell diagonals
+// (kMaxEntryMarginCells in geometry/render/raycast_reference.cpp).
+const float kMaxEntryMarginCells = 16.0;
+
+// Cells whose centres are inside the TM can be crossed before the entry
+// point, by up to half a cell diagonal away from the entry face's plane:
+// along a ray that meets the face at a grazing angle, that is far.
+float entryMargin(int face, vec3 d, float margin) {
+  const uvec4 f = faces[face];
+  const vec3 a = positions[f.x].xyz;
+  const vec3 n = normalize(cross(positions[f.y].xyz - a, positions[f.z].xyz - a));
+  return min(kMaxEntryMarginCells * margin, 0.5 * sqrt(3.0) / abs(dot(n, d)));
+}
+
 struct Hit {
   bool hit;
   uint label;
@@ -273,7 +287,7 @@ Hit trace(vec3 e, vec3 d, uint pixel) {
   dda.step = sign(d);
   dda.inv = mix(vec3(0.0), 1.0 / d, notEqual(d, vec3(0.0)));
   dda.axis = 0;
-  ddaStart(dda, max(keyT - margin, tLo));
+  ddaStart(dda, max(keyT - entryMargin(keyFace, d, margin), tLo));
   uint cells = 0u;
   for (uint round = 0u; round <= P.maxEntries + 1u; ++round) {
     if (!nextKnown && round > 0u) {
@@ -314,7 +328,7 @@ Hit trace(vec3 e, vec3 d, uint pixel) {
             needQuery = true;
             break;
           }
-          if (nextFace < 0 || nextT - margin > ddaExit(dda) || entryCount >= P.maxEntries) break;
+          if (nextFace < 0 || nextT - entryMargin(nextFace, d, margin) > ddaExit(dda) || entryCount >= P.maxEntries) break;
           keyT = nextT;
           keyFace = nextFace;
           tet = int(faces[keyFace].w);
@@ -350,14 +364,14 @@ Hit trace(vec3 e, vec3 d, uint pixel) {
           break;
         }
         if (nextFace < 0 || entryCount >= P.maxEntries) return res;
-        if (nextT - margin > ddaExit(dda)) {
+        if (nextT - entryMargin(nextFace, d, margin) > ddaExit(dda)) {
           keyT = nextT;
           keyFace = nextFace;
           tet = int(faces[keyFace].w);
           nextKnown = false;
           failStart = kInf;
           ++entryCount;
-          ddaStart(dda, keyT - margin);
+          ddaStart(dda, keyT - entryMargin(keyFace, d, margin));
           continue;
         }
       }

@@ -1,5 +1,7 @@
 #include "geometry/render/raycast_reference.h"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -11,6 +13,8 @@ namespace vox {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+// Cap of the margin before an entry point, in half cell diagonals.
+constexpr double kMaxEntryMarginCells = 16.0;
 
 // 3D DDA over unit cells centred on integers (thesis Algorithm 2). Cell-face
 // crossings are recomputed from the integer cell, so no error accumulates.
@@ -141,6 +145,15 @@ struct Tracer {
     FaceHit key = entryAfter(e, d, FaceHit{0.0, -1});
     if (!key.valid()) return res;
     const double margin = 0.5 * std::sqrt(3.0) / d.norm();
+    // Cells whose centres are inside the TM can be crossed before the entry
+    // point, by up to half a cell diagonal away from the entry face's plane:
+    // along a ray that meets the face at a grazing angle, that is far.
+    auto entryMargin = [&](const FaceHit& h) {
+      const Tri& f = mesh.boundary[std::size_t(h.face)].vertices;
+      const Eigen::Vector3d& a = frame.positions[std::size_t(f[0])];
+      const Eigen::Vector3d n = (frame.positions[std::size_t(f[1])] - a).cross(frame.positions[std::size_t(f[2])] - a).normalized();
+      return std::min(kMaxEntryMarginCells * margin, 0.5 * std::sqrt(3.0) / std::abs(n.dot(d)));
+    };
     std::int32_t tet = mesh.boundary[std::size_t(key.face)].tet;
     int entries = 1;
     FaceHit next;
@@ -160,7 +173,7 @@ struct Tracer {
 
     // 3. Cells in ray order.
     Dda dda(e, d);
-    dda.start(std::max(key.t - margin, tLo));
+    dda.start(std::max(key.t - entryMargin(key), tLo));
     const std::int64_t maxCells = 4 * (frame.output.dims[0] + frame.output.dims[1] + frame.output.dims[2]) + 64;
     for (std::int64_t n = 0; n < maxCells && dda.tEnter <= tHi; ++n) {
       ++stats.cells;
@@ -191,7 +204,7 @@ struct Tracer {
           // has (almost) reached it.
           if (dda.tEnter <= key.t) break;
           queryNext();
-          if (!next.valid() || next.t - margin > dda.tExit() || entries >= limits.maxEntries) break;
+          if (!next.valid() || next.t - entryMargin(next) > dda.tExit() || entries >= limits.maxEntries) break;
           takeNext();
         }
         if (found) {
@@ -219,9 +232,9 @@ struct Tracer {
         // Outside the mesh for two cells: jump to the next entry, if any.
         queryNext();
         if (!next.valid() || entries >= limits.maxEntries) return res;
-        if (next.t - margin > dda.tExit()) {
+        if (next.t - entryMargin(next) > dda.tExit()) {
           takeNext();
-          dda.start(key.t - margin);
+          dda.start(key.t - entryMargin(key));
           continue;
         }
       }
