@@ -23,14 +23,4 @@ void writeInr(const std::string& path, const LabelGrid&) { pending(path); }
 std::unique_ptr<GridSliceReader> openGridSlices(const std::string& path) { pending(path); }
 std::unique_ptr<GridSliceWriter> createGridSlices(const std::string& path, const GridGeometry&, Label) { pending(path); }
 
-// mesh formats
-TetMesh readMedit(const std::string& path) { pending(path); }
-void writeMedit(const std::string& path, const TetMesh&) { pending(path); }
-TetMesh readVtu(const std::string& path) { pending(path); }
-void writeVtu(const std::string& path, const TetMesh&) { pending(path); }
-TetMesh readGmsh(const std::string& path) { pending(path); }
-void writeGmsh(const std::string& path, const TetMesh&) { pending(path); }
-TriMesh readSurface(const std::string& path) { pending(path); }
-void writeSurface(const std::string& path, const TriMesh&) { pending(path); }
-
 }  // namespace vox
