@@ -26,12 +26,12 @@ std::string lowerExtension(const std::string& path) {
 }
 
 // Appends the fan of `polygon` (vertex indices) to `triangles`; `in` names
-// the line on error.
-void addFan(const std::vector<std::int32_t>& polygon, std::vector<Tri>& triangles, io::TextScanner& in) {
+// the line on error, where vertices are numbered from `firstIndex` as in the file.
+void addFan(const std::vector<std::int32_t>& polygon, std::vector<Tri>& triangles, io::TextScanner& in, int firstIndex) {
   if (polygon.size() < 3) in.fail("face has " + std::to_string(polygon.size()) + " vertices (at least 3 needed)");
   for (std::size_t i = 0; i < polygon.size(); ++i)
     for (std::size_t j = 0; j < i; ++j)
-      if (polygon[i] == polygon[j]) in.fail("face repeats vertex " + std::to_string(polygon[i] + 1));
+      if (polygon[i] == polygon[j]) in.fail("face repeats vertex " + std::to_string(polygon[i] + firstIndex));
   for (std::size_t i = 1; i + 1 < polygon.size(); ++i) triangles.push_back({polygon[0], polygon[i], polygon[i + 1]});
 }
 
@@ -67,7 +67,7 @@ TriMesh readObj(const std::string& path) {
           in.fail("face references vertex " + std::to_string(i) + " (" + std::to_string(nv) + " vertices defined so far)");
         polygon.push_back(std::int32_t(v));
       }
-      addFan(polygon, mesh.triangles, in);
+      addFan(polygon, mesh.triangles, in, 1);
     }
     // Other statements (vt, vn, g, o, s, usemtl, mtllib, l, ...) carry
     // nothing a surface needs.
@@ -128,7 +128,7 @@ TriMesh readOff(const std::string& path) {
         in.fail("face references vertex " + std::to_string(v) + " (indices are 0-based; the file has " + std::to_string(nv) + " vertices)");
       polygon.push_back(std::int32_t(v));
     }
-    addFan(polygon, mesh.triangles, in);
+    addFan(polygon, mesh.triangles, in, 0);
   }
   if (mesh.triangles.empty()) throw InputError(path, "no faces");
   mesh.validate(path);

@@ -1,0 +1,106 @@
+#include "geometry/io/mesh_io.h"
+#include "tests/geometry/io/mesh_test_meshes.h"
+#include "tests/support/test_environment.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace vox {
+namespace {
+
+using test::expectInputError;
+using test::writeText;
+
+// A closed surface (octahedron) with coordinates that need 17 digits.
+TriMesh octahedron() {
+  TriMesh m;
+  m.positions = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  for (std::size_t v = 0; v < m.positions.size(); ++v) m.positions[v] = m.positions[v] * 0.1 + Eigen::Vector3d::Constant(std::sqrt(double(v + 2)));
+  m.triangles = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4}, {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
+  return m;
+}
+
+class SurfaceRoundTrip : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(SurfaceRoundTrip, Exact) {
+  const std::string dir = test::tempDir();
+  const std::string path = dir + "/cage" + GetParam();
+  const TriMesh mesh = octahedron();
+  EXPECT_TRUE(hasSurfaceExtension(path));
+  writeSurface(path, mesh);
+  EXPECT_EQ(test::listFiles(dir), "cage" + std::string(GetParam()) + "\n");
+  const TriMesh back = readSurface(path);
+  EXPECT_EQ(back.positions, mesh.positions);
+  EXPECT_EQ(back.triangles, mesh.triangles);
+}
+
+INSTANTIATE_TEST_SUITE_P(Formats, SurfaceRoundTrip, ::testing::Values(".obj", ".off", ".OBJ"),
+                         [](const auto& info) { return std::string(info.param + 1); });
+
+TEST(SurfaceFormats, ObjCornerFormsNegativeIndicesAndPolygons) {
+  const std::string path = test::tempDir() + "/poly.obj";
+  writeText(path,
+            "# square and a triangle\nmtllib x.mtl\no thing\nv 0 0 0\nv 1 0 0 1.0\nv 1 1 0 0.5 0.5 0.5\nv 0 1 0\n"
+            "vt 0 0\nvn 0 0 1\ng faces\nusemtl red\ns off\nf 1/1/1 2/1/1 3//1 4/1\nv 2 2 2\nf -1 -4 -3\nl 1 2\n");
+  const TriMesh m = readSurface(path);
+  ASSERT_EQ(m.vertexCount(), 5u);
+  EXPECT_EQ(m.positions[1], Eigen::Vector3d(1, 0, 0));
+  EXPECT_EQ(m.positions[2], Eigen::Vector3d(1, 1, 0));
+  // The quad becomes the fan (0,1,2), (0,2,3); -1 is the latest vertex.
+  EXPECT_EQ(m.triangles, (std::vector<Tri>{{0, 1, 2}, {0, 2, 3}, {4, 1, 2}}));
+}
+
+TEST(SurfaceFormats, OffVariants) {
+  const std::string path = test::tempDir() + "/poly.off";
+  writeText(path, "COFF\n# comment\n5 2 0\n0 0 0 255 0 0 255\n1 0 0 255 0 0 255\n\n1 1 0 0 0 0 0\n0 1 0 1 1 1 1\n2 2 2 0 0 0 0\n"
+                  "4 0 1 2 3 255 0 0\n3 4 1 2 # trailing comment\n");
+  const TriMesh m = readSurface(path);
+  ASSERT_EQ(m.vertexCount(), 5u);
+  EXPECT_EQ(m.triangles, (std::vector<Tri>{{0, 1, 2}, {0, 2, 3}, {4, 1, 2}}));
+}
+
+void expectBad(const std::string& name, const std::string& text, const std::string& fault) {
+  SCOPED_TRACE(name);
+  const std::string path = test::tempDir() + "/" + name;
+  writeText(path, text);
+  expectInputError([&] { readSurface(path); }, path, fault);
+}
+
+TEST(SurfaceFormats, BadInput) {
+  const std::string tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  expectBad("o1.obj", "", "no faces");
+  expectBad("o2.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n", "no faces");
+  expectBad("o3.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", "line 4: face references vertex 0");
+  expectBad("o4.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", "line 4: face references vertex 4 (3 vertices defined so far)");
+  expectBad("o5.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -4 1 2\n", "line 4: face references vertex -4");
+  expectBad("o6.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 2\n", "line 4: face repeats vertex 2");
+  expectBad("o7.obj", "v 0 0 0\nv 1 0 0\nf 1 2\n", "line 3: face has 2 vertices");
+  expectBad("o8.obj", "v 0 nan 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "line 1: y coordinate is not finite");
+  expectBad("o9.obj", "v 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "line 1: expected z coordinate, found nothing");
+  expectBad("o10.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n", "line 4: expected a vertex index, found 'x'");
+  expectBad("o11.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 99999999999999999999\n", "line 4: expected a vertex index");
+  const std::string off = "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  expectBad("f1.off", "", "not an OFF file");
+  expectBad("f2.off", "ply\nformat ascii 1.0\n", "line 1: not an OFF file: expected OFF, found 'ply'");
+  expectBad("f3.off", "OFF BINARY\n3 1 0\n", "binary OFF is not supported");
+  expectBad("f4.off", "OFF\n99999999999 1 0\n0 0 0\n", "line 2: vertex count 99999999999 is more than the rest of the file can hold");
+  expectBad("f5.off", "OFF\n3 99999999999 0\n0 0 0\n", "face count 99999999999 is more");
+  expectBad("f6.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n", "line 6: face references vertex 3 (indices are 0-based");
+  expectBad("f7.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 1\n", "line 6: face repeats vertex 1");
+  expectBad("f8.off", "OFF\n3 1 0\n0 0 0\n1 inf 0\n0 1 0\n3 0 1 2\n", "line 4: y coordinate is not finite");
+  expectBad("f9.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n\n\n\n\n\n\n\n\n", "file ends after 1 of 2 faces");
+  expectBad("f10.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n2 0 1\n", "face vertex count 2 is invalid");
+  expectBad("f11.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n", "no faces");
+  expectBad("f12.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1\n3 0 1 2\n", "line 5: expected z coordinate, found nothing");
+  expectBad("s.stl", tri, "unknown surface format");
+  // Writing refuses a broken surface and leaves nothing behind.
+  const std::string dir = test::tempDir();
+  TriMesh broken = octahedron();
+  broken.triangles[3][1] = 6;
+  expectInputError([&] { writeSurface(dir + "/b.obj", broken); }, dir + "/b.obj", "triangle 3 references vertex 6");
+  EXPECT_EQ(test::listFiles(dir), "");
+}
+
+}  // namespace
+}  // namespace vox
