@@ -256,6 +256,8 @@ void GmshReader::readElements() {
   const std::size_t total = readCount("element count", 4, 2 * sizeT_);
   readSize("minimum element tag");
   readSize("maximum element tag");
+  // The count was checked against the file size, so reserving it is safe.
+  tets_.reserve(total);
   std::size_t seen = 0;
   for (std::size_t b = 0; b < blocks; ++b) {
     const std::int32_t dim = readInt("entity dimension");
@@ -268,7 +270,6 @@ void GmshReader::readElements() {
     if (seen > total) fail("the element blocks hold more than the " + std::to_string(total) + " elements announced");
     if (type == kTet4) {
       if (dim != 3) fail("element block " + std::to_string(b) + " has tetrahedra on an entity of dimension " + std::to_string(dim));
-      tets_.reserve(tets_.size() + n);
       for (std::size_t i = 0; i < n; ++i) {
         TetRecord r;
         r.tag = readSize("element tag");
@@ -328,6 +329,7 @@ TetMesh GmshReader::assemble() {
   if (tets_.empty()) throw InputError(path_, "no tetrahedra (no elements of type 4)");
   const std::size_t n = nodes_.size();
   if (n > std::size_t(std::numeric_limits<std::int32_t>::max())) throw InputError(path_, "more than 2^31 - 1 nodes");
+  if (tets_.size() > std::size_t(std::numeric_limits<std::int32_t>::max())) throw InputError(path_, "more than 2^31 - 1 tetrahedra");
 
   TetMesh mesh;
   mesh.positions.resize(n);
@@ -368,13 +370,31 @@ TetMesh GmshReader::assemble() {
                                 ", which is not in $Nodes");
   };
 
-  if (!std::is_sorted(tets_.begin(), tets_.end(), [](const TetRecord& a, const TetRecord& b) { return a.tag < b.tag; }))
-    std::stable_sort(tets_.begin(), tets_.end(), [](const TetRecord& a, const TetRecord& b) { return a.tag < b.tag; });
-  mesh.tets.resize(tets_.size());
-  mesh.labels.resize(tets_.size());
-  for (std::size_t t = 0; t < tets_.size(); ++t) {
-    const TetRecord& r = tets_[t];
-    if (t > 0 && r.tag == tets_[t - 1].tag) throw InputError(path_, "$Elements: element tag " + std::to_string(r.tag) + " is repeated");
+  // Tets in ascending element tag order. Tags are usually a permutation of
+  // a range (our writer's are), which places each tet directly.
+  const std::size_t nt = tets_.size();
+  std::vector<std::uint32_t> order(nt);
+  const auto [minTet, maxTet] = std::minmax_element(tets_.begin(), tets_.end(), [](const TetRecord& a, const TetRecord& b) { return a.tag < b.tag; });
+  const std::uint64_t firstTag = minTet->tag;
+  if (maxTet->tag - firstTag == nt - 1) {
+    std::vector<bool> placed(nt, false);
+    for (std::size_t t = 0; t < nt; ++t) {
+      const auto at = std::size_t(tets_[t].tag - firstTag);
+      if (placed[at]) throw InputError(path_, "$Elements: element tag " + std::to_string(tets_[t].tag) + " is repeated");
+      placed[at] = true;
+      order[at] = std::uint32_t(t);
+    }
+  } else {
+    std::iota(order.begin(), order.end(), std::uint32_t(0));
+    std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return tets_[a].tag < tets_[b].tag; });
+    for (std::size_t i = 1; i < nt; ++i)
+      if (tets_[order[i]].tag == tets_[order[i - 1]].tag)
+        throw InputError(path_, "$Elements: element tag " + std::to_string(tets_[order[i]].tag) + " is repeated");
+  }
+  mesh.tets.resize(nt);
+  mesh.labels.resize(nt);
+  for (std::size_t t = 0; t < nt; ++t) {
+    const TetRecord& r = tets_[order[t]];
     for (int k = 0; k < 4; ++k) {
       mesh.tets[t][k] = vertexOf(r.nodes[k], r.tag);
       for (int m = 0; m < k; ++m)

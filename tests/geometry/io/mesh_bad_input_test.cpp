@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <random>
 #include <sys/mman.h>
 #include <unistd.h>
@@ -78,6 +79,37 @@ TEST(MeshBadInput, Medit) {
             "a second Tetrahedra block");
   const std::string missing = test::tempDir() + "/missing.mesh";
   expectInputError([&] { readMedit(missing); }, missing, "cannot open file");
+}
+
+TEST(MeshBadInput, MeditBinary) {
+  const auto read = &readMedit;
+  const std::string dir = test::tempDir();
+  writeMedit(dir + "/good.meshb", twoTets());
+  const std::string good = test::readText(dir + "/good.meshb");
+  ASSERT_EQ(good.size(), 8 + 16 + (16 + 5 * 28) + (16 + 2 * 20) + 12u);
+  auto patched = [&good](std::size_t at, const auto& value) {
+    std::string b = good;
+    std::memcpy(b.data() + at, &value, sizeof(value));
+    return b;
+  };
+  const std::size_t vertices = 8 + 16, tets = vertices + 16 + 5 * 28;
+  expectBad(read, "b1.meshb", "MeshVersionFormatted 2\n", "not a binary Medit mesh (bad magic number)");
+  expectBad(read, "b2.meshb", patched(4, std::int32_t(9)), "version 9 is not 1, 2, 3 or 4");
+  expectBad(read, "b3.meshb", patched(vertices + 12, std::int32_t(2000000000)), "vertex count 2000000000 at byte 40 is more than the rest of the file can hold");
+  expectBad(read, "b4.meshb", patched(vertices + 16 + 28 + 8, std::nan("")), "vertex 2 has a non-finite coordinate");
+  expectBad(read, "b5.meshb", patched(tets + 16 + 4, std::int32_t(0)), "tetrahedron 1 references vertex 0");
+  expectBad(read, "b6.meshb", patched(tets + 16 + 4, std::int32_t(6)), "tet 0 references vertex 5 (mesh has 5 vertices)");
+  expectBad(read, "b7.meshb", patched(tets + 16 + 4, std::int32_t(1)), "tet 0 repeats vertex 0");
+  expectBad(read, "b8.meshb", good.substr(0, tets + 30), "tetrahedron count 2 at byte 196 is more than the rest of the file can hold");
+  {
+    // An unknown keyword is skipped through its next-keyword position, which
+    // must point forward and into the file.
+    std::string unknown = patched(tets, std::int32_t(77));
+    const std::int64_t back = 100;
+    std::memcpy(unknown.data() + tets + 4, &back, 8);
+    expectBad(read, "b9.meshb", unknown, "keyword 77 at byte 180 points to byte 100");
+  }
+  expectBad(read, "b10.meshb", patched(8 + 12, std::int32_t(2)), "dimension 2 is not supported");
 }
 
 const std::string kGmsh =
@@ -225,11 +257,18 @@ TEST(MeshBadInput, Vtu) {
 }
 
 // An in-memory file (memfd) for the many small reads below: rewriting a file
-// on disk thousands of times costs more than the reads themselves.
+// on disk thousands of times costs more than the reads themselves. It is
+// reached through a symlink named `name` in `dir`, so readers see the
+// extension.
 class MemoryFile {
 public:
-  MemoryFile() : fd_(::memfd_create("mesh", 0)), path_("/proc/self/fd/" + std::to_string(fd_)) {}
-  ~MemoryFile() { ::close(fd_); }
+  MemoryFile(const std::string& dir, const std::string& name) : fd_(::memfd_create("mesh", 0)), path_(dir + "/" + name) {
+    std::filesystem::create_symlink("/proc/" + std::to_string(::getpid()) + "/fd/" + std::to_string(fd_), path_);
+  }
+  ~MemoryFile() {
+    std::filesystem::remove(path_);
+    ::close(fd_);
+  }
   const std::string& set(const std::string& bytes) {
     EXPECT_EQ(::ftruncate(fd_, 0), 0);
     EXPECT_EQ(::pwrite(fd_, bytes.data(), bytes.size(), 0), ssize_t(bytes.size()));
@@ -243,8 +282,7 @@ private:
 
 // Every prefix of a valid file either fails with an InputError or, when the
 // cut only lost optional trailing text, reads as the whole mesh.
-void expectPrefixesFailCleanly(TetMesh (*read)(const std::string&), const std::string& text, const TetMesh& mesh) {
-  MemoryFile file;
+void expectPrefixesFailCleanly(MemoryFile& file, TetMesh (*read)(const std::string&), const std::string& text, const TetMesh& mesh) {
   std::size_t failures = 0;
   for (std::size_t n = 0; n < text.size(); ++n) {
     const std::string& path = file.set(text.substr(0, n));
@@ -261,8 +299,7 @@ void expectPrefixesFailCleanly(TetMesh (*read)(const std::string&), const std::s
 }
 
 // Random byte corruption: an InputError or a mesh that validates, nothing else.
-void expectCorruptionFailsCleanly(TetMesh (*read)(const std::string&), const std::string& text) {
-  MemoryFile file;
+void expectCorruptionFailsCleanly(MemoryFile& file, TetMesh (*read)(const std::string&), const std::string& text) {
   std::mt19937 random(12345);
   for (int trial = 0; trial < 500; ++trial) {
     std::string bad = text;
@@ -280,6 +317,7 @@ TEST(MeshBadInput, TruncatedAndCorruptFiles) {
   const std::string dir = test::tempDir();
   const TetMesh mesh = twoTets();
   writeMedit(dir + "/w.mesh", mesh);
+  writeMedit(dir + "/w.meshb", mesh);
   writeVtu(dir + "/w.vtu", mesh);
   writeGmsh(dir + "/w.msh", mesh);
   TetMesh oneTet;
@@ -295,6 +333,7 @@ TEST(MeshBadInput, TruncatedAndCorruptFiles) {
   const Case cases[] = {
       {"ours.mesh", test::readText(dir + "/w.mesh"), &readMedit, mesh},
       {"ours.vtu", test::readText(dir + "/w.vtu"), &readVtu, mesh},
+      {"ours.meshb", test::readText(dir + "/w.meshb"), &readMedit, mesh},
       {"ours.msh", test::readText(dir + "/w.msh"), &readGmsh, mesh},
       {"binary.msh", binaryGmsh(), &readGmsh, oneTet},
       {"appended base64 zlib u64.vtu", test::vtuFile(mesh, {test::VtuEncoding::AppendedBase64, true, true}), &readVtu, mesh},
@@ -302,12 +341,12 @@ TEST(MeshBadInput, TruncatedAndCorruptFiles) {
       {"inline big-endian.vtu", test::vtuFile(mesh, {test::VtuEncoding::Binary, false, false, true}), &readVtu, mesh},
       {"ascii.vtu", test::vtuFile(mesh, {test::VtuEncoding::Ascii}), &readVtu, mesh},
   };
-  MemoryFile file;
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
+    MemoryFile file(dir, c.name);
     test::expectSameMesh(c.mesh, c.read(file.set(c.text)));  // valid before it is cut
-    expectPrefixesFailCleanly(c.read, c.text, c.mesh);
-    expectCorruptionFailsCleanly(c.read, c.text);
+    expectPrefixesFailCleanly(file, c.read, c.text, c.mesh);
+    expectCorruptionFailsCleanly(file, c.read, c.text);
   }
 }
 

@@ -34,7 +34,7 @@ print(" ".join(map(str, np.concatenate(labels).ravel().tolist())))
 )";
 
 // Reads our .mesh (argv[1]) and writes it back with meshio into argv[2]: Medit
-// ASCII, VTU in four encodings with the labels under different cell data
+// ASCII and binary, VTU in four encodings with the labels under different cell data
 // names, and Gmsh 4.1 binary and ASCII with one entity per label.
 constexpr const char* kMeshioWrite = R"(
 import sys
@@ -48,6 +48,7 @@ ref = m.cell_data_dict["medit:ref"]["tetra"]
 def mesh(**cell_data):
     return meshio.Mesh(pts, [("tetra", tets)], cell_data={k: [v] for k, v in cell_data.items()})
 meshio.write(out + "/meshio.mesh", mesh(**{"medit:ref": ref}))
+meshio.write(out + "/meshio.meshb", mesh(**{"medit:ref": ref}))
 meshio.write(out + "/zlib.vtu", mesh(**{"medit:ref": ref}))
 meshio.vtu.write(out + "/zlib_u64.vtu", mesh(label=ref.astype(np.int32)), header_type="UInt64")
 meshio.vtu.write(out + "/base64.vtu", mesh(**{"gmsh:physical": ref}), binary=True, compression=None)
@@ -153,7 +154,7 @@ TEST_P(MeshioReadsOurs, PointsTetsAndLabels) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Formats, MeshioReadsOurs,
-                         ::testing::Values(std::pair{".mesh", "medit:ref"}, std::pair{".vtu", "label"},
+                         ::testing::Values(std::pair{".mesh", "medit:ref"}, std::pair{".meshb", "medit:ref"}, std::pair{".vtu", "label"},
                                            std::pair{".msh", "gmsh:physical"}),
                          [](const auto& info) { return std::string(info.param.first + 1); });
 
@@ -164,7 +165,9 @@ TEST(MeshioWritesWeRead, EveryEncoding) {
   writeMedit(dir + "/source.mesh", mesh);
   ASSERT_EQ(runPython(dir, kMeshioWrite, {dir + "/source.mesh", dir}), "ok\n");
 
-  for (const char* name : {"meshio.mesh", "zlib.vtu", "zlib_u64.vtu", "base64.vtu"}) {
+  // meshio writes .meshb as GMF version 4 (64-bit integers).
+  EXPECT_EQ(test::readText(dir + "/meshio.meshb").substr(4, 4), std::string("\x04\0\0\0", 4));
+  for (const char* name : {"meshio.mesh", "meshio.meshb", "zlib.vtu", "zlib_u64.vtu", "base64.vtu"}) {
     SCOPED_TRACE(name);
     test::expectSameMesh(mesh, readTetMesh(dir + "/" + name));
   }

@@ -40,11 +40,12 @@ TEST_P(MeshRoundTrip, FailedWriteKeepsThePreviousFile) {
   EXPECT_EQ(test::listFiles(dir), "mesh" + std::string(GetParam()) + "\n");
 }
 
-INSTANTIATE_TEST_SUITE_P(Formats, MeshRoundTrip, ::testing::Values(".mesh", ".vtu", ".msh"),
+INSTANTIATE_TEST_SUITE_P(Formats, MeshRoundTrip, ::testing::Values(".mesh", ".meshb", ".vtu", ".msh"),
                          [](const auto& info) { return std::string(info.param + 1); });
 
 TEST(MeshFormat, ExtensionDispatch) {
   EXPECT_EQ(meshFormatFromPath("a/b.MESH"), MeshFormat::Medit);
+  EXPECT_EQ(meshFormatFromPath("b.meshb"), MeshFormat::Medit);
   EXPECT_EQ(meshFormatFromPath("b.vtu"), MeshFormat::Vtu);
   EXPECT_EQ(meshFormatFromPath("b.msh"), MeshFormat::Gmsh);
   EXPECT_TRUE(hasTetMeshExtension("x.Msh"));
