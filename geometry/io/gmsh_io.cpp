@@ -256,8 +256,6 @@ void GmshReader::readElements() {
   const std::size_t total = readCount("element count", 4, 2 * sizeT_);
   readSize("minimum element tag");
   readSize("maximum element tag");
-  // The count was checked against the file size, so reserving it is safe.
-  tets_.reserve(total);
   std::size_t seen = 0;
   for (std::size_t b = 0; b < blocks; ++b) {
     const std::int32_t dim = readInt("entity dimension");
@@ -270,6 +268,8 @@ void GmshReader::readElements() {
     if (seen > total) fail("the element blocks hold more than the " + std::to_string(total) + " elements announced");
     if (type == kTet4) {
       if (dim != 3) fail("element block " + std::to_string(b) + " has tetrahedra on an entity of dimension " + std::to_string(dim));
+      // `n` was checked against the file size; grow geometrically across blocks.
+      if (tets_.capacity() < tets_.size() + n) tets_.reserve(std::max(2 * tets_.capacity(), tets_.size() + n));
       for (std::size_t i = 0; i < n; ++i) {
         TetRecord r;
         r.tag = readSize("element tag");

@@ -7,19 +7,32 @@
 #include <charconv>
 #include <cmath>
 #include <cstring>
-#include <fstream>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 namespace vox::io {
 
 std::string readWholeFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, std::string("cannot open file (") + std::strerror(errno) + ")");
-  in.seekg(0, std::ios::end);
-  const std::streamoff size = in.tellg();
-  if (size < 0) throw InputError(path, "cannot determine the file size");
-  in.seekg(0, std::ios::beg);
-  std::string bytes(std::size_t(size), '\0');
-  if (size > 0 && !in.read(bytes.data(), size)) throw InputError(path, "read error");
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw InputError(path, std::string("cannot open file (") + std::strerror(errno) + ")");
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  struct stat info {};
+  if (::fstat(fd, &info) != 0) throw InputError(path, std::string("cannot read file (") + std::strerror(errno) + ")");
+  if (!S_ISREG(info.st_mode)) throw InputError(path, "not a regular file");
+  std::string bytes(std::size_t(info.st_size), '\0');
+  std::size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::read(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) throw InputError(path, std::string("read error (") + std::strerror(errno) + ")");
+    if (n == 0) break;
+    done += std::size_t(n);
+  }
+  bytes.resize(done);
   return bytes;
 }
 

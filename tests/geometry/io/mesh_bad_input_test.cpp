@@ -79,6 +79,9 @@ TEST(MeshBadInput, Medit) {
             "a second Tetrahedra block");
   const std::string missing = test::tempDir() + "/missing.mesh";
   expectInputError([&] { readMedit(missing); }, missing, "cannot open file");
+  const std::string directory = test::tempDir() + "/directory.mesh";
+  std::filesystem::create_directory(directory);
+  expectInputError([&] { readMedit(directory); }, directory, "not a regular file");
 }
 
 TEST(MeshBadInput, MeditBinary) {
