@@ -177,11 +177,7 @@ void writeMeditBinary(const std::string& path, const TetMesh& mesh) {
   file.commit();
 }
 
-}  // namespace
-
-TetMesh readMedit(const std::string& path) {
-  const std::string bytes = io::readWholeFile(path);
-  if (isBinaryPath(path)) return GmfReader(path, bytes).read();
+TetMesh readMeditText(const std::string& path, const std::string& bytes) {
   io::TextScanner in(bytes, path, '#');
 
   const std::string_view magic = in.word();
@@ -250,9 +246,7 @@ TetMesh readMedit(const std::string& path) {
   return mesh;
 }
 
-void writeMedit(const std::string& path, const TetMesh& mesh) {
-  mesh.validate(path);
-  if (isBinaryPath(path)) return writeMeditBinary(path, mesh);
+void writeMeditText(const std::string& path, const TetMesh& mesh) {
   AtomicFile file(path);
   {
     io::TextOutput out(file.openStdio());
@@ -266,6 +260,19 @@ void writeMedit(const std::string& path, const TetMesh& mesh) {
     out << "\nEnd\n";
   }
   file.commit();
+}
+
+}  // namespace
+
+TetMesh readMedit(const std::string& path) {
+  const std::string bytes = io::readWholeFile(path);
+  return isBinaryPath(path) ? GmfReader(path, bytes).read() : readMeditText(path, bytes);
+}
+
+void writeMedit(const std::string& path, const TetMesh& mesh) {
+  mesh.validate(path);
+  if (isBinaryPath(path)) writeMeditBinary(path, mesh);
+  else writeMeditText(path, mesh);
 }
 
 }  // namespace vox

@@ -49,7 +49,7 @@ void writeTetMesh(const std::string& path, const TetMesh& mesh) {
 
 bool hasSurfaceExtension(const std::string& path) {
   const std::string e = lowerExtension(path);
-  return e == ".obj" || e == ".off";
+  return e == ".obj" || e == ".off" || e == ".ply";
 }
 
 }  // namespace vox

@@ -2,7 +2,7 @@
 // Tetrahedral mesh formats: Medit .mesh (ASCII) and .meshb (binary), VTK
 // .vtu (XML; ascii, binary base64 and zlib-compressed appended data as written
 // by meshio/ParaView), Gmsh .msh 4.1 (ASCII and binary). Surface formats: OBJ,
-// OFF.
+// OFF, PLY.
 //
 // Labels: Medit tetrahedron reference, VTU cell data array "label" (or
 // "medit:ref", "gmsh:physical" on read), Gmsh physical tag of the element's
@@ -33,7 +33,7 @@ TetMesh readGmsh(const std::string& path);
 void writeGmsh(const std::string& path, const TetMesh& mesh);
 
 bool hasSurfaceExtension(const std::string& path);
-TriMesh readSurface(const std::string& path);   // .obj, .off
+TriMesh readSurface(const std::string& path);   // .obj, .off, .ply
 void writeSurface(const std::string& path, const TriMesh& mesh);
 
 }  // namespace vox

@@ -35,7 +35,7 @@ TEST_P(SurfaceRoundTrip, Exact) {
   EXPECT_EQ(back.triangles, mesh.triangles);
 }
 
-INSTANTIATE_TEST_SUITE_P(Formats, SurfaceRoundTrip, ::testing::Values(".obj", ".off", ".OBJ"),
+INSTANTIATE_TEST_SUITE_P(Formats, SurfaceRoundTrip, ::testing::Values(".obj", ".off", ".ply", ".OBJ"),
                          [](const auto& info) { return std::string(info.param + 1); });
 
 TEST(SurfaceFormats, ObjCornerFormsNegativeIndicesAndPolygons) {
@@ -93,6 +93,36 @@ TEST(SurfaceFormats, BadInput) {
   expectBad("f10.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n2 0 1\n", "face vertex count 2 is invalid");
   expectBad("f11.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n", "no faces");
   expectBad("f12.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1\n3 0 1 2\n", "line 5: expected z coordinate, found nothing");
+  const std::string ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                          "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  auto edited = [](std::string text, const std::string& from, const std::string& to) {
+    const std::size_t at = text.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    return text.replace(at, from.size(), to);
+  };
+  expectBad("p1.ply", "", "not a PLY file");
+  expectBad("p2.ply", edited(ply, "ply\n", "PLY\n"), "line 1: not a PLY file: expected 'ply', found 'PLY'");
+  expectBad("p3.ply", ply.substr(0, ply.find("end_header")), "no end_header line");
+  expectBad("p3b.ply", edited(ply, "end_header\n", ""), "line 9: unknown header line starting with '0'");
+  expectBad("p4.ply", edited(ply, "ascii", "binary_middle_endian"), "line 2: unknown PLY format 'binary_middle_endian'");
+  expectBad("p5.ply", edited(ply, "vertex 3", "vertex 99999999999"), "line 3: element vertex count 99999999999 is more than the rest of the file can hold");
+  expectBad("p6.ply", edited(ply, "1 0 0\n", "1 nan 0\n"), "line 11: vertex 1 has a non-finite coordinate");
+  expectBad("p7.ply", edited(ply, "3 0 1 2", "3 0 1 3"), "face 0 references vertex 3");
+  expectBad("p8.ply", edited(ply, "3 0 1 2", "3 0 1 1"), "face 0 repeats vertex 1");
+  expectBad("p9.ply", edited(ply, "3 0 1 2", "2 0 1"), "face 0 has 2 vertices");
+  expectBad("p10.ply", edited(ply, "property float z\n", ""), "line 3: vertex element lacks an x, y or z property");
+  expectBad("p11.ply", edited(ply, "float y", "quad y"), "line 5: unknown property type 'quad'");
+  expectBad("p12.ply", edited(ply, "3 0 1 2\n", "3 0 1"), "expected vertex index, found nothing");
+  expectBad("p13.ply", edited(ply, "list uchar int vertex_indices", "list uchar int corners"), "face element lacks a vertex_indices list");
+  {
+    // Binary: a list length larger than the rest of the file.
+    const std::string dir = test::tempDir();
+    writeSurface(dir + "/good.ply", octahedron());
+    std::string b = test::readText(dir + "/good.ply");
+    b[b.size() - 13] = char(200);
+    expectBad("p14.ply", b, "has length 200");
+    expectBad("p15.ply", b.substr(0, b.size() - 5), "truncated");
+  }
   expectBad("s.stl", tri, "unknown surface format");
   // Writing refuses a broken surface and leaves nothing behind.
   const std::string dir = test::tempDir();
