@@ -297,7 +297,7 @@ private:
   double value(PlyType t, std::string_view what) {
     if (!binary_) {
       const std::string_view w = in_.word();
-      const char* first = w.data() + (!w.empty() && w[0] == '+');
+      const char* first = w.data() + (w.size() > 1 && w[0] == '+' && w[1] != '-');
       double v = 0;
       const auto [end, ec] = std::from_chars(first, w.data() + w.size(), v);
       if (w.empty() || ec != std::errc() || end != w.data() + w.size())

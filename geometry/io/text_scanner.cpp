@@ -89,7 +89,7 @@ std::int64_t TextScanner::integer(std::string_view what) {
   std::int64_t v = 0;
   const char* first = w.data();
   const char* last = w.data() + w.size();
-  if (first != last && *first == '+') ++first;
+  if (last - first > 1 && *first == '+' && first[1] != '-') ++first;
   const auto [end, ec] = std::from_chars(first, last, v);
   if (w.empty() || ec != std::errc() || end != last) {
     if (ec == std::errc::result_out_of_range) fail(std::string(what) + " " + quoted(w) + " is out of range");
@@ -103,7 +103,7 @@ double TextScanner::real(std::string_view what) {
   double v = 0;
   const char* first = w.data();
   const char* last = w.data() + w.size();
-  if (first != last && *first == '+') ++first;
+  if (last - first > 1 && *first == '+' && first[1] != '-') ++first;
   const auto [end, ec] = std::from_chars(first, last, v);
   if (w.empty() || ec != std::errc() || end != last) {
     if (ec == std::errc::result_out_of_range) fail(std::string(what) + " " + quoted(w) + " is out of the double range");

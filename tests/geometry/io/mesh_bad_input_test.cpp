@@ -10,8 +10,6 @@
 
 #include <filesystem>
 #include <random>
-#include <sys/mman.h>
-#include <unistd.h>
 
 namespace vox {
 namespace {
@@ -259,33 +257,9 @@ TEST(MeshBadInput, Vtu) {
   }
 }
 
-// An in-memory file (memfd) for the many small reads below: rewriting a file
-// on disk thousands of times costs more than the reads themselves. It is
-// reached through a symlink named `name` in `dir`, so readers see the
-// extension.
-class MemoryFile {
-public:
-  MemoryFile(const std::string& dir, const std::string& name) : fd_(::memfd_create("mesh", 0)), path_(dir + "/" + name) {
-    std::filesystem::create_symlink("/proc/" + std::to_string(::getpid()) + "/fd/" + std::to_string(fd_), path_);
-  }
-  ~MemoryFile() {
-    std::filesystem::remove(path_);
-    ::close(fd_);
-  }
-  const std::string& set(const std::string& bytes) {
-    EXPECT_EQ(::ftruncate(fd_, 0), 0);
-    EXPECT_EQ(::pwrite(fd_, bytes.data(), bytes.size(), 0), ssize_t(bytes.size()));
-    return path_;
-  }
-
-private:
-  int fd_;
-  std::string path_;
-};
-
 // Every prefix of a valid file either fails with an InputError or, when the
 // cut only lost optional trailing text, reads as the whole mesh.
-void expectPrefixesFailCleanly(MemoryFile& file, TetMesh (*read)(const std::string&), const std::string& text, const TetMesh& mesh) {
+void expectPrefixesFailCleanly(test::MemoryFile& file, TetMesh (*read)(const std::string&), const std::string& text, const TetMesh& mesh) {
   std::size_t failures = 0;
   for (std::size_t n = 0; n < text.size(); ++n) {
     const std::string& path = file.set(text.substr(0, n));
@@ -302,7 +276,7 @@ void expectPrefixesFailCleanly(MemoryFile& file, TetMesh (*read)(const std::stri
 }
 
 // Random byte corruption: an InputError or a mesh that validates, nothing else.
-void expectCorruptionFailsCleanly(MemoryFile& file, TetMesh (*read)(const std::string&), const std::string& text) {
+void expectCorruptionFailsCleanly(test::MemoryFile& file, TetMesh (*read)(const std::string&), const std::string& text) {
   std::mt19937 random(12345);
   for (int trial = 0; trial < 500; ++trial) {
     std::string bad = text;
@@ -346,7 +320,7 @@ TEST(MeshBadInput, TruncatedAndCorruptFiles) {
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
-    MemoryFile file(dir, c.name);
+    test::MemoryFile file(dir, c.name);
     test::expectSameMesh(c.mesh, c.read(file.set(c.text)));  // valid before it is cut
     expectPrefixesFailCleanly(file, c.read, c.text, c.mesh);
     expectCorruptionFailsCleanly(file, c.read, c.text);

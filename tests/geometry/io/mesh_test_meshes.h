@@ -9,10 +9,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <sstream>
 #include <string>
+#include <sys/mman.h>
+#include <unistd.h>
 
 namespace vox::test {
 
@@ -70,5 +73,29 @@ inline void expectInputError(const std::function<void()>& read, const std::strin
     EXPECT_NE(what.find(fault), std::string::npos) << "message: " << what << "\nexpected fault: " << fault;
   }
 }
+
+// An in-memory file (memfd) for tests that read thousands of variants of a
+// small file: rewriting a file on disk costs more than the reads. It is
+// reached through a symlink named `name` in `dir`, so readers see the
+// extension.
+class MemoryFile {
+public:
+  MemoryFile(const std::string& dir, const std::string& name) : fd_(::memfd_create("mesh", 0)), path_(dir + "/" + name) {
+    std::filesystem::create_symlink("/proc/" + std::to_string(::getpid()) + "/fd/" + std::to_string(fd_), path_);
+  }
+  ~MemoryFile() {
+    std::filesystem::remove(path_);
+    ::close(fd_);
+  }
+  const std::string& set(const std::string& bytes) {
+    EXPECT_EQ(::ftruncate(fd_, 0), 0);
+    EXPECT_EQ(::pwrite(fd_, bytes.data(), bytes.size(), 0), ssize_t(bytes.size()));
+    return path_;
+  }
+
+private:
+  int fd_;
+  std::string path_;
+};
 
 }  // namespace vox::test

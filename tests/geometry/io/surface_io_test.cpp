@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 namespace vox {
 namespace {
@@ -130,6 +131,40 @@ TEST(SurfaceFormats, BadInput) {
   broken.triangles[3][1] = 6;
   expectInputError([&] { writeSurface(dir + "/b.obj", broken); }, dir + "/b.obj", "triangle 3 references vertex 6");
   EXPECT_EQ(test::listFiles(dir), "");
+}
+
+// Every prefix and random corruptions of small valid files: an InputError or
+// a surface that validates, nothing else (no crash, no other exception).
+TEST(SurfaceFormats, TruncatedAndCorruptFiles) {
+  const std::string dir = test::tempDir();
+  const TriMesh mesh = octahedron();
+  std::mt19937 random(777);
+  for (const char* name : {"s.obj", "s.off", "s.ply"}) {
+    SCOPED_TRACE(name);
+    writeSurface(dir + "/w" + name, mesh);
+    const std::string text = test::readText(dir + "/w" + name);
+    test::MemoryFile file(dir, name);
+    std::size_t failures = 0;
+    for (std::size_t n = 0; n < text.size(); ++n) {
+      try {
+        const TriMesh m = readSurface(file.set(text.substr(0, n)));
+        m.validate(name);
+        EXPECT_LE(m.faceCount(), mesh.faceCount());
+      } catch (const InputError&) {
+        ++failures;
+      }
+    }
+    // OBJ has no counts: a cut between lines loses faces silently.
+    EXPECT_GT(failures, text.size() / 3);
+    for (int trial = 0; trial < 300; ++trial) {
+      std::string bad = text;
+      for (int e = 0; e < 1 + int(random() % 3); ++e) bad[random() % bad.size()] = char(random() % 256);
+      try {
+        readSurface(file.set(bad)).validate(name);
+      } catch (const InputError&) {
+      }
+    }
+  }
 }
 
 }  // namespace
