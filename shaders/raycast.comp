@@ -104,7 +104,7 @@ bool locate(vec3 p, inout int tet, inout TetCache c, out vec4 lambda) {
     lambda.z = dot(c.f2.xyz, q) + c.f2.w;
     lambda.w = dot(c.f3.xyz, q) + c.f3.w;
     lambda.x = 1.0 - lambda.y - lambda.z - lambda.w;
-    const bvec4 outside = lessThan(lambda, vec4(-P.insideTolerance));
+    const bvec4 outside = lessThan(lambda, vec4(-VOX_RAYCAST_INSIDE_TOLERANCE));
     if (!any(outside)) return true;
     // Cross the face with the most negative coordinate among those with a
     // neighbour (the mesh may be non-convex); ties go to the lowest index.
@@ -209,10 +209,6 @@ void ddaAdvance(inout Dda s) {
 
 // ---------------------------------------------------------------------- ray
 
-// Cap of the margin before an entry point, in half cell diagonals
-// (kMaxEntryMarginCells in geometry/render/raycast_reference.cpp).
-const float kMaxEntryMarginCells = 16.0;
-
 // Cells whose centres are inside the TM can be crossed before the entry
 // point, by up to half a cell diagonal away from the entry face's plane:
 // along a ray that meets the face at a grazing angle, that is far.
@@ -220,7 +216,7 @@ float entryMargin(int face, vec3 d, float margin) {
   const uvec4 f = faces[face];
   const vec3 a = positions[f.x].xyz;
   const vec3 n = normalize(cross(positions[f.y].xyz - a, positions[f.z].xyz - a));
-  return min(kMaxEntryMarginCells * margin, 0.5 * sqrt(3.0) / abs(dot(n, d)));
+  return min(VOX_RAYCAST_MAX_ENTRY_MARGIN_CELLS * margin, 0.5 * sqrt(3.0) / abs(dot(n, d)));
 }
 
 struct Hit {

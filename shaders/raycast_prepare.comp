@@ -13,9 +13,6 @@ layout(std430, binding = VOX_RAYCAST_PREPARE_BINDING_POSITIONS) readonly buffer 
 layout(std430, binding = VOX_RAYCAST_PREPARE_BINDING_FACTORS) writeonly buffer Factors { vec4 factors[]; };
 layout(push_constant) uniform Push { RaycastPreparePush pc; };
 
-// kDegenerateTetRatio (geometry/render/raycast_scene.h).
-const float kDegenerateTetRatio = 1e-7;
-
 void main() {
   const uint t = gl_GlobalInvocationID.x;
   if (t >= pc.tetCount) return;
@@ -26,7 +23,7 @@ void main() {
   const vec3 e3 = positions[q.w].xyz - v0;
   const vec3 n1 = cross(e2, e3), n2 = cross(e3, e1), n3 = cross(e1, e2);
   const float det = dot(e1, n1);
-  if (!(abs(det) > kDegenerateTetRatio * length(e1) * length(e2) * length(e3))) {
+  if (!(abs(det) > VOX_RAYCAST_DEGENERATE_TET_RATIO * length(e1) * length(e2) * length(e3))) {
     // Contains no point: lambda_1..3 = -1.
     factors[4u * t + 0u] = vec4(0.0, 0.0, 0.0, -1.0);
     factors[4u * t + 1u] = vec4(0.0, 0.0, 0.0, -1.0);

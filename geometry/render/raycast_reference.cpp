@@ -13,8 +13,6 @@ namespace vox {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-// Cap of the margin before an entry point, in half cell diagonals.
-constexpr double kMaxEntryMarginCells = 16.0;
 
 // 3D DDA over unit cells centred on integers (thesis Algorithm 2). Cell-face
 // crossings are recomputed from the integer cell, so no error accumulates.

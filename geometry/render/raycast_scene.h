@@ -110,5 +110,8 @@ inline constexpr double kInsideTolerance = 1e-5;
 // A deformed tet whose |det(v1-v0, v2-v0, v3-v0)| is below this fraction of
 // the product of its edge lengths from v0 is degenerate (float noise on the GPU).
 inline constexpr double kDegenerateTetRatio = 1e-7;
+// Cap of the margin before an entry point, in half cell diagonals
+// (raycast_reference.h, step 3).
+inline constexpr double kMaxEntryMarginCells = 16.0;
 
 }  // namespace vox

@@ -21,6 +21,10 @@ using shader::RaycastParams;
 using shader::RaycastPreparePush;
 
 static_assert(VOX_RAYCAST_BVH_STACK == 2 * kBvhMaxDepth);
+static_assert(VOX_RAYCAST_FACE_HIT_TOLERANCE == kFaceHitTolerance);
+static_assert(VOX_RAYCAST_INSIDE_TOLERANCE == kInsideTolerance);
+static_assert(VOX_RAYCAST_DEGENERATE_TET_RATIO == kDegenerateTetRatio);
+static_assert(VOX_RAYCAST_MAX_ENTRY_MARGIN_CELLS == kMaxEntryMarginCells);
 
 PipelineDesc raycastPipeline() {
   PipelineDesc d;
@@ -181,7 +185,6 @@ RgbImage RaycastKernel::render(const RaycastFrame& frame, const RaycastView& vie
   p.tanHalfFovY = float(view.camera.tanHalfFovY);
   p.aspect = float(view.camera.aspect);
   p.ambient = float(shading.ambient);
-  p.insideTolerance = float(kInsideTolerance);
   p.width = std::uint32_t(w);
   p.height = std::uint32_t(h);
   p.cutCount = std::uint32_t(view.cuts.size());

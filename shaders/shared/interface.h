@@ -40,6 +40,13 @@ struct LabelStatsPush {
 #define VOX_RAYCAST_MAX_SLABS 8     // label slabs (z-slabs of whole slices), one binding each
 #define VOX_RAYCAST_MAX_CUTS 4      // three axis-aligned planes and one free plane
 #define VOX_RAYCAST_BVH_STACK 64    // 2 * kBvhMaxDepth (geometry/render/boundary_bvh.h)
+// Tolerances shared with the CPU reference (gpu/kernels/raycast.cpp checks
+// that they equal geometry/render's kFaceHitTolerance, kInsideTolerance,
+// kDegenerateTetRatio and kMaxEntryMarginCells).
+#define VOX_RAYCAST_FACE_HIT_TOLERANCE 1e-4
+#define VOX_RAYCAST_INSIDE_TOLERANCE 1e-5
+#define VOX_RAYCAST_DEGENERATE_TET_RATIO 1e-7
+#define VOX_RAYCAST_MAX_ENTRY_MARGIN_CELLS 16.0
 
 // raycast_prepare.comp: per-tet factors of eq. 5.1-5.2 from the deformed positions.
 #define VOX_RAYCAST_PREPARE_BINDING_TETS 0       // uvec4[tetCount]: vertex indices
@@ -104,7 +111,6 @@ struct RaycastParams {
   float tanHalfFovY;
   float aspect;
   float ambient;
-  float insideTolerance;
   int sourceShift[4];  // source voxel = round(mapped point) + sourceShift
   int sourceDims[4];
   uint width;
@@ -125,7 +131,7 @@ struct RaycastParams {
 static_assert(sizeof(RaycastPreparePush) == 16);
 static_assert(sizeof(RaycastNode) == 32);
 static_assert(sizeof(RaycastEntriesPush) == 16);
-static_assert(sizeof(RaycastParams) == 320);
+static_assert(sizeof(RaycastParams) == 316);
 #endif
 
 #ifdef __cplusplus

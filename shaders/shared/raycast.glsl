@@ -4,8 +4,7 @@
 #ifndef VOXMORPH_RAYCAST_GLSL
 #define VOXMORPH_RAYCAST_GLSL
 
-// kFaceHitTolerance (geometry/render/boundary_bvh.h).
-const float kFaceHitTolerance = 1e-4;
+const float kFaceHitTolerance = VOX_RAYCAST_FACE_HIT_TOLERANCE;
 const float kInf = 1e30;
 
 vec3 vec3Of(float v[4]) { return vec3(v[0], v[1], v[2]); }
