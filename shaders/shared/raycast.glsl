@@ -1,5 +1,6 @@
 // GLSL shared by raycast.comp and raycast_entries.comp: the pixel ray and the
-// ray / boundary-face test, so both passes compute bit-identical hits.
+// ray / boundary-face test. `precise` forbids contracting their arithmetic
+// differently in the two shaders, so both passes compute bit-identical hits.
 // Included after the RaycastParams block named P.
 #ifndef VOXMORPH_RAYCAST_GLSL
 #define VOXMORPH_RAYCAST_GLSL
@@ -11,27 +12,29 @@ vec3 vec3Of(float v[4]) { return vec3(v[0], v[1], v[2]); }
 
 // Ray direction of pixel (x, y) in the render frame (CameraRays::sx, sy).
 vec3 pixelDirection(uvec2 px) {
-  const float sx = (2.0 * (float(px.x) + 0.5) / float(P.width) - 1.0) * P.tanHalfFovY * P.aspect;
-  const float sy = (1.0 - 2.0 * (float(px.y) + 0.5) / float(P.height)) * P.tanHalfFovY;
-  return vec3Of(P.forward) + sx * vec3Of(P.right) + sy * vec3Of(P.up);
+  precise const float sx = (2.0 * (float(px.x) + 0.5) / float(P.width) - 1.0) * P.tanHalfFovY * P.aspect;
+  precise const float sy = (1.0 - 2.0 * (float(px.y) + 0.5) / float(P.height)) * P.tanHalfFovY;
+  precise const vec3 d = vec3Of(P.forward) + sx * vec3Of(P.right) + sy * vec3Of(P.up);
+  return d;
 }
 
 // Moller-Trumbore, front faces only (det > 0 means dot(d, n) < 0), with the
 // barycentric tolerance that makes rays through shared edges hit both faces.
 bool rayFrontFace(vec3 o, vec3 d, vec3 a, vec3 b, vec3 c, out float t) {
   t = 0.0;
-  const vec3 e1 = b - a, e2 = c - a;
-  const vec3 p = cross(d, e2);
-  const float det = dot(e1, p);
+  precise const vec3 e1 = b - a, e2 = c - a;
+  precise const vec3 p = cross(d, e2);
+  precise const float det = dot(e1, p);
   if (!(det > 0.0)) return false;
-  const float inv = 1.0 / det;
-  const vec3 s = o - a;
-  const float u = dot(s, p) * inv;
+  precise const float inv = 1.0 / det;
+  precise const vec3 s = o - a;
+  precise const float u = dot(s, p) * inv;
   if (u < -kFaceHitTolerance || u > 1.0 + kFaceHitTolerance) return false;
-  const vec3 q = cross(s, e1);
-  const float v = dot(d, q) * inv;
+  precise const vec3 q = cross(s, e1);
+  precise const float v = dot(d, q) * inv;
   if (v < -kFaceHitTolerance || u + v > 1.0 + kFaceHitTolerance) return false;
-  t = dot(e2, q) * inv;
+  precise const float hit = dot(e2, q) * inv;
+  t = hit;
   return true;
 }
 
