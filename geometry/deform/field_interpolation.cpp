@@ -14,14 +14,18 @@ namespace {
 constexpr std::int64_t kSlabPoints = std::int64_t(1) << 24;
 }  // namespace
 
-ScalarGrid interpolateVertexField(const TetMesh& mesh, const std::vector<double>& values, const GridGeometry& target,
-                                  const FieldInterpolationOptions& options) {
+void validateVertexField(const TetMesh& mesh, const std::vector<double>& values) {
   mesh.validate("field mesh");
   if (values.size() != mesh.positions.size())
     throw InputError("vertex field", std::to_string(values.size()) + " values for a mesh of " +
                                          std::to_string(mesh.positions.size()) + " vertices");
   for (std::size_t i = 0; i < values.size(); ++i)
     if (!std::isfinite(values[i])) throw InputError("vertex field", "value " + std::to_string(i) + " is not finite");
+}
+
+ScalarGrid interpolateVertexField(const TetMesh& mesh, const std::vector<double>& values, const GridGeometry& target,
+                                  const FieldInterpolationOptions& options) {
+  validateVertexField(mesh, values);
   target.validate("field grid");
 
   const std::vector<LatticeTet> tets = latticeTets(target, mesh.positions, mesh.tets);

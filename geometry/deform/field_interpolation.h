@@ -19,6 +19,9 @@ struct FieldInterpolationOptions {
   int threads = 0;    // CPU threads; 0 = every hardware thread
 };
 
+// Throws InputError unless mesh is valid and values holds #V finite values.
+void validateVertexField(const TetMesh& mesh, const std::vector<double>& values);
+
 // mesh: positions in the grid frame of `target` (mm); values: #V per-vertex
 // values. Voxel centres in several tets (shared faces) take the lowest-index
 // tet, as in the rasterizer (lattice_tets.h). Throws InputError for a value

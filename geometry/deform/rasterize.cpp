@@ -126,7 +126,7 @@ SlabTets RasterizationPlan::slab(std::int64_t z0, std::int64_t z1) const {
   return slabTets(tets_, std::int32_t(z0 * samples_), std::int32_t(z1 * samples_));
 }
 
-std::array<std::int64_t, 2> RasterizationPlan::sourceSlices(const SlabTets& slab) const {
+SliceRange RasterizationPlan::sourceSlices(const SlabTets& slab) const {
   std::int64_t first = source_.dims[2], last = 0;
   for (std::int32_t t : slab.tets) {
     const auto& r = sourceZ_[std::size_t(t)];
@@ -134,7 +134,7 @@ std::array<std::int64_t, 2> RasterizationPlan::sourceSlices(const SlabTets& slab
     first = std::min<std::int64_t>(first, r[0]);
     last = std::max<std::int64_t>(last, std::int64_t(r[1]) + 1);
   }
-  return first < last ? std::array<std::int64_t, 2>{first, last} : std::array<std::int64_t, 2>{0, 0};
+  return first < last ? SliceRange{first, last} : SliceRange{};
 }
 
 void resolveSamples(const RasterizationPlan& plan, const SlabTets& slab, const Label* window, std::int64_t w0,
@@ -196,6 +196,50 @@ void reduceSamples(const RasterizationPlan& plan, const SlabTets& slab, const st
       row[i] = majorityLabel(labels, n);
     }
   });
+}
+
+std::vector<SliceRange> sourceWindows(const SliceRange& needed, const SliceRange& resident, std::int64_t capacity,
+                                      std::int64_t sourceSlices) {
+  if (needed.empty()) return {};
+  if (resident.contains(needed)) return {resident};
+  capacity = std::max<std::int64_t>(1, capacity);
+  if (needed.count() <= capacity) {
+    const std::int64_t first = std::max<std::int64_t>(0, std::min(needed.first, sourceSlices - capacity));
+    return {SliceRange{first, std::min(sourceSlices, first + capacity)}};
+  }
+  std::vector<SliceRange> windows;
+  for (std::int64_t w = needed.first; w < needed.last; w += capacity) windows.push_back({w, std::min(needed.last, w + capacity)});
+  return windows;
+}
+
+void LabelGridSlices::readSlices(std::int64_t k0, std::int64_t count, Label* out) {
+  const std::int64_t slice = grid_.geometry().sliceVoxels();
+  std::copy(grid_.data() + k0 * slice, grid_.data() + (k0 + count) * slice, out);
+}
+
+CpuSlabRasterizer::CpuSlabRasterizer(const RasterizationPlan& plan, GridSliceReader& source, const CpuRasterizerLimits& limits,
+                                     int threads)
+    : plan_(plan), source_(source), limits_(limits), threads_(threads) {}
+
+std::int64_t CpuSlabRasterizer::slabSlices() const {
+  return std::max<std::int64_t>(1, limits_.slabSamples / plan_.samplesPerOutputSlice());
+}
+
+void CpuSlabRasterizer::rasterizeSlab(std::int64_t z0, std::int64_t z1, Label* out) {
+  const SlabTets slab = plan_.slab(z0, z1);
+  state_.resize(std::size_t((z1 - z0) * plan_.samplesPerOutputSlice()));
+  locateLatticePoints(plan_.tets(), slab, plan_.lattice(), state_.data(), threads_);
+  const std::int64_t sourceSlice = plan_.source().sliceVoxels();
+  const std::int64_t capacity = std::max<std::int64_t>(1, limits_.windowVoxels / sourceSlice);
+  for (const SliceRange& w : sourceWindows(plan_.sourceSlices(slab), resident_, capacity, plan_.source().dims[2])) {
+    if (!(w == resident_)) {
+      window_.resize(std::size_t(w.count() * sourceSlice));
+      source_.readSlices(w.first, w.count(), window_.data());
+      resident_ = w;
+    }
+    resolveSamples(plan_, slab, window_.data(), w.first, w.last, state_.data(), threads_);
+  }
+  reduceSamples(plan_, slab, state_.data(), out, threads_);
 }
 
 LabelGrid rasterizeDeformedGrid(const LabelGrid& source, const TetMesh& rest, const std::vector<Eigen::Vector3d>& deformed,

@@ -23,6 +23,7 @@
 // -> voxel label).
 
 #include "geometry/deform/lattice_tets.h"
+#include "geometry/io/grid_io.h"
 #include "geometry/label_grid.h"
 #include "geometry/tet_mesh.h"
 
@@ -47,6 +48,16 @@ GridGeometry deformedGridGeometry(const GridGeometry& source, const std::vector<
 // The lattice of the k^3 sample points of every output voxel: k times finer,
 // sample (a,b,c) of voxel (i,j,l) is lattice point (k i + a, k j + b, k l + c).
 GridGeometry sampleLattice(const GridGeometry& output, int samples);
+
+// Whole source slices [first, last).
+struct SliceRange {
+  std::int64_t first = 0;
+  std::int64_t last = 0;
+  std::int64_t count() const { return last - first; }
+  bool empty() const { return last <= first; }
+  bool contains(const SliceRange& r) const { return r.empty() || (first <= r.first && r.last <= last); }
+  bool operator==(const SliceRange&) const = default;
+};
 
 // Sample states after the resolve stage: kNoTet (label 0), a slab-local tet
 // index (label still pending: its source voxel is not in memory yet), or
@@ -79,9 +90,9 @@ public:
 
   // The tets of output slices [z0, z1) (sample slices k z0 .. k z1).
   SlabTets slab(std::int64_t z0, std::int64_t z1) const;
-  // Source slices [first, last) that the samples of a slab may read
-  // (first == last when none). Includes a margin for float evaluation.
-  std::array<std::int64_t, 2> sourceSlices(const SlabTets& slab) const;
+  // Source slices that the samples of a slab may read (empty when none).
+  // Includes a margin for float evaluation.
+  SliceRange sourceSlices(const SlabTets& slab) const;
 
 private:
   GridGeometry source_, output_, lattice_;
@@ -103,6 +114,64 @@ void resolveSamples(const RasterizationPlan& plan, const SlabTets& slab, const L
 // samples) into `out` (the slab's output voxels, x fastest).
 void reduceSamples(const RasterizationPlan& plan, const SlabTets& slab, const std::uint32_t* state, Label* out,
                    int threads);
+
+// The source windows (at most `capacity` slices each) through which the
+// resolve stage reads `needed`, of a source of `sourceSlices` slices: none
+// when `needed` is empty; `resident` alone when it holds `needed`; else
+// consecutive windows from needed.first, a single one extended to `capacity`
+// slices (a whole source that fits is loaded whole) so that the next slabs
+// find their slices resident.
+std::vector<SliceRange> sourceWindows(const SliceRange& needed, const SliceRange& resident, std::int64_t capacity,
+                                      std::int64_t sourceSlices);
+
+// An engine that rasterizes G' slab by slab (the CPU reference below, the GPU
+// kernel gpu::RasterizeKernel); the out-of-core driver writes its slabs.
+class SlabRasterizer {
+public:
+  virtual ~SlabRasterizer() = default;
+  virtual const GridGeometry& outputGeometry() const = 0;
+  // Output slices per slab that fit the engine's memory limits.
+  virtual std::int64_t slabSlices() const = 0;
+  // Labels of output slices [z0, z1) into out ((z1 - z0) * nx * ny labels).
+  virtual void rasterizeSlab(std::int64_t z0, std::int64_t z1, Label* out) = 0;
+};
+
+// A GridSliceReader over an in-memory grid (which must outlive it).
+class LabelGridSlices : public GridSliceReader {
+public:
+  explicit LabelGridSlices(const LabelGrid& grid) : grid_(grid) {}
+  const GridGeometry& geometry() const override { return grid_.geometry(); }
+  void readSlices(std::int64_t k0, std::int64_t count, Label* out) override;
+  const LabelGrid& grid() const { return grid_; }
+
+private:
+  const LabelGrid& grid_;
+};
+
+struct CpuRasterizerLimits {
+  std::int64_t slabSamples = std::int64_t(1) << 24;   // sample states held at once
+  std::int64_t windowVoxels = std::int64_t(1) << 28;  // source labels held at once
+};
+
+// The CPU reference as a slab engine reading its source through a
+// GridSliceReader (both must outlive it).
+class CpuSlabRasterizer : public SlabRasterizer {
+public:
+  CpuSlabRasterizer(const RasterizationPlan& plan, GridSliceReader& source, const CpuRasterizerLimits& limits = {},
+                    int threads = 0);
+  const GridGeometry& outputGeometry() const override { return plan_.output(); }
+  std::int64_t slabSlices() const override;
+  void rasterizeSlab(std::int64_t z0, std::int64_t z1, Label* out) override;
+
+private:
+  const RasterizationPlan& plan_;
+  GridSliceReader& source_;
+  CpuRasterizerLimits limits_;
+  int threads_;
+  std::vector<std::uint32_t> state_;
+  std::vector<Label> window_;
+  SliceRange resident_;
+};
 
 // In-core CPU reference: the deformed grid G'.
 LabelGrid rasterizeDeformedGrid(const LabelGrid& source, const TetMesh& rest, const std::vector<Eigen::Vector3d>& deformed,

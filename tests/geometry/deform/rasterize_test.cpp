@@ -222,14 +222,42 @@ TEST(RasterizeCpu, SlabsAndSourceWindowsDoNotChangeTheResult) {
       std::vector<std::uint32_t> state(std::size_t((z1 - z0) * plan.samplesPerOutputSlice()));
       locateLatticePoints(plan.tets(), slab, plan.lattice(), state.data(), 2);
       const auto range = plan.sourceSlices(slab);
-      for (std::int64_t w0 = range[0]; w0 < range[1]; w0 += 3) {
-        const std::int64_t w1 = std::min(range[1], w0 + 3);
+      for (std::int64_t w0 = range.first; w0 < range.last; w0 += 3) {
+        const std::int64_t w1 = std::min(range.last, w0 + 3);
         resolveSamples(plan, slab, source.data() + w0 * sourceSlice, w0, w1, state.data(), 1);
       }
       reduceSamples(plan, slab, state.data(), pieced.data() + z0 * plan.output().sliceVoxels(), 2);
     }
     EXPECT_EQ(pieced.labels(), whole.labels()) << "samples " << samples;
   }
+}
+
+TEST(RasterizeCpu, SlabEngineWithSmallLimitsEqualsInCore) {
+  const LabelGrid source = stickFigure();
+  const TetMesh tm = coveringTransferMesh(source, 3);
+  const auto deformed = deformPositions(tm.positions, test::twist(gridCentre(source.geometry()), 2.0));
+  const LabelGrid whole = rasterizeDeformedGrid(source, tm, deformed);
+  const RasterizationPlan plan(source.geometry(), tm, deformed);
+  LabelGridSlices reader(source);
+  // Slabs of 3 output slices, windows of 4 source slices: several windows per slab.
+  CpuSlabRasterizer engine(plan, reader,
+                           {.slabSamples = 3 * plan.samplesPerOutputSlice(), .windowVoxels = 4 * source.geometry().sliceVoxels()});
+  ASSERT_EQ(engine.slabSlices(), 3);
+  LabelGrid pieced(engine.outputGeometry());
+  const std::int64_t nz = pieced.dims()[2];
+  for (std::int64_t z0 = 0; z0 < nz; z0 += 3)
+    engine.rasterizeSlab(z0, std::min(nz, z0 + 3), pieced.data() + z0 * pieced.geometry().sliceVoxels());
+  EXPECT_EQ(pieced.labels(), whole.labels());
+}
+
+TEST(RasterizeCpu, SourceWindowsCoverWhatIsNeeded) {
+  using W = std::vector<SliceRange>;
+  EXPECT_EQ(sourceWindows({}, {0, 10}, 5, 100), W{});
+  EXPECT_EQ(sourceWindows({3, 8}, {0, 10}, 5, 100), (W{{0, 10}}));        // resident
+  EXPECT_EQ(sourceWindows({3, 8}, {0, 5}, 10, 100), (W{{3, 13}}));        // read ahead
+  EXPECT_EQ(sourceWindows({95, 99}, {}, 10, 100), (W{{90, 100}}));       // clipped at the end
+  EXPECT_EQ(sourceWindows({3, 8}, {}, 500, 100), (W{{0, 100}}));         // whole source
+  EXPECT_EQ(sourceWindows({3, 14}, {}, 5, 100), (W{{3, 8}, {8, 13}, {13, 14}}));
 }
 
 TEST(RasterizeCpu, SupersamplingTiesGoToTheLowestLabel) {
