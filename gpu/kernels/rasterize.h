@@ -13,6 +13,7 @@
 // up to VOX_RASTER_SOURCE_PARTS bindings of one allocation (2 GiB at most),
 // and slabs with too many tets or tasks are split.
 
+#include "geometry/deform/out_of_core.h"
 #include "geometry/deform/rasterize.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/label_grid.h"
@@ -83,5 +84,12 @@ private:
   std::uint64_t maxSlabSamples_ = 0;
   double gpuMs_ = 0.0;
 };
+
+// Out-of-core rasterization (geometry/deform/out_of_core.h) with this kernel
+// as the engine: slabs and source windows sized by options.maxMemoryBytes
+// (and by the device's limits).
+void rasterizeOutOfCore(Context& context, OutOfCoreSource& source, const TetMesh& rest,
+                        const std::vector<Eigen::Vector3d>& deformed, const std::string& outputPath,
+                        const OutOfCoreOptions& options = {});
 
 }  // namespace vox::gpu

@@ -1,10 +1,13 @@
 #pragma once
 // Transfer meshes and smooth deformations for the rasterization tests and
 // benchmarks, until the CGAL transfer mesh generator is available: a six-tet
-// decomposition of a downsampled copy of the grid (foreground only), whose
-// corners coincide with full-resolution voxel corners, deformed by analytic
+// decomposition of a downsampled copy of the grid (foreground only; the
+// downsampling keeps any foreground, so the mesh covers every foreground
+// voxel, its corners on full-resolution voxel corners), deformed by analytic
 // non-rigid maps (bend, twist) or a rotation.
 
+#include "geometry/deform/out_of_core.h"
+#include "geometry/deform/rasterize.h"
 #include "geometry/label_grid.h"
 #include "geometry/tet_mesh.h"
 #include "geometry/voxel_tetrahedralization.h"
@@ -13,49 +16,15 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
-#include <map>
 #include <vector>
 
 namespace vox::test {
 
-// Block downsampling by `factor`: a block is foreground when any of its
-// voxels is (most frequent non-zero label), so a mesh of the downsampled
-// foreground covers every foreground voxel of `grid`.
-inline LabelGrid downsampleCovering(const LabelGrid& grid, int factor) {
-  const GridGeometry& g = grid.geometry();
-  GridGeometry d = g;
-  for (int a = 0; a < 3; ++a) d.dims[std::size_t(a)] = (g.dims[std::size_t(a)] + factor - 1) / factor;
-  d.spacing = g.spacing * double(factor);
-  d.origin = g.origin + g.spacing * (double(factor - 1) / 2.0);
-  LabelGrid out(d);
-  std::vector<int> counts(65536, 0);
-  std::vector<Label> seen;
-  for (std::int64_t K = 0; K < d.dims[2]; ++K)
-    for (std::int64_t J = 0; J < d.dims[1]; ++J)
-      for (std::int64_t I = 0; I < d.dims[0]; ++I) {
-        seen.clear();
-        for (std::int64_t k = K * factor; k < std::min((K + 1) * factor, g.dims[2]); ++k)
-          for (std::int64_t j = J * factor; j < std::min((J + 1) * factor, g.dims[1]); ++j)
-            for (std::int64_t i = I * factor; i < std::min((I + 1) * factor, g.dims[0]); ++i) {
-              const Label l = grid.at(i, j, k);
-              if (l == 0) continue;
-              if (counts[l]++ == 0) seen.push_back(l);
-            }
-        Label best = 0;
-        int bestCount = 0;
-        for (Label l : seen) {
-          if (counts[l] > bestCount || (counts[l] == bestCount && l < best)) best = l, bestCount = counts[l];
-          counts[l] = 0;
-        }
-        out.at(I, J, K) = best;
-      }
-  return out;
-}
-
 // Six-tet transfer mesh covering the foreground of `grid`, `factor` voxels per
 // tet cube edge. Positions are in the grid frame of `grid`.
 inline TetMesh coveringTransferMesh(const LabelGrid& grid, int factor) {
-  return tetrahedralizeVoxels(downsampleCovering(grid, factor), {.includeBackground = false});
+  LabelGridSlices slices(grid);
+  return tetrahedralizeVoxels(downsampleLabels(slices, factor), {.includeBackground = false});
 }
 
 using Deformation = std::function<Eigen::Vector3d(const Eigen::Vector3d&)>;
