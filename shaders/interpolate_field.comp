@@ -1,29 +1,29 @@
 #version 460
 // Field interpolation after the locate stage (CPU reference:
-// geometry/deform/field_interpolation.cpp): the located tet's barycentric
-// interpolation of the per-vertex values, as an affine map around an anchor
-// lattice point; `fill` where no tet contains the point.
+// geometry/deform/field_interpolation.cpp): each task walks its tet's spans
+// and writes, at the points its tet won, the tet's barycentric interpolation
+// of the per-vertex values (an affine map around an anchor lattice point).
+// Points no tet won keep the fill value the host wrote.
 #extension GL_GOOGLE_include_directive : require
 #include "shared/interface.h"
+#include "shared/lattice_span.glsl"
+#include "shared/raster_tasks.glsl"
 
-layout(local_size_x = VOX_RASTER_GROUP_SIZE) in;
-
-layout(std430, binding = VOX_RASTER_BINDING_STATE) readonly buffer State { uint state[]; };
 layout(std430, binding = VOX_RASTER_BINDING_MAPS) readonly buffer Maps { FieldMap maps[]; };
-layout(std430, binding = VOX_RASTER_BINDING_OUTPUT) writeonly buffer Output { float values[]; };
-layout(push_constant) uniform Push { FieldInterpolatePush pc; };
+layout(std430, binding = VOX_FIELD_BINDING_OUTPUT) writeonly buffer Output { float values[]; };
 
 void main() {
-  if (gl_GlobalInvocationID.x >= pc.itemCount) return;
-  const uint s = pc.itemBase + gl_GlobalInvocationID.x;
-  const uint st = state[s];
-  if (st == VOX_RASTER_NO_TET) {
-    values[s] = pc.fill;
-    return;
+  Task task;
+  RasterTet t;
+  if (!taskOfInvocation(task, t)) return;
+  const FieldMap m = maps[task.local];
+  const float slice = m.value + m.gz * float(task.z - m.az);
+  for (int y = task.y0; y <= task.y1; ++y) {
+    int x0, x1;
+    if (!rowSpan(t, y, task.z, x0, x1)) continue;
+    const uint row = rowStart(task, y);
+    const float base = slice + m.gy * float(y - m.ay);
+    for (int x = x0; x <= x1; ++x)
+      if (state[row + uint(x)] == task.local) values[row + uint(x)] = base + m.gx * float(x - m.ax);
   }
-  const uint row = s / pc.latticeNx;
-  const ivec3 q = ivec3(s % pc.latticeNx, row % pc.latticeNy, pc.slabZ0 + row / pc.latticeNy);
-  const FieldMap m = maps[st];
-  const vec3 d = vec3(q - ivec3(m.ax, m.ay, m.az));
-  values[s] = m.value + (m.gx * d.x + m.gy * d.y + m.gz * d.z);
 }

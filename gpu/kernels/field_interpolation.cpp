@@ -11,8 +11,8 @@
 namespace vox::gpu {
 
 namespace {
-using shader::FieldInterpolatePush;
 using shader::FieldMap;
+using shader::RasterTaskPush;
 }  // namespace
 
 FieldInterpolationKernel::FieldInterpolationKernel(Context& context, const FieldInterpolationKernelOptions& options)
@@ -20,8 +20,9 @@ FieldInterpolationKernel::FieldInterpolationKernel(Context& context, const Field
       options_(options),
       locate_(context),
       pipeline_(context, {"interpolate_field.comp",
-                          {BindingKind::StorageBuffer, BindingKind::StorageBuffer, BindingKind::StorageBuffer},
-                          sizeof(FieldInterpolatePush)}),
+                          {BindingKind::StorageBuffer, BindingKind::StorageBuffer, BindingKind::StorageBuffer,
+                           BindingKind::StorageBuffer, BindingKind::StorageBuffer},
+                          sizeof(RasterTaskPush)}),
       batch_(context) {}
 
 ScalarGrid FieldInterpolationKernel::run(const TetMesh& mesh, const std::vector<double>& values, const GridGeometry& target,
@@ -54,7 +55,6 @@ void FieldInterpolationKernel::runSlab(const std::vector<LatticeTet>& tets, cons
     runSlab(tets, mesh, values, target, fill, mid, z1, out + (mid - z0) * target.sliceVoxels());
     return;
   }
-  batch_.timestamp("start");
   const std::uint64_t mapBytes = slab.tets.size() * sizeof(FieldMap);
   growBuffer(context_, maps_, mapBytes, MemoryIntent::Upload);
   writeHostData(maps_, mapBytes, [&](std::uint8_t* dst) {
@@ -71,16 +71,18 @@ void FieldInterpolationKernel::runSlab(const std::vector<LatticeTet>& tets, cons
   const std::uint64_t points = std::uint64_t((z1 - z0) * target.sliceVoxels());
   growBuffer(context_, output_, points * sizeof(float), MemoryIntent::Readback);
 
-  FieldInterpolatePush push{};
+  std::uint32_t fillBits;
+  std::memcpy(&fillBits, &fill, sizeof(fillBits));
+  batch_.fill(output_, fillBits, 0, points * sizeof(float));
+  RasterTaskPush push{};
   push.latticeNx = std::uint32_t(target.dims[0]);
   push.latticeNy = std::uint32_t(target.dims[1]);
   push.slabZ0 = std::uint32_t(z0);
-  push.fill = fill;
-  dispatchItems(context_, points, VOX_RASTER_GROUP_SIZE, [&](std::uint32_t first, std::uint32_t n, std::uint32_t groups) {
-    push.itemBase = first;
-    push.itemCount = n;
+  locate_.forTaskDispatches([&](std::uint32_t first, std::uint32_t n, std::uint32_t groups) {
+    push.taskBase = first;
+    push.taskCount = n;
     batch_.dispatch(pipeline_,
-                    {Binding::storage(locate_.state(), 0, locate_.stateBytes()), Binding::storage(maps_, 0, std::max<std::uint64_t>(mapBytes, 16)),
+                    {locate_.state(), locate_.tets(), locate_.tasks(), Binding::storage(maps_, 0, std::max<std::uint64_t>(mapBytes, 16)),
                      Binding::storage(output_, 0, points * sizeof(float))},
                     push, groups);
   });

@@ -9,7 +9,7 @@ namespace vox::gpu {
 
 namespace {
 
-using shader::RasterLocatePush;
+using shader::RasterTaskPush;
 using shader::RasterTet;
 
 RasterTet rasterTet(const LatticeTet& t) {
@@ -36,7 +36,7 @@ LatticeLocateKernel::LatticeLocateKernel(Context& context)
     : context_(context),
       pipeline_(context, {"rasterize_locate.comp",
                           {BindingKind::StorageBuffer, BindingKind::StorageBuffer, BindingKind::StorageBuffer},
-                          sizeof(RasterLocatePush)}) {}
+                          sizeof(RasterTaskPush)}) {}
 
 std::uint64_t LatticeLocateKernel::maxPoints() const { return context_.maxBindingBytes() / sizeof(std::uint32_t); }
 
@@ -59,18 +59,19 @@ bool LatticeLocateKernel::record(CommandBatch& batch, const std::vector<LatticeT
   forEachTask([&](std::uint32_t, std::uint32_t) { ++taskCount; });
   if (taskCount * 8 > binding) return false;
 
-  const std::uint64_t tetBytes = slab.tets.size() * sizeof(RasterTet), taskBytes = taskCount * 8;
-  growBuffer(context_, tets_, tetBytes, MemoryIntent::Upload);
-  growBuffer(context_, tasks_, taskBytes, MemoryIntent::Upload);
+  tetBytes_ = std::max<std::uint64_t>(16, slab.tets.size() * sizeof(RasterTet));
+  taskBytes_ = taskCount * 8;
   stateBytes_ = points * sizeof(std::uint32_t);
+  growBuffer(context_, tets_, tetBytes_, MemoryIntent::Upload);
+  growBuffer(context_, tasks_, taskBytes_, MemoryIntent::Upload);
   growBuffer(context_, state_, stateBytes_, MemoryIntent::Device);
-  writeHostData(tets_, tetBytes, [&](std::uint8_t* dst) {
+  writeHostData(tets_, tetBytes_, [&](std::uint8_t* dst) {
     for (std::size_t local = 0; local < slab.tets.size(); ++local) {
       const RasterTet r = rasterTet(tets[std::size_t(slab.tets[local])]);
       std::memcpy(dst + local * sizeof(RasterTet), &r, sizeof(RasterTet));
     }
   });
-  writeHostData(tasks_, taskBytes, [&](std::uint8_t* dst) {
+  writeHostData(tasks_, taskBytes_, [&](std::uint8_t* dst) {
     auto* out = reinterpret_cast<std::uint32_t*>(dst);
     forEachTask([&](std::uint32_t local, std::uint32_t zy) {
       *out++ = local;
@@ -78,21 +79,24 @@ bool LatticeLocateKernel::record(CommandBatch& batch, const std::vector<LatticeT
     });
   });
 
+  batch.timestamp("locate");
   batch.fill(state_, VOX_RASTER_NO_TET, 0, stateBytes_);
-  RasterLocatePush push{};
+  RasterTaskPush push{};
   push.latticeNx = std::uint32_t(lattice.dims[0]);
   push.latticeNy = std::uint32_t(lattice.dims[1]);
   push.slabZ0 = std::uint32_t(slab.z0);
-  dispatchItems(context_, taskCount, VOX_RASTER_LOCATE_GROUP_SIZE, [&](std::uint32_t first, std::uint32_t n, std::uint32_t groups) {
+  forTaskDispatches([&](std::uint32_t first, std::uint32_t n, std::uint32_t groups) {
     push.taskBase = first;
     push.taskCount = n;
-    batch.dispatch(pipeline_,
-                   {Binding::storage(state_, 0, stateBytes_), Binding::storage(tets_, 0, std::max<std::uint64_t>(tetBytes, 16)),
-                    Binding::storage(tasks_, 0, std::max<std::uint64_t>(taskBytes, 16))},
-                   push, groups);
+    batch.dispatch(pipeline_, {state(), this->tets(), tasks()}, push, groups);
   });
   batch.barrier();
   return true;
+}
+
+void LatticeLocateKernel::forTaskDispatches(
+    const std::function<void(std::uint32_t first, std::uint32_t count, std::uint32_t groups)>& dispatch) const {
+  dispatchItems(context_, taskCount(), VOX_RASTER_TASK_GROUP_SIZE, dispatch);
 }
 
 }  // namespace vox::gpu

@@ -8,7 +8,9 @@
 // Work is one task per (tet, lattice slice, block of VOX_RASTER_ROWS_PER_TASK
 // rows): the task walks the tet's scanline spans and claims their points by
 // atomicMin, so the cost is one atomic per covered point plus a span per row,
-// independent of how many tets a region holds.
+// independent of how many tets a region holds. The later stages (resolve,
+// field) reuse the uploaded tets and tasks: each task then handles the points
+// its tet won, loading the tet's data once.
 
 #include "geometry/deform/lattice_tets.h"
 #include "gpu/buffer.h"
@@ -18,6 +20,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace vox::gpu {
@@ -30,21 +33,29 @@ public:
   std::uint64_t maxPoints() const;
 
   // Uploads the slab's tets (float copies of `tets`' planes) and tasks, and
-  // records into `batch`: states <- VOX_RASTER_NO_TET, locate, barrier.
+  // records into `batch`: a "locate" timestamp, states <- VOX_RASTER_NO_TET,
+  // locate, barrier.
   // Returns false, recording nothing, when the slab's points, tets or tasks
   // exceed one storage binding or its slices exceed the task encoding: the
   // caller splits the slab. The previous use of the buffers must be complete.
   bool record(CommandBatch& batch, const std::vector<LatticeTet>& tets, const SlabTets& slab, const GridGeometry& lattice);
 
-  // Sample states of the last recorded slab (its points, lattice order).
-  const Buffer& state() const { return state_; }
-  std::uint64_t stateBytes() const { return stateBytes_; }
+  // The last recorded slab: sample states (its points, lattice order), tets
+  // and tasks, as bindings, and the task count.
+  Binding state() const { return Binding::storage(state_, 0, stateBytes_); }
+  Binding tets() const { return Binding::storage(tets_, 0, tetBytes_); }
+  Binding tasks() const { return Binding::storage(tasks_, 0, taskBytes_); }
+  std::uint64_t taskCount() const { return taskBytes_ / 8; }
+
+  // Records `dispatch(first, count, groups)` for every slice of the tasks
+  // that one dispatch can hold (see dispatchItems).
+  void forTaskDispatches(const std::function<void(std::uint32_t first, std::uint32_t count, std::uint32_t groups)>& dispatch) const;
 
 private:
   Context& context_;
   ComputePipeline pipeline_;
   Buffer tets_, tasks_, state_;
-  std::uint64_t stateBytes_ = 0;
+  std::uint64_t stateBytes_ = 0, tetBytes_ = 0, taskBytes_ = 0;
 };
 
 // Reallocates `buffer` when it holds fewer than `bytes` (at least 16) bytes.

@@ -14,15 +14,28 @@ namespace vox::gpu {
 namespace {
 
 using shader::RasterMap;
-using shader::RasterResolvePush;
+using shader::RasterReducePush;
+using shader::RasterTaskPush;
 
 constexpr std::uint64_t kPartLabels = std::uint64_t(1) << VOX_RASTER_SOURCE_PART_LABELS_LOG2;
 constexpr std::uint64_t kPartBytes = kPartLabels * sizeof(Label);
 
-PipelineDesc windowStage(const char* shader) {
-  PipelineDesc d{shader, {BindingKind::StorageBuffer, BindingKind::StorageBuffer, BindingKind::StorageBuffer}, sizeof(RasterResolvePush)};
-  for (int p = 0; p < VOX_RASTER_SOURCE_PARTS; ++p) d.bindings.push_back(BindingKind::StorageBuffer);
+PipelineDesc resolveStage(std::uint32_t sourceParts) {
+  PipelineDesc d{"rasterize_resolve.comp", {}, sizeof(RasterTaskPush), {sourceParts}};
+  d.bindings.assign(4 + VOX_RASTER_SOURCE_PARTS, BindingKind::StorageBuffer);
   return d;
+}
+
+PipelineDesc reduceStage(int samples) {
+  if (samples < 1 || samples > VOX_RASTER_MAX_SAMPLES)
+    throw InputError("rasterization", "samples per axis must be 1.." + std::to_string(VOX_RASTER_MAX_SAMPLES) + ", got " +
+                                          std::to_string(samples));
+  return {"rasterize_reduce.comp", {BindingKind::StorageBuffer, BindingKind::StorageBuffer}, sizeof(RasterReducePush),
+          {std::uint32_t(samples)}};
+}
+
+std::uint64_t windowBytes(const GridGeometry& source, std::int64_t slices) {
+  return (std::uint64_t(slices * source.sliceVoxels()) * sizeof(Label) + 3) / 4 * 4;
 }
 
 RasterMap rasterMap(const TetAffineMap<3>& m) {
@@ -64,26 +77,27 @@ RasterizeKernel::RasterizeKernel(Context& context, std::unique_ptr<GridSliceRead
       rest_(rest),
       options_(options),
       locate_(context),
-      resolve_(context, windowStage("rasterize_resolve.comp")),
-      reduce_(context, windowStage("rasterize_reduce.comp")),
+      windowSlices_(windowSlicesFor(context, source_.geometry(), options)),
+      resolve_(context, resolveStage(std::uint32_t((windowBytes(source_.geometry(), windowSlices_) + kPartBytes - 1) / kPartBytes))),
+      reduce_(context, reduceStage(options.samples)),
       batch_(context) {
-  if (options.samples < 1 || options.samples > VOX_RASTER_MAX_SAMPLES)
-    throw InputError("rasterization", "samples per axis must be 1.." + std::to_string(VOX_RASTER_MAX_SAMPLES) + ", got " +
-                                          std::to_string(options.samples));
   rest_.validate("transfer mesh");
   maxSlabSamples_ = locate_.maxPoints();
   if (options.maxSlabSamples) maxSlabSamples_ = std::min<std::uint64_t>(maxSlabSamples_, options.maxSlabSamples);
 
-  const GridGeometry& g = source_.geometry();
-  const std::uint64_t slice = std::uint64_t(g.sliceVoxels());
+  window_ = Buffer(context, windowBytes(source_.geometry(), windowSlices_), MemoryIntent::Device);
+}
+
+std::int64_t RasterizeKernel::windowSlicesFor(const Context& context, const GridGeometry& source,
+                                              const RasterizeKernelOptions& options) {
+  const std::uint64_t slice = std::uint64_t(source.sliceVoxels());
   std::uint64_t capacity = std::min<std::uint64_t>(VOX_RASTER_SOURCE_PARTS * kPartLabels,
                                                    context.info().maxAllocationSize / sizeof(Label));
   if (options.maxWindowVoxels) capacity = std::min<std::uint64_t>(capacity, options.maxWindowVoxels);
   if (slice > capacity)
     throw RuntimeFailure("source slices of " + std::to_string(slice) + " voxels exceed the GPU source window of " +
                          std::to_string(capacity) + " voxels");
-  windowSlices_ = std::min<std::int64_t>(g.dims[2], std::int64_t(capacity / slice));
-  window_ = Buffer(context, (std::uint64_t(windowSlices_) * slice * sizeof(Label) + 3) / 4 * 4, MemoryIntent::Device);
+  return std::min<std::int64_t>(source.dims[2], std::int64_t(capacity / slice));
 }
 
 const RasterizationPlan& RasterizeKernel::plan() const {
@@ -93,7 +107,7 @@ const RasterizationPlan& RasterizeKernel::plan() const {
 
 void RasterizeKernel::setDeformedPositions(const std::vector<Eigen::Vector3d>& deformed) {
   plan_ = std::make_unique<RasterizationPlan>(source_.geometry(), rest_, deformed, options_.samples);
-  gpuMs_ = 0.0;
+  gpuMs_ = locateMs_ = resolveMs_ = 0.0;
 }
 
 std::int64_t RasterizeKernel::slabSlices() const {
@@ -150,7 +164,7 @@ void RasterizeKernel::rasterizeSlab(std::int64_t z0, std::int64_t z1, Label* out
     rasterizeSlab(mid, z1, out + (mid - z0) * output.sliceVoxels());
     return;
   }
-  batch_.timestamp("start");
+  batch_.timestamp("located");
 
   const std::uint64_t mapBytes = slab.tets.size() * sizeof(RasterMap);
   growBuffer(context_, maps_, mapBytes, MemoryIntent::Upload);
@@ -160,54 +174,64 @@ void RasterizeKernel::rasterizeSlab(std::int64_t z0, std::int64_t z1, Label* out
       std::memcpy(dst + local * sizeof(RasterMap), &m, sizeof(RasterMap));
     }
   });
-  const std::uint64_t pairs = (voxels + 1) / 2;
-  growBuffer(context_, output_, pairs * 4, MemoryIntent::Readback);
+  const auto submit = [&] {
+    batch_.submitAndWait();
+    const auto& t = batch_.timings();
+    // Each stamp ends the stage it names ("locate" and "loaded" start GPU work).
+    for (std::size_t i = 1; i < t.size(); ++i) {
+      const double ms = t[i].ms - t[i - 1].ms;
+      gpuMs_ += ms;
+      if (t[i].label == "located") locateMs_ += ms;
+      if (t[i].label == "resolved") resolveMs_ += ms;
+    }
+  };
 
   const GridGeometry& src = source_.geometry();
-  RasterResolvePush push{};
+  RasterTaskPush push{};
   push.latticeNx = std::uint32_t(p.lattice().dims[0]);
   push.latticeNy = std::uint32_t(p.lattice().dims[1]);
   push.slabZ0 = std::uint32_t(slab.z0);
-  push.samples = std::uint32_t(p.samples());
-  push.outputNx = std::uint32_t(output.dims[0]);
-  push.outputNy = std::uint32_t(output.dims[1]);
-  push.voxelCount = std::uint32_t(voxels);
   push.sourceNx = std::uint32_t(src.dims[0]);
   push.sourceNy = std::uint32_t(src.dims[1]);
   push.sourceNz = std::uint32_t(src.dims[2]);
-  const auto record = [&](const ComputePipeline& stage, std::uint64_t items) {
-    dispatchItems(context_, items, VOX_RASTER_GROUP_SIZE, [&](std::uint32_t first, std::uint32_t n, std::uint32_t groups) {
-      push.itemBase = first;
-      push.itemCount = n;
-      batch_.dispatch(stage,
-                      {Binding::storage(locate_.state(), 0, locate_.stateBytes()), Binding::storage(maps_, 0, std::max<std::uint64_t>(mapBytes, 16)),
-                       Binding::storage(output_, 0, std::max<std::uint64_t>(pairs * 4, 16)), sourcePart(0), sourcePart(1), sourcePart(2),
-                       sourcePart(3), sourcePart(4), sourcePart(5), sourcePart(6), sourcePart(7)},
-                      push, groups);
-    });
-    batch_.barrier();
-  };
-  const auto submit = [&] {
-    batch_.timestamp("end");
-    batch_.submitAndWait();
-    if (batch_.timings().size() >= 2) gpuMs_ += batch_.timings().back().ms;
-  };
-
   const std::vector<SliceRange> windows = sourceWindows(p.sourceSlices(slab), resident_, windowSlices_, src.dims[2]);
   for (std::size_t i = 0; i < windows.size(); ++i) {
     if (!(windows[i] == resident_)) {
-      if (i > 0) {  // the window buffer is in use by the recorded work
-        submit();
-        batch_.timestamp("start");
-      }
+      if (i > 0) submit();  // the window buffer is in use by the recorded work
       loadWindow(windows[i]);
+      if (i > 0) batch_.timestamp("loaded");
     }
     push.windowFirst = std::uint32_t(windows[i].first);
     push.windowEnd = std::uint32_t(windows[i].last);
-    if (i + 1 < windows.size()) record(resolve_, locate_.stateBytes() / sizeof(std::uint32_t));
+    locate_.forTaskDispatches([&](std::uint32_t first, std::uint32_t n, std::uint32_t groups) {
+      push.taskBase = first;
+      push.taskCount = n;
+      batch_.dispatch(resolve_,
+                      {locate_.state(), locate_.tets(), locate_.tasks(), Binding::storage(maps_, 0, std::max<std::uint64_t>(mapBytes, 16)),
+                       sourcePart(0), sourcePart(1), sourcePart(2), sourcePart(3), sourcePart(4), sourcePart(5), sourcePart(6),
+                       sourcePart(7)},
+                      push, groups);
+    });
+    batch_.barrier();
+    batch_.timestamp("resolved");
   }
-  if (windows.empty()) push.windowFirst = push.windowEnd = 0;
-  record(reduce_, pairs);
+
+  const std::uint64_t runs = (voxels + VOX_RASTER_REDUCE_RUN - 1) / VOX_RASTER_REDUCE_RUN;
+  const std::uint64_t outputBytes = runs * VOX_RASTER_REDUCE_RUN * sizeof(Label);
+  growBuffer(context_, output_, outputBytes, MemoryIntent::Readback);
+  RasterReducePush reduce{};
+  reduce.latticeNx = push.latticeNx;
+  reduce.latticeNy = push.latticeNy;
+  reduce.outputNx = std::uint32_t(output.dims[0]);
+  reduce.outputNy = std::uint32_t(output.dims[1]);
+  reduce.voxelCount = std::uint32_t(voxels);
+  dispatchItems(context_, runs, VOX_RASTER_REDUCE_GROUP_SIZE, [&](std::uint32_t first, std::uint32_t n, std::uint32_t groups) {
+    reduce.runBase = first;
+    reduce.runCount = n;
+    batch_.dispatch(reduce_, {locate_.state(), Binding::storage(output_, 0, outputBytes)}, reduce, groups);
+  });
+  batch_.barrier();
+  batch_.timestamp("reduced");
   submit();
   output_.download(out, voxels * sizeof(Label));
 }

@@ -60,12 +60,18 @@ public:
   std::int64_t slabSlices() const override;
   void rasterizeSlab(std::int64_t z0, std::int64_t z1, Label* out) override;
 
-  // GPU time (ms) since the last setDeformedPositions (0 without timestamps).
+  // GPU time (ms) since the last setDeformedPositions (0 without
+  // timestamps), and the parts of it spent in the locate and resolve stages
+  // (the rest: reduce).
   double gpuMs() const { return gpuMs_; }
+  double locateMs() const { return locateMs_; }
+  double resolveMs() const { return resolveMs_; }
 
 private:
   RasterizeKernel(Context& context, std::unique_ptr<GridSliceReader> owned, GridSliceReader* borrowed, const TetMesh& rest,
                   const RasterizeKernelOptions& options);
+  static std::int64_t windowSlicesFor(const Context& context, const GridGeometry& source,
+                                      const RasterizeKernelOptions& options);
   void loadWindow(const SliceRange& window);
   Binding sourcePart(int part) const;
 
@@ -75,14 +81,16 @@ private:
   TetMesh rest_;
   RasterizeKernelOptions options_;
   LatticeLocateKernel locate_;
+  std::int64_t windowSlices_ = 0;  // source slices the window holds
   ComputePipeline resolve_, reduce_;
   CommandBatch batch_;
   Buffer maps_, output_, window_;
-  std::int64_t windowSlices_ = 0;
   SliceRange resident_;
   std::unique_ptr<RasterizationPlan> plan_;
   std::uint64_t maxSlabSamples_ = 0;
   double gpuMs_ = 0.0;
+  double locateMs_ = 0.0;
+  double resolveMs_ = 0.0;
 };
 
 // Out-of-core rasterization (geometry/deform/out_of_core.h) with this kernel

@@ -34,27 +34,32 @@ struct LabelStatsPush {
 // Deformed-grid rasterization (gpu/kernels/rasterize.h) and field
 // interpolation (gpu/kernels/field_interpolation.h) on a slab of lattice
 // slices. CPU reference: geometry/deform/lattice_tets.h, rasterize.h.
-// Stages: locate (rasterize_locate.comp: sample -> lowest containing tet, by
-// atomicMin over per-tet scanline spans), resolve (rasterize_resolve.comp:
-// tet -> source voxel -> label for one source window), reduce
-// (rasterize_reduce.comp: last window, majority of k^3 samples, uint16 pack);
-// interpolate_field.comp replaces resolve + reduce for fields.
-// Bindings: every stage binds the sample states first; then locate binds the
-// slab's tets and tasks, the other stages the per-tet maps, their output and
-// (resolve, reduce) the source window.
-#define VOX_RASTER_BINDING_STATE 0         // uint[]: per sample, slab lattice order
-#define VOX_RASTER_LOCATE_BINDING_TETS 1   // RasterTet[]: the slab's tets, local index order
-#define VOX_RASTER_LOCATE_BINDING_TASKS 2  // uint[2 * tasks]: local tet, (slab z) | (first row << 16)
-#define VOX_RASTER_BINDING_MAPS 1          // RasterMap[] (rasterize) or FieldMap[] (field), local tet order
-#define VOX_RASTER_BINDING_OUTPUT 2        // uint[]: two uint16 labels per word, or float[] field values
-#define VOX_RASTER_BINDING_SOURCE 3        // 3..3+VOX_RASTER_SOURCE_PARTS-1: uint[] window parts, 2 labels per word
+// A task is one tet on one lattice slice, VOX_RASTER_ROWS_PER_TASK rows of
+// it; the stages that follow a tet walk its scanline spans:
+//   locate   (rasterize_locate.comp, tasks): state <- atomicMin(local tet)
+//   resolve  (rasterize_resolve.comp, tasks, once per source window): the
+//            samples a task's tet won get RESOLVED | source label
+//   reduce   (rasterize_reduce.comp, voxel runs): majority of the k^3
+//            sample labels, two uint16 labels per word
+//   field    (interpolate_field.comp, tasks): the samples a task's tet won
+//            get its barycentric interpolation (the rest keep the fill)
+// A tet's map is loaded once per task and each sample is touched only by
+// the task of the tet that won it.
+#define VOX_RASTER_BINDING_STATE 0   // uint[]: per sample, slab lattice order
+#define VOX_RASTER_BINDING_TETS 1    // RasterTet[]: the slab's tets, local index order
+#define VOX_RASTER_BINDING_TASKS 2   // uint[2 * tasks]: local tet, (slab z) | (first row << 16)
+#define VOX_RASTER_BINDING_MAPS 3    // RasterMap[] (resolve) or FieldMap[] (field), local tet order
+#define VOX_RASTER_BINDING_SOURCE 4  // resolve: 4..4+VOX_RASTER_SOURCE_PARTS-1, uint[] window parts, 2 labels per word
+#define VOX_FIELD_BINDING_OUTPUT 4   // field: float[] per sample
+#define VOX_RASTER_REDUCE_BINDING_OUTPUT 1  // reduce: uint[], two uint16 labels per word
 #define VOX_RASTER_SOURCE_PARTS 8
 #define VOX_RASTER_SOURCE_PART_LABELS_LOG2 26  // labels per window part: 2^26 (128 MiB)
 #define VOX_RASTER_NO_TET 0xFFFFFFFFu
 #define VOX_RASTER_RESOLVED 0x80000000u        // | label
-#define VOX_RASTER_LOCATE_GROUP_SIZE 64
-#define VOX_RASTER_ROWS_PER_TASK 4
-#define VOX_RASTER_GROUP_SIZE 64               // resolve, reduce, interpolate
+#define VOX_RASTER_TASK_GROUP_SIZE 64          // locate, resolve, field
+#define VOX_RASTER_ROWS_PER_TASK 16
+#define VOX_RASTER_REDUCE_GROUP_SIZE 64
+#define VOX_RASTER_REDUCE_RUN 8                // output voxels per reduce invocation (even)
 #define VOX_RASTER_MAX_SAMPLES 4               // k <= 4: k^3 <= 64 samples per voxel
 
 // Face k of a tet (opposite vertex k): inward plane value at lattice point q
@@ -118,45 +123,30 @@ struct FieldMap {
   float pad;
 };
 
-struct RasterLocatePush {
+struct RasterTaskPush {
   uint latticeNx;
   uint latticeNy;
-  uint slabZ0;     // lattice slice of the slab's first sample slice
-  uint taskBase;   // first task of this dispatch
-  uint taskCount;  // tasks of this dispatch
-  uint pad0;
-  uint pad1;
-  uint pad2;
-};
-
-struct RasterResolvePush {
-  uint latticeNx;
-  uint latticeNy;
-  uint slabZ0;        // lattice slice of the slab's first sample slice
-  uint samples;       // k
-  uint outputNx;      // output voxels per row (latticeNx / k)
-  uint outputNy;
-  uint itemBase;      // first sample (resolve) or voxel pair (reduce) of this dispatch
-  uint itemCount;     // samples (resolve) or voxel pairs (reduce) of this dispatch
-  uint voxelCount;    // output voxels of the slab (reduce)
-  uint sourceNx;
+  uint slabZ0;       // lattice slice of the slab's first sample slice
+  uint taskBase;     // first task of this dispatch
+  uint taskCount;    // tasks of this dispatch
+  uint sourceNx;     // resolve: source grid dims
   uint sourceNy;
   uint sourceNz;
-  uint windowFirst;   // source slices [windowFirst, windowEnd) are in the window
+  uint windowFirst;  // resolve: source slices [windowFirst, windowEnd) are in the window
   uint windowEnd;
   uint pad0;
   uint pad1;
 };
 
-struct FieldInterpolatePush {
+struct RasterReducePush {
   uint latticeNx;
   uint latticeNy;
-  uint slabZ0;
-  uint itemBase;
-  uint itemCount;
-  float fill;
-  uint pad0;
-  uint pad1;
+  uint outputNx;    // output voxels per row (latticeNx / k)
+  uint outputNy;
+  uint voxelCount;  // output voxels of the slab
+  uint runBase;     // first voxel run of this dispatch
+  uint runCount;    // voxel runs of this dispatch
+  uint pad;
 };
 
 #ifdef __cplusplus
@@ -164,9 +154,8 @@ static_assert(sizeof(RasterFace) == 32);
 static_assert(sizeof(RasterTet) == 160);
 static_assert(sizeof(RasterMap) == 72);
 static_assert(sizeof(FieldMap) == 32);
-static_assert(sizeof(RasterLocatePush) == 32);
-static_assert(sizeof(RasterResolvePush) == 64);
-static_assert(sizeof(FieldInterpolatePush) == 32);
+static_assert(sizeof(RasterTaskPush) == 48);
+static_assert(sizeof(RasterReducePush) == 32);
 #endif
 
 #ifdef __cplusplus
