@@ -5,12 +5,16 @@
 // windows) does not change the GPU output.
 
 #include "geometry/deform/field_interpolation.h"
+#include "geometry/deform/out_of_core.h"
 #include "geometry/deform/rasterize.h"
+#include "geometry/io/grid_io.h"
 #include "geometry/synth.h"
+#include "geometry/voxel_tetrahedralization.h"
 #include "gpu/context.h"
 #include "gpu/kernels/field_interpolation.h"
 #include "gpu/kernels/rasterize.h"
 #include "tests/support/deformation_fixtures.h"
+#include "tests/support/test_environment.h"
 
 #include <gtest/gtest.h>
 
@@ -126,7 +130,7 @@ std::map<std::string, test::Deformation> deformations(const GridGeometry& g) {
   return {
       {"bend", test::bend(c, 0.8 * height)},
       {"twist", test::twist(c, 60.0 / height)},
-      {"rotation", test::rotation(c, {1.0, 2.0, 0.5}, 33.0)},
+      {"rotation", test::rotation(c, {0.2, 0.3, 1.0}, 33.0)},
   };
 }
 
@@ -142,6 +146,20 @@ TEST(RasterizeGpu, SynthFigureEqualsCpuReference) {
   }
 }
 
+TEST(RasterizeGpu, IcrpPhantomsEqualCpuReference) {
+  for (const char* name : {"icrp110_am.nii.gz", "icrp110_af.nii.gz"}) {
+    const LabelGrid source = readGrid(test::assetPath(name));
+    const TetMesh tm = test::coveringTransferMesh(source, 4);
+    gpu::RasterizeKernel kernel(context(), source, tm);
+    for (const auto& [pose, f] : deformations(source.geometry())) {
+      const auto deformed = test::deformPositions(tm.positions, f);
+      const LabelGrid gpu = kernel.rasterize(deformed);
+      const LabelGrid cpu = rasterizeDeformedGrid(source, tm, deformed);
+      expectEquivalent(std::string(name) + " " + pose, kernel.plan(), cpu, gpu);
+    }
+  }
+}
+
 TEST(RasterizeGpu, SupersamplingEqualsCpuReference) {
   const LabelGrid source = stickFigure(48);
   const TetMesh tm = test::coveringTransferMesh(source, 3);
@@ -154,6 +172,20 @@ TEST(RasterizeGpu, SupersamplingEqualsCpuReference) {
   }
 }
 
+// Foreground voxels of `source` whose label differs in `out` (a grid on the
+// source lattice, shifted by an integer offset).
+std::int64_t foregroundMismatches(const LabelGrid& source, const LabelGrid& out) {
+  const Eigen::Vector3d offset = source.geometry().continuousIndex(out.geometry().origin);
+  EXPECT_TRUE(offset.isApprox(offset.array().round().matrix(), 1e-9));
+  std::int64_t mismatched = 0;
+  for (std::int64_t k = 0; k < source.dims()[2]; ++k)
+    for (std::int64_t j = 0; j < source.dims()[1]; ++j)
+      for (std::int64_t i = 0; i < source.dims()[0]; ++i)
+        if (source.at(i, j, k) != 0)
+          mismatched += out.atOr(i - std::lround(offset.x()), j - std::lround(offset.y()), k - std::lround(offset.z())) != source.at(i, j, k);
+  return mismatched;
+}
+
 TEST(RasterizeGpu, IdentityReproducesSourceExactly) {
   // Every voxel centre lies on six tets' shared diagonal: the hardest tie
   // case, and GPU and CPU must agree exactly (the planes are exact here).
@@ -162,14 +194,20 @@ TEST(RasterizeGpu, IdentityReproducesSourceExactly) {
   gpu::RasterizeKernel kernel(context(), source, tm);
   const LabelGrid gpu = kernel.rasterize(tm.positions);
   EXPECT_EQ(gpu.labels(), rasterizeDeformedGrid(source, tm, tm.positions).labels());
-  const Eigen::Vector3d offset = source.geometry().continuousIndex(gpu.geometry().origin);
-  std::int64_t mismatched = 0;
-  for (std::int64_t k = 0; k < source.dims()[2]; ++k)
-    for (std::int64_t j = 0; j < source.dims()[1]; ++j)
-      for (std::int64_t i = 0; i < source.dims()[0]; ++i)
-        if (source.at(i, j, k) != 0)
-          mismatched += gpu.atOr(i - std::lround(offset.x()), j - std::lround(offset.y()), k - std::lround(offset.z())) != source.at(i, j, k);
-  EXPECT_EQ(mismatched, 0);
+  EXPECT_EQ(foregroundMismatches(source, gpu), 0);
+}
+
+TEST(RasterizeGpu, IdentityReproducesTheAmPhantom) {
+  const LabelGrid source = readGrid(test::assetPath("icrp110_am.nii.gz"));
+  const TetMesh tm = test::coveringTransferMesh(source, 4);
+  gpu::RasterizeKernel kernel(context(), source, tm);
+  const LabelGrid gpu = kernel.rasterize(tm.positions);
+  EXPECT_EQ(foregroundMismatches(source, gpu), 0);
+  std::int64_t foreground = 0;
+  for (Label l : gpu.labels()) foreground += l != 0;
+  std::int64_t sourceForeground = 0;
+  for (Label l : source.labels()) sourceForeground += l != 0;
+  EXPECT_EQ(foreground, sourceForeground);
 }
 
 TEST(RasterizeGpu, SlabsAndWindowsDoNotChangeTheOutput) {
@@ -188,6 +226,24 @@ TEST(RasterizeGpu, SlabsAndWindowsDoNotChangeTheOutput) {
     const LabelGrid got = chunked.rasterize(deformed);
     EXPECT_LT(chunked.slabSlices(), got.dims()[2] / 4);
     EXPECT_EQ(got.labels(), expected.labels()) << "samples " << samples;
+  }
+}
+
+TEST(RasterizeGpu, OutOfCoreEqualsInCore) {
+  const std::string dir = test::tempDir();
+  const LabelGrid grid = stickFigure(64);
+  writeGrid(dir + "/source.nii.gz", grid);
+  OutOfCoreSource source(dir + "/source.nii.gz", grid.voxelCount() / 27, dir);
+  const TetMesh tm = tetrahedralizeVoxels(source.downsampled(), {.includeBackground = false});
+  const auto deformed = test::deformPositions(tm.positions, deformations(grid.geometry()).at("bend"));
+  for (int samples : {1, 2}) {
+    gpu::RasterizeKernel kernel(context(), grid, tm, {.samples = samples});
+    const LabelGrid inCore = kernel.rasterize(deformed);
+    // 64 KiB: several slabs, several windows per slab.
+    gpu::rasterizeOutOfCore(context(), source, tm, deformed, dir + "/posed.nii.gz", {.maxMemoryBytes = 64 << 10, .samples = samples});
+    const LabelGrid got = readGrid(dir + "/posed.nii.gz");
+    ASSERT_EQ(got.dims(), inCore.dims());
+    EXPECT_EQ(got.labels(), inCore.labels()) << "samples " << samples;
   }
 }
 

@@ -5,9 +5,11 @@
 #include "geometry/deform/lattice_tets.h"
 #include "geometry/deform/rasterize.h"
 #include "geometry/error.h"
+#include "geometry/io/grid_io.h"
 #include "geometry/label_stats.h"
 #include "geometry/synth.h"
 #include "tests/support/deformation_fixtures.h"
+#include "tests/support/test_environment.h"
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
@@ -174,6 +176,27 @@ TEST(RasterizeCpu, IdentityReproducesForeground) {
       }
     }
   }
+}
+
+TEST(RasterizeCpu, IdentityReproducesTheAmPhantom) {
+  const LabelGrid source = readGrid(test::assetPath("icrp110_am.nii.gz"));
+  const TetMesh tm = coveringTransferMesh(source, 4);
+  const LabelGrid out = rasterizeDeformedGrid(source, tm, tm.positions);
+  const Eigen::Vector3d offset = source.geometry().continuousIndex(out.geometry().origin);
+  const Index3 o{std::lround(offset.x()), std::lround(offset.y()), std::lround(offset.z())};
+  // Voxel for voxel: every source voxel inside the output grid keeps its
+  // label (background included: the mesh covers exactly the blocks holding
+  // foreground), and no foreground lies outside it.
+  std::int64_t mismatched = 0, foreground = 0;
+  for (std::int64_t k = 0; k < source.dims()[2]; ++k)
+    for (std::int64_t j = 0; j < source.dims()[1]; ++j)
+      for (std::int64_t i = 0; i < source.dims()[0]; ++i) {
+        const Label l = source.at(i, j, k);
+        foreground += l != 0;
+        if (out.geometry().contains(i - o[0], j - o[1], k - o[2]) || l != 0) mismatched += out.atOr(i - o[0], j - o[1], k - o[2]) != l;
+      }
+  EXPECT_EQ(mismatched, 0);
+  EXPECT_GT(foreground, 1000000);
 }
 
 TEST(RasterizeCpu, OutputGeometryAlignedToSourceLattice) {
