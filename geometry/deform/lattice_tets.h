@@ -14,13 +14,15 @@
 // vertices taken in a canonical order (ascending global vertex index) and is
 // anchored at the lattice point nearest the first of them. The two tets that
 // share a face therefore hold the same numbers with opposite signs, and their
-// plane values at any point are exact negatives of each other in double as in
-// float (the GPU kernels evaluate the same expression, in the same order,
-// without contraction). A point on a shared face passes the closed test (all
-// four values >= 0) of both tets, a point near it passes exactly one: the
-// union of the tets' closed sets has no floating-point cracks. Ties are then
-// resolved by the lowest tet index (the thesis' "first tet that visits the
-// voxel").
+// plane values at any point are exact negatives of each other: a point on a
+// shared face passes the closed test (all four values >= 0) of both tets, a
+// point near it passes exactly one, and the union of the tets' closed sets
+// has no floating-point cracks. Ties are resolved by the lowest tet index (the
+// thesis' "first tet that visits the voxel"). The GPU kernels round these
+// planes to float and bound each scanline at the root of each plane value,
+// which the two tets of a face also compute bitwise equal (shaders/shared/
+// lattice_span.glsl): watertight too, and different from this exact test only
+// for points within float rounding of a face.
 
 #include "geometry/label_grid.h"
 #include "geometry/tet_mesh.h"

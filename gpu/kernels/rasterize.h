@@ -6,12 +6,15 @@
 // where a voxel centre lies within float rounding of a tet face (or its
 // source position within float rounding of a source voxel boundary).
 //
-// Per slab of output slices: locate (lattice_locate.h), resolve through each
-// source window but the last, reduce (last window, majority, uint16 pack).
-// Chunking keeps every storage binding under Context::maxBindingBytes(): the
-// sample states of a slab fill at most one binding, the source window spans
-// up to VOX_RASTER_SOURCE_PARTS bindings of one allocation (2 GiB at most),
-// and slabs with too many tets or tasks are split.
+// Per slab of output slices: locate (lattice_locate.h: per-tet scanline
+// spans, atomicMin of the tet index), resolve once per source window (the
+// same tasks label the samples their tet won), reduce (majority of the k^3
+// samples, uint16 pack). Chunking keeps every storage binding under
+// Context::maxBindingBytes(): the sample states of a slab fill at most one
+// binding, the source window spans up to VOX_RASTER_SOURCE_PARTS bindings of
+// one allocation (2 GiB at most), and slabs with too many tets or tasks are
+// split. Supersampling is limited to output slices of at most
+// maxBindingBytes / (4 k^3) voxels.
 
 #include "geometry/deform/out_of_core.h"
 #include "geometry/deform/rasterize.h"

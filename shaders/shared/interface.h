@@ -64,7 +64,8 @@ struct LabelStatsPush {
 
 // Face k of a tet (opposite vertex k): inward plane value at lattice point q
 //   n.x * (q.x - a.x) + ((n.y * (q.y - a.y) + n.z * (q.z - a.z)) + d)
-// evaluated in this order without contraction (LatticeTet::planeValue).
+// (LatticeTet::planeValue); the GPU evaluates the bracket in this order
+// without contraction and bounds each row at the root in x.
 struct RasterFace {
   float nx;
   float ny;

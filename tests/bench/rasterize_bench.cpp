@@ -19,11 +19,13 @@
 #include "tests/support/deformation_fixtures.h"
 
 #include <benchmark/benchmark.h>
+#include <sys/resource.h>
 
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <string>
@@ -86,6 +88,14 @@ const Case& benchCase(const std::string& name) {
   return *c;
 }
 
+// CPU seconds of the whole process (every thread, lavapipe's included): on a
+// machine shared with other work, CPU time per run is steadier than wall time.
+double processCpuSeconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
 void setCounters(benchmark::State& state, const LabelGrid& out) {
   state.counters["output_voxels"] = double(out.voxelCount());
   state.counters["voxels_per_s"] = benchmark::Counter(double(out.voxelCount()), benchmark::Counter::kIsIterationInvariantRate);
@@ -109,10 +119,12 @@ void BM_RasterizeGpu(benchmark::State& state, std::string name, int samples) {
   const Case& c = benchCase(name);
   vox::gpu::RasterizeKernel kernel(context(), c.source, c.tm, {.samples = samples});
   LabelGrid out;
+  const double cpu0 = processCpuSeconds();
   for (auto _ : state) {
     out = kernel.rasterize(c.deformed);
     benchmark::DoNotOptimize(out.data());
   }
+  state.counters["process_cpu_s"] = (processCpuSeconds() - cpu0) / double(state.iterations());
   checkAgainstCpu(name + "/k" + std::to_string(samples), c, out, samples);
   state.counters["gpu_ms"] = kernel.gpuMs();
   state.counters["locate_ms"] = kernel.locateMs();
@@ -124,10 +136,12 @@ void BM_RasterizeGpu(benchmark::State& state, std::string name, int samples) {
 void BM_RasterizeCpu(benchmark::State& state, std::string name, int samples) {
   const Case& c = benchCase(name);
   LabelGrid out;
+  const double cpu0 = processCpuSeconds();
   for (auto _ : state) {
     out = vox::rasterizeDeformedGrid(c.source, c.tm, c.deformed, {.samples = samples});
     benchmark::DoNotOptimize(out.data());
   }
+  state.counters["process_cpu_s"] = (processCpuSeconds() - cpu0) / double(state.iterations());
   setCounters(state, out);
 }
 
@@ -160,14 +174,64 @@ void BM_FieldInterpolation(benchmark::State& state, std::string name, bool gpu) 
       benchmark::Counter(double(field.values.size()), benchmark::Counter::kIsIterationInvariantRate);
 }
 
+// Writing the posed grid (.nii.gz, streamed gzip): with the rasterization,
+// the post-process this benchmark's case stands for.
+void BM_WriteNiftiGz(benchmark::State& state, std::string name) {
+  const Case& c = benchCase(name);
+  vox::gpu::RasterizeKernel kernel(context(), c.source, c.tm);
+  const LabelGrid out = kernel.rasterize(c.deformed);
+  const std::string path = (std::filesystem::temp_directory_path() / ("rasterize_bench_" + name + ".nii.gz")).string();
+  for (auto _ : state) vox::writeGrid(path, out);
+  std::filesystem::remove(path);
+  setCounters(state, out);
+}
+
+// Effect of supersampling on per-label volume change (AM phantom, bend):
+// counters over the labels of at least 1000 voxels.
+void BM_SupersamplingVolumeChange(benchmark::State& state, int samples) {
+  static const LabelGrid source = vox::readGrid(std::string(VOX_ASSETS_DIR) + "/icrp110_am.nii.gz");
+  static const vox::TetMesh tm = vox::test::coveringTransferMesh(source, 4);
+  const vox::GridGeometry& g = source.geometry();
+  const auto deformed =
+      vox::test::deformPositions(tm.positions, vox::test::bend(vox::test::gridCentre(g), 1.2 * (g.boxMax().z() - g.boxMin().z())));
+  vox::gpu::RasterizeKernel kernel(context(), source, tm, {.samples = samples});
+  LabelGrid out;
+  for (auto _ : state) out = kernel.rasterize(deformed);
+  std::vector<double> before(65536, 0.0), after(65536, 0.0);
+  for (vox::Label l : source.labels()) before[l] += 1.0;
+  for (vox::Label l : out.labels()) after[l] += 1.0;
+  double sumAbs = 0.0, maxAbs = 0.0, body0 = 0.0, body1 = 0.0;
+  int labels = 0, over5 = 0;
+  for (std::size_t l = 1; l < before.size(); ++l) {
+    body0 += before[l];
+    body1 += after[l];
+    if (before[l] < 1000.0) continue;
+    const double change = 100.0 * std::abs(after[l] - before[l]) / before[l];
+    sumAbs += change;
+    maxAbs = std::max(maxAbs, change);
+    ++labels;
+    over5 += change > 5.0;
+  }
+  state.counters["labels"] = labels;
+  state.counters["mean_abs_change_pct"] = sumAbs / labels;
+  state.counters["max_abs_change_pct"] = maxAbs;
+  state.counters["labels_over_5pct"] = over5;
+  state.counters["body_change_pct"] = 100.0 * (body1 - body0) / body0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  for (int samples : {1, 2, 3})
+    benchmark::RegisterBenchmark(("SupersamplingVolumeChange/am_bend/k" + std::to_string(samples)).c_str(),
+                                 BM_SupersamplingVolumeChange, samples)
+        ->Unit(benchmark::kMillisecond)->Iterations(1)->UseRealTime();
   for (const char* name : {"af_x2x2x2.2", "stick_figure_880"}) {
     const std::string n(name);
     benchmark::RegisterBenchmark(("Rasterize/gpu/" + n).c_str(), BM_RasterizeGpu, n, 1)->Unit(benchmark::kMillisecond)->Iterations(3)->UseRealTime();
     benchmark::RegisterBenchmark(("Rasterize/cpu/" + n).c_str(), BM_RasterizeCpu, n, 1)->Unit(benchmark::kMillisecond)->Iterations(2)->UseRealTime();
     benchmark::RegisterBenchmark(("Rasterize/memcpy/" + n).c_str(), BM_Memcpy, n)->Unit(benchmark::kMillisecond)->Iterations(5)->UseRealTime();
+    benchmark::RegisterBenchmark(("Write/nii.gz/" + n).c_str(), BM_WriteNiftiGz, n)->Unit(benchmark::kMillisecond)->Iterations(1)->UseRealTime();
     benchmark::RegisterBenchmark(("Rasterize/gpu_k3/" + n).c_str(), BM_RasterizeGpu, n, 3)->Unit(benchmark::kMillisecond)->Iterations(1)->UseRealTime();
     benchmark::RegisterBenchmark(("FieldInterpolation/gpu/" + n).c_str(), BM_FieldInterpolation, n, true)->Unit(benchmark::kMillisecond)->Iterations(2)->UseRealTime();
     benchmark::RegisterBenchmark(("FieldInterpolation/cpu/" + n).c_str(), BM_FieldInterpolation, n, false)->Unit(benchmark::kMillisecond)->Iterations(2)->UseRealTime();
