@@ -160,6 +160,41 @@ TEST(RasterizeGpu, IcrpPhantomsEqualCpuReference) {
   }
 }
 
+TEST(RasterizeGpu, FloatTiesAreTheOnlyDifferences) {
+  // Overlapping tets decided by the lowest index, with a face of the lower
+  // cube 1e-9 voxel beyond a row of voxel centres: double excludes them from
+  // it, float rounds the face onto them. A conforming mesh maps both sides of
+  // a face to the same source point, so this needs an overlap to show.
+  GridGeometry g;
+  g.dims = {12, 4, 4};
+  LabelGrid source(g);
+  for (std::int64_t v = 0; v < g.voxelCount(); ++v) source.labels()[std::size_t(v)] = Label(1 + g.ijk(v)[0] / 4);
+  GridGeometry cube;
+  cube.dims = {4, 4, 4};
+  cube.origin = {8, 0, 0};
+  const TetMesh a = tetrahedralizeVoxels(LabelGrid(cube, 3));  // rest x in [7.5, 11.5], lower indices
+  cube.origin = {0, 0, 0};
+  const TetMesh b = tetrahedralizeVoxels(LabelGrid(cube, 1));  // rest x in [-0.5, 3.5]
+  TetMesh tm = a;
+  for (const Tet& t : b.tets) tm.tets.push_back({t[0] + std::int32_t(a.vertexCount()), t[1] + std::int32_t(a.vertexCount()),
+                                                 t[2] + std::int32_t(a.vertexCount()), t[3] + std::int32_t(a.vertexCount())});
+  tm.positions.insert(tm.positions.end(), b.positions.begin(), b.positions.end());
+  tm.labels.assign(tm.tets.size(), 1);
+  auto deformed = tm.positions;
+  for (std::size_t i = 0; i < a.vertexCount(); ++i) deformed[i].x() -= 5.5 - 1e-9;  // cube a now spans x in [2 + 1e-9, 6 + 1e-9]
+  gpu::RasterizeKernel kernel(context(), source, tm);
+  const LabelGrid gpu = kernel.rasterize(deformed);
+  const LabelGrid cpu = rasterizeDeformedGrid(source, tm, deformed);
+  const Disagreement d = compare(kernel.plan(), cpu, gpu);
+  // The 4 x 4 centres at x = 2: label 1 through cube b (double), 2 through
+  // cube a (float). At x = 6, 1e-9 inside cube a's far face, the source
+  // position 11.5 - 1e-9 rounds to voxel 11 in double and off the grid in float.
+  EXPECT_EQ(d.voxels, 32);
+  EXPECT_EQ(d.faceTies, 32);
+  EXPECT_LT(d.maxFaceMargin, 1e-9);
+  EXPECT_EQ(d.unexplained, 0);
+}
+
 TEST(RasterizeGpu, SupersamplingEqualsCpuReference) {
   const LabelGrid source = stickFigure(48);
   const TetMesh tm = test::coveringTransferMesh(source, 3);
