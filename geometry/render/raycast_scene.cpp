@@ -1,7 +1,7 @@
 #include "geometry/render/raycast_scene.h"
 
 #include "geometry/error.h"
-#include "geometry/render/output_grid.h"
+#include "geometry/deform/rasterize.h"
 
 #include <Eigen/Geometry>
 
@@ -59,7 +59,7 @@ RaycastFrame prepareRaycastFrame(const RaycastMesh& mesh, const std::vector<Eige
   for (std::size_t v = 0; v < deformed.size(); ++v)
     if (!deformed[v].allFinite()) throw InputError("deformed positions", "vertex " + std::to_string(v) + " is not finite");
   RaycastFrame f;
-  f.output = outputGridGeometry(mesh.source, deformed);
+  f.output = deformedGridGeometry(mesh.source, deformed);
   for (int a = 0; a < 3; ++a) f.cellShift[a] = f.output.dims[a] / 2;
   const Eigen::Vector3d shift(double(f.cellShift[0]), double(f.cellShift[1]), double(f.cellShift[2]));
   f.renderOrigin = f.output.origin + f.output.spacing.cwiseProduct(shift);

@@ -3,7 +3,8 @@
 // by the CPU reference (raycast_reference.h) and the GPU kernel
 // (gpu/kernels/raycast.h).
 //
-// Render frame: the index space of the deformed grid G' (output_grid.h),
+// Render frame: the index space of the deformed grid G' that the rasterizer
+// fills (deformedGridGeometry in geometry/deform/rasterize.h),
 // shifted by an integer so that its origin lies near the mesh: the centre of
 // the render cell c (integer vector) is the centre of output voxel
 // c + cellShift. Cells are unit cubes, so the 3D DDA of thesis Algorithm 2 is
@@ -48,7 +49,7 @@ RaycastMesh buildRaycastMesh(const TetMesh& restMesh, const GridGeometry& source
 
 // Per-frame geometry: the deformed positions in the render frame.
 struct RaycastFrame {
-  GridGeometry output;                    // the deformed grid G'
+  GridGeometry output;                    // the deformed grid G' (deformedGridGeometry)
   Index3 cellShift{0, 0, 0};              // output voxel of render cell 0
   Eigen::Vector3d renderOrigin{0, 0, 0};  // grid-frame position of render cell 0's centre
   std::vector<Eigen::Vector3d> positions; // #V, render frame

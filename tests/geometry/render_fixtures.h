@@ -1,10 +1,9 @@
 #pragma once
 // Shared by the ray-casting tests (tests/geometry, tests/gpu) and the
-// benchmark: smooth deformations standing in for poses, a brute-force
-// deformed grid (an independent rasterization of G'), and the golden scenes.
+// benchmark: smooth deformations standing in for poses until the
+// deformation pipeline produces them, and the golden scenes.
 
 #include "geometry/label_grid.h"
-#include "geometry/render/output_grid.h"
 #include "geometry/render/rest_transfer_mesh.h"
 #include "geometry/tet_mesh.h"
 
@@ -63,48 +62,6 @@ inline std::vector<Eigen::Vector3d> deform(const std::vector<Eigen::Vector3d>& r
         break;
       }
     }
-  }
-  return out;
-}
-
-// The deformed grid G' computed without the ray caster's machinery: every
-// tet, in index order, claims the output voxel centres inside it (closed
-// barycentric test) that no lower tet claimed, and gives them the label of
-// the source voxel its barycentric map sends them to.
-inline LabelGrid bruteForceDeformedGrid(const LabelGrid& source, const TetMesh& rest, const std::vector<Eigen::Vector3d>& deformed) {
-  const GridGeometry& sg = source.geometry();
-  LabelGrid out(outputGridGeometry(sg, deformed), 0);
-  const GridGeometry& og = out.geometry();
-  std::vector<std::uint8_t> claimed(std::size_t(og.voxelCount()), 0);
-  for (const Tet& t : rest.tets) {
-    Eigen::Matrix3d m;
-    for (int k = 0; k < 3; ++k) m.col(k) = deformed[t[k + 1]] - deformed[t[0]];
-    const Eigen::Matrix3d inv = m.inverse();
-    Eigen::Vector3d lo = deformed[t[0]], hi = deformed[t[0]];
-    for (int k = 1; k < 4; ++k) {
-      lo = lo.cwiseMin(deformed[t[k]]);
-      hi = hi.cwiseMax(deformed[t[k]]);
-    }
-    Index3 a, b;
-    for (int k = 0; k < 3; ++k) {
-      a[k] = std::max<std::int64_t>(0, std::int64_t(std::ceil((lo[k] - og.origin[k]) / og.spacing[k])));
-      b[k] = std::min<std::int64_t>(og.dims[k] - 1, std::int64_t(std::floor((hi[k] - og.origin[k]) / og.spacing[k])));
-    }
-    for (std::int64_t k = a[2]; k <= b[2]; ++k)
-      for (std::int64_t j = a[1]; j <= b[1]; ++j)
-        for (std::int64_t i = a[0]; i <= b[0]; ++i) {
-          const std::int64_t idx = og.index(i, j, k);
-          if (claimed[std::size_t(idx)]) continue;
-          const Eigen::Vector3d l = inv * (og.voxelCenter(i, j, k) - deformed[t[0]]);
-          const double l0 = 1.0 - l.sum();
-          if (l.minCoeff() < -1e-9 || l0 < -1e-9) continue;
-          claimed[std::size_t(idx)] = 1;
-          Eigen::Vector3d s = rest.positions[t[0]];
-          for (int q = 0; q < 3; ++q) s += l[q] * (rest.positions[t[q + 1]] - rest.positions[t[0]]);
-          const Eigen::Vector3d ci = sg.continuousIndex(s);
-          out.labels()[std::size_t(idx)] =
-              source.atOr(std::int64_t(std::floor(ci[0] + 0.5)), std::int64_t(std::floor(ci[1] + 0.5)), std::int64_t(std::floor(ci[2] + 0.5)));
-        }
   }
   return out;
 }

@@ -8,7 +8,7 @@
 #include "geometry/io/png_io.h"
 #include "geometry/organ_table.h"
 #include "geometry/render/boundary_bvh.h"
-#include "geometry/render/output_grid.h"
+#include "geometry/deform/rasterize.h"
 #include "geometry/render/raycast_reference.h"
 #include "geometry/render/raycast_scene.h"
 #include "geometry/render/rest_transfer_mesh.h"
@@ -91,9 +91,9 @@ private:
   std::vector<Eigen::Vector3d> origin_, lo_, hi_;
 };
 
-// Renders `grid` through `rest` deformed by `d`, and the brute-force
-// rasterized grid G' through an identity box TM, with the same camera and
-// cuts. Returns the number of differing pixels, after checking that each is a
+// Renders `grid` through `rest` deformed by `d`, and the grid G' that the
+// rasterizer produces for that pose through an identity box TM, with the
+// same camera and cuts. Returns the number of differing pixels, after checking that each is a
 // voxel the TM rendering missed, never one it invented: G' shows a voxel
 // there, and the TM rendering shows nothing or a voxel of G' farther along
 // the ray. Prints how many of the missed voxels the ray crosses only outside
@@ -110,7 +110,7 @@ std::size_t poseVersusRasterizedGrid(const LabelGrid& grid, const TetMesh& rest,
   const Camera camera = sceneCamera(frame, cameraSpec, w, h);
   const Rendered tm = renderReference(grid, mesh, posed, camera, cuts, palette);
 
-  const LabelGrid rasterized = test::bruteForceDeformedGrid(grid, rest, posed);
+  const LabelGrid rasterized = rasterizeDeformedGrid(grid, rest, posed);
   EXPECT_EQ(rasterized.geometry().dims, tm.frame.output.dims);
   EXPECT_TRUE(rasterized.geometry().origin.isApprox(tm.frame.output.origin));
   const TetMesh box = boxTransferMesh(rasterized);
@@ -165,23 +165,23 @@ std::size_t poseVersusRasterizedGrid(const LabelGrid& grid, const TetMesh& rest,
   return diff.differing;
 }
 
-TEST(RenderOutputGrid, IsTheSourceLatticeOverTheDeformedBox) {
+TEST(RenderFrame, TraversesTheRasterizersGridInAShiftedIndexFrame) {
   const LabelGrid grid = stickFigure();
   const TetMesh tm = coarseVoxelTransferMesh(grid, 3);
-  const GridGeometry rest = outputGridGeometry(grid.geometry(), tm.positions);
-  // Vertices sit on voxel corners: the lattice points inside are exactly the
-  // voxels the coarse cells cover.
-  for (int a = 0; a < 3; ++a) {
-    const double first = (rest.origin[a] - grid.origin()[a]) / grid.spacing()[a];
-    EXPECT_NEAR(first, std::round(first), 1e-9);
-  }
-  const GridGeometry moved = outputGridGeometry(grid.geometry(), test::deform(tm.positions, grid.geometry(), test::Deformation::Rotate));
-  for (int a = 0; a < 3; ++a) {
-    const double first = (moved.origin[a] - grid.origin()[a]) / grid.spacing()[a];
-    EXPECT_NEAR(first, std::round(first), 1e-9);
-  }
-  EXPECT_TRUE(moved.spacing.isApprox(grid.spacing()));
-  EXPECT_EQ(outputGridGeometry(grid.geometry(), {}).voxelCount(), 0);
+  const RaycastMesh mesh = buildRaycastMesh(tm, grid.geometry());
+  const std::vector<Eigen::Vector3d> posed = test::deform(tm.positions, grid.geometry(), test::Deformation::Twist);
+  const RaycastFrame frame = prepareRaycastFrame(mesh, posed);
+  const GridGeometry g = deformedGridGeometry(grid.geometry(), posed);
+  EXPECT_EQ(frame.output.dims, g.dims);
+  EXPECT_TRUE(frame.output.origin.isApprox(g.origin));
+  // Render cell c is output voxel c + cellShift; the cells' box is G''s.
+  const Eigen::Vector3d corner(2, 5, 7);
+  const Eigen::Vector3d shift(double(frame.cellShift[0]), double(frame.cellShift[1]), double(frame.cellShift[2]));
+  EXPECT_TRUE(frame.toGrid(corner - shift).isApprox(g.voxelCenter(2, 5, 7)));
+  EXPECT_TRUE(frame.toRender(g.voxelCenter(2, 5, 7)).isApprox(corner - shift));
+  EXPECT_TRUE(frame.toGrid(frame.cellsLo).isApprox(g.boxMin()));
+  EXPECT_TRUE(frame.toGrid(frame.cellsHi).isApprox(g.boxMax()));
+  for (std::size_t v = 0; v < posed.size(); ++v) EXPECT_TRUE(frame.toGrid(frame.positions[v]).isApprox(posed[v]));
 }
 
 TEST(RenderTetFactors, ReproduceBarycentricCoordinates) {
