@@ -392,5 +392,10 @@ void main() {
   const uvec2 px = gl_GlobalInvocationID.xy;
   if (px.x >= P.width || px.y >= P.height) return;
   const uint pixel = px.y * P.width + px.x;
+  // Most pixels' rays cross no front face: background, without building a ray.
+  if (entries[2u * P.width * P.height + pixel] == 0u) {
+    image[pixel] = P.background;
+    return;
+  }
   image[pixel] = shade(trace(vec3Of(P.eye), pixelDirection(px), pixel));
 }
