@@ -17,6 +17,8 @@ layout(std430, binding = VOX_RAYCAST_BINDING_REST) readonly buffer Rest { vec4 r
 layout(std430, binding = VOX_RAYCAST_BINDING_PALETTE) readonly buffer Palette { uint palette[]; };
 layout(std430, binding = VOX_RAYCAST_BINDING_ENTRIES) readonly buffer Entries { uint entries[]; };
 layout(std430, binding = VOX_RAYCAST_BINDING_IMAGE) writeonly buffer Image { uint image[]; };
+layout(std430, binding = VOX_RAYCAST_BINDING_TILES) readonly buffer Tiles { uint tiles[]; };
+layout(push_constant) uniform Push { RaycastPush pc; };
 layout(std430, binding = VOX_RAYCAST_BINDING_SLAB0 + 0) readonly buffer Slab0 { uint slab0[]; };
 layout(std430, binding = VOX_RAYCAST_BINDING_SLAB0 + 1) readonly buffer Slab1 { uint slab1[]; };
 layout(std430, binding = VOX_RAYCAST_BINDING_SLAB0 + 2) readonly buffer Slab2 { uint slab2[]; };
@@ -389,13 +391,14 @@ uint shade(Hit h) {
 }
 
 void main() {
-  const uvec2 px = gl_GlobalInvocationID.xy;
+  const uint tilesX = (P.width + VOX_RAYCAST_GROUP_X - 1u) / VOX_RAYCAST_GROUP_X;
+  const uint group = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
+  if (group >= pc.tileCount) return;
+  const uint tile = tiles[group];
+  const uvec2 px = uvec2(tile % tilesX, tile / tilesX) * uvec2(VOX_RAYCAST_GROUP_X, VOX_RAYCAST_GROUP_Y) + gl_LocalInvocationID.xy;
   if (px.x >= P.width || px.y >= P.height) return;
   const uint pixel = px.y * P.width + px.x;
-  // Most pixels' rays cross no front face: background, without building a ray.
-  if (entries[2u * P.width * P.height + pixel] == 0u) {
-    image[pixel] = P.background;
-    return;
-  }
+  // A ray that crosses no front face keeps the background.
+  if (entries[2u * P.width * P.height + pixel] == 0u) return;
   image[pixel] = shade(trace(vec3Of(P.eye), pixelDirection(px), pixel));
 }

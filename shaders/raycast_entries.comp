@@ -15,6 +15,7 @@ layout(std430, binding = VOX_RAYCAST_ENTRIES_BINDING_PARAMS) readonly buffer Par
 layout(std430, binding = VOX_RAYCAST_ENTRIES_BINDING_FACES) readonly buffer Faces { uvec4 faces[]; };
 layout(std430, binding = VOX_RAYCAST_ENTRIES_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
 layout(std430, binding = VOX_RAYCAST_ENTRIES_BINDING_ENTRIES) buffer Entries { uint entries[]; };
+layout(std430, binding = VOX_RAYCAST_ENTRIES_BINDING_TILE_FLAGS) buffer TileFlags { uint tileFlags[]; };
 layout(push_constant) uniform Push { RaycastEntriesPush pc; };
 
 #include "shared/raycast.glsl"
@@ -81,6 +82,8 @@ void main() {
       if (pc.pass == 0u) {
         atomicMin(entries[pixel], floatBitsToUint(t));
         atomicAdd(entries[2u * plane + pixel], 1u);
+        const uint tilesX = (P.width + VOX_RAYCAST_GROUP_X - 1u) / VOX_RAYCAST_GROUP_X;
+        tileFlags[(y / VOX_RAYCAST_GROUP_Y) * tilesX + x / VOX_RAYCAST_GROUP_X] = 1u;
       } else if (floatBitsToUint(t) == entries[pixel]) {
         atomicMin(entries[plane + pixel], f);
       }

@@ -19,6 +19,7 @@ using shader::RaycastEntriesPush;
 using shader::RaycastNode;
 using shader::RaycastParams;
 using shader::RaycastPreparePush;
+using shader::RaycastPush;
 
 static_assert(VOX_RAYCAST_BVH_STACK == 2 * kBvhMaxDepth);
 static_assert(VOX_RAYCAST_FACE_HIT_TOLERANCE == kFaceHitTolerance);
@@ -30,6 +31,7 @@ PipelineDesc raycastPipeline() {
   PipelineDesc d;
   d.shader = "raycast.comp";
   d.bindings.assign(VOX_RAYCAST_BINDING_SLAB0 + VOX_RAYCAST_MAX_SLABS, BindingKind::StorageBuffer);
+  d.pushConstantBytes = sizeof(RaycastPush);
   return d;
 }
 
@@ -81,7 +83,8 @@ RaycastKernel::RaycastKernel(Context& context, const LabelGrid& source, const Ra
                          {BindingKind::StorageBuffer, BindingKind::StorageBuffer, BindingKind::StorageBuffer},
                          sizeof(RaycastPreparePush)}),
       entries_(context, {"raycast_entries.comp",
-                         {BindingKind::StorageBuffer, BindingKind::StorageBuffer, BindingKind::StorageBuffer, BindingKind::StorageBuffer},
+                         {BindingKind::StorageBuffer, BindingKind::StorageBuffer, BindingKind::StorageBuffer, BindingKind::StorageBuffer,
+                          BindingKind::StorageBuffer},
                          sizeof(RaycastEntriesPush)}),
       raycast_(context, raycastPipeline()),
       batch_(context) {
@@ -207,10 +210,15 @@ RgbImage RaycastKernel::render(const RaycastFrame& frame, const RaycastView& vie
 
   const std::uint64_t imageBytes = checkedBinding(context_, 4 * std::uint64_t(w) * std::uint64_t(h), "the image");
   const std::uint64_t entryBytes = checkedBinding(context_, 3 * imageBytes, "the entry buffer");
+  const auto tilesX = std::uint32_t((w + VOX_RAYCAST_GROUP_X - 1) / VOX_RAYCAST_GROUP_X);
+  const auto tilesY = std::uint32_t((h + VOX_RAYCAST_GROUP_Y - 1) / VOX_RAYCAST_GROUP_Y);
   if (!image_.valid() || image_.size() != imageBytes) {
     image_ = Buffer(context_, imageBytes, MemoryIntent::Device);
     imageReadback_ = Buffer(context_, imageBytes, MemoryIntent::Readback);
     entryBuffer_ = Buffer(context_, entryBytes, MemoryIntent::Device);
+    tileCount_ = tilesX * tilesY;
+    tileFlags_ = Buffer(context_, 4 * std::uint64_t(tileCount_), MemoryIntent::Readback);
+    tiles_ = Buffer(context_, 4 * std::uint64_t(tileCount_), MemoryIntent::Upload);
   }
   times_ = {};
   times_.uploadMs = msSince(t0);
@@ -229,32 +237,47 @@ RgbImage RaycastKernel::render(const RaycastFrame& frame, const RaycastView& vie
   // Entry buffer: depth planes start at +inf bits, faces at ~0, counts at 0.
   batch_.fill(entryBuffer_, 0xFFFFFFFFu, 0, 2 * imageBytes);
   batch_.fill(entryBuffer_, 0u, 2 * imageBytes, imageBytes);
+  batch_.fill(tileFlags_, 0u);
   const auto faceGroups = std::uint32_t((faceCount_ + VOX_RAYCAST_ENTRIES_GROUP_SIZE - 1) / VOX_RAYCAST_ENTRIES_GROUP_SIZE);
   for (std::uint32_t pass = 0; pass < 2; ++pass) {
     const RaycastEntriesPush entriesPush{std::uint32_t(faceCount_), pass, 0, 0};
-    batch_.dispatch(entries_, {Binding::storage(params_), Binding::storage(faces_), Binding::storage(positions_), Binding::storage(entryBuffer_)},
+    batch_.dispatch(entries_,
+                    {Binding::storage(params_), Binding::storage(faces_), Binding::storage(positions_), Binding::storage(entryBuffer_),
+                     Binding::storage(tileFlags_)},
                     entriesPush, faceGroups);
     batch_.barrier();
   }
   batch_.timestamp("entries");
+  batch_.fill(image_, p.background);
+  batch_.submitAndWait();
+  if (batch_.timings().size() == 4) {
+    const auto& ts = batch_.timings();
+    times_.prepareGpuMs = ts[2].ms - ts[1].ms;
+    times_.entriesGpuMs = ts[3].ms - ts[2].ms;
+  }
+
+  // The flagged tiles, in image order: one work group each.
+  const auto* flags = static_cast<const std::uint32_t*>(tileFlags_.mapped());
+  auto* list = static_cast<std::uint32_t*>(tiles_.mapped());
+  std::uint32_t active = 0;
+  for (std::uint32_t t = 0; t < tileCount_; ++t)
+    if (flags[t]) list[active++] = t;
   const Buffer& s0 = slabs_[0];
   auto slab = [&](std::size_t i) { return Binding::storage(i < slabs_.size() ? slabs_[i] : s0); };
+  const std::uint32_t maxGroups = context_.info().maxWorkGroupCount[0];
+  batch_.timestamp("start");
   batch_.dispatch(raycast_,
                   {Binding::storage(params_), Binding::storage(nodes_), Binding::storage(faces_), Binding::storage(positions_),
                    Binding::storage(factors_), Binding::storage(neighbors_), Binding::storage(rest_), Binding::storage(palette_),
-                   Binding::storage(entryBuffer_), Binding::storage(image_), slab(0), slab(1), slab(2), slab(3), slab(4), slab(5), slab(6), slab(7)},
-                  static_cast<const void*>(nullptr), 0u, std::uint32_t((w + VOX_RAYCAST_GROUP_X - 1) / VOX_RAYCAST_GROUP_X),
-                  std::uint32_t((h + VOX_RAYCAST_GROUP_Y - 1) / VOX_RAYCAST_GROUP_Y), 1u);
+                   Binding::storage(entryBuffer_), Binding::storage(image_), Binding::storage(tiles_), slab(0), slab(1), slab(2),
+                   slab(3), slab(4), slab(5), slab(6), slab(7)},
+                  RaycastPush{active, 0, 0, 0}, std::min(active, maxGroups), (active + maxGroups - 1) / maxGroups);
   batch_.barrier();
   batch_.timestamp("raycast");
   batch_.copy(image_, imageReadback_, imageBytes);
   batch_.submitAndWait();
-  const auto& ts = batch_.timings();
-  if (ts.size() == 5) {
-    times_.prepareGpuMs = ts[2].ms - ts[1].ms;
-    times_.entriesGpuMs = ts[3].ms - ts[2].ms;
-    times_.raycastGpuMs = ts[4].ms - ts[3].ms;
-  }
+  if (batch_.timings().size() == 2) times_.raycastGpuMs = batch_.timings()[1].ms;
+  times_.activeTiles = active;
 
   RgbImage image(w, h);
   const auto* px = static_cast<const std::uint32_t*>(imageReadback_.mapped());

@@ -9,8 +9,11 @@
 // too. Per frame only the deformed positions and the refitted boundary BVH
 // are uploaded; one compute pass recomputes the per-tet factors (eq. 5.1-5.2),
 // two rasterize the front boundary faces into the entry buffer (each pixel's
-// first entry face and the number of front faces its ray crosses), then one
-// invocation per pixel casts its ray, querying the BVH only for re-entries.
+// first entry face and the number of front faces its ray crosses, and which
+// 8x8 tiles hold such pixels), then one invocation per pixel of those tiles
+// casts its ray, querying the BVH only for re-entries. The tile list is made
+// on the host between two submissions: on CPU drivers an invocation of the
+// ray shader costs even when it exits at once, and most tiles see no mesh.
 
 #include "geometry/label_grid.h"
 #include "geometry/render/palette.h"
@@ -39,6 +42,7 @@ struct RaycastFrameTimes {
   double prepareGpuMs = 0.0; // GPU: per-tet factors
   double entriesGpuMs = 0.0; // GPU: entry buffer
   double raycastGpuMs = 0.0; // GPU: the rays
+  std::uint32_t activeTiles = 0;  // 8x8 tiles that ran the ray pass
   double totalMs = 0.0;      // host: render() from call to image
 };
 
@@ -71,7 +75,8 @@ private:
   // Per frame: staging (host visible) and device copies.
   Buffer positionsStaging_, nodesStaging_, paramsStaging_, paletteStaging_;
   Buffer positions_, nodes_, params_, palette_, factors_;
-  Buffer entryBuffer_, image_, imageReadback_;
+  Buffer entryBuffer_, image_, imageReadback_, tileFlags_, tiles_;
+  std::uint32_t tileCount_ = 0;
   CommandBatch batch_;
   RaycastFrameTimes times_;
 };

@@ -187,14 +187,18 @@ static_assert(sizeof(RasterReducePush) == 32);
 // front faces into the entry buffer (uint[3 * width * height], three planes):
 // the smallest hit parameter t >= 0 per pixel (float bits, pass 0), the
 // lowest face index hit at that t (pass 1), and the number of front faces
-// the pixel's ray hits (pass 0).
+// the pixel's ray hits (pass 0). Pass 0 also flags the image tiles
+// (VOX_RAYCAST_GROUP_X x VOX_RAYCAST_GROUP_Y pixels, row by row) that hold a
+// hit pixel: only those tiles run the ray pass.
 #define VOX_RAYCAST_ENTRIES_GROUP_SIZE 64
 #define VOX_RAYCAST_ENTRIES_BINDING_PARAMS 0
 #define VOX_RAYCAST_ENTRIES_BINDING_FACES 1
 #define VOX_RAYCAST_ENTRIES_BINDING_POSITIONS 2
 #define VOX_RAYCAST_ENTRIES_BINDING_ENTRIES 3
+#define VOX_RAYCAST_ENTRIES_BINDING_TILE_FLAGS 4  // uint[tile count]: 1 where a pixel is hit
 
-// raycast.comp: one invocation per pixel.
+// raycast.comp: one invocation per pixel of the flagged tiles, one work group
+// per tile; the other pixels keep the background the image was filled with.
 #define VOX_RAYCAST_BINDING_PARAMS 0     // RaycastParams
 #define VOX_RAYCAST_BINDING_NODES 1      // RaycastNode[]: boundary BVH
 #define VOX_RAYCAST_BINDING_FACES 2      // uvec4[faceCount]: outward vertices a, b, c and the tet
@@ -205,10 +209,18 @@ static_assert(sizeof(RasterReducePush) == 32);
 #define VOX_RAYCAST_BINDING_PALETTE 7    // uint[labelCount]: RGBA8 (r in the low byte), alpha 0 = hidden
 #define VOX_RAYCAST_BINDING_ENTRIES 8    // uint[3 * width * height] (raycast_entries.comp)
 #define VOX_RAYCAST_BINDING_IMAGE 9      // uint[width * height]: RGBA8, row 0 at the top
-#define VOX_RAYCAST_BINDING_SLAB0 10     // uint[] x VOX_RAYCAST_MAX_SLABS: two uint16 labels per word
+#define VOX_RAYCAST_BINDING_TILES 10     // uint[]: indices of the flagged tiles, one per work group
+#define VOX_RAYCAST_BINDING_SLAB0 11     // uint[] x VOX_RAYCAST_MAX_SLABS: two uint16 labels per word
 
 struct RaycastPreparePush {
   uint tetCount;
+  uint pad0;
+  uint pad1;
+  uint pad2;
+};
+
+struct RaycastPush {
+  uint tileCount;  // flagged tiles; work group g (row-major over the dispatch) takes tile tiles[g]
   uint pad0;
   uint pad1;
   uint pad2;
@@ -261,6 +273,7 @@ struct RaycastParams {
 static_assert(sizeof(RaycastPreparePush) == 16);
 static_assert(sizeof(RaycastNode) == 32);
 static_assert(sizeof(RaycastEntriesPush) == 16);
+static_assert(sizeof(RaycastPush) == 16);
 static_assert(sizeof(RaycastParams) == 316);
 #endif
 
