@@ -118,7 +118,8 @@ TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, con
     throw InputError("sizing field", "must be positive everywhere");
   reportProgress("transfer mesh", 0.0);
   const GridGeometry& g = groups.geometry();
-  const double maxOffset = options.boundaryOffsetMm * (1.0 + 0.5 * kCoveragePasses);
+  const double offset = options.boundaryOffsetVoxels * g.spacing.minCoeff();
+  const double maxOffset = offset * (1.0 + 0.5 * kCoveragePasses);
   // Pad by the largest offset plus two voxels: the domain ends inside the grid.
   const GridGeometry padded = padGeometry(g, padForDistance(g, maxOffset, 2));
   const LabelGrid labels = padLabels(groups, padded);
@@ -132,14 +133,14 @@ TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, con
   DistanceTransform dt = euclideanDistanceTransform(padded, foreground, true);
   LabelGrid nearestGroup(padded, 0);
   for (std::size_t v = 0; v < foreground.size(); ++v) nearestGroup.labels()[v] = labels.labels()[std::size_t(dt.nearest[v])];
-  const TransferMeshDomain label(dt.distance, nearestGroup, options.boundaryOffsetMm);
+  const TransferMeshDomain label(dt.distance, nearestGroup, offset);
   LabelGrid atCentres(padded, 0);
   SampledDomain domain;
   domain.labels = &atCentres;
   domain.labelAt = [&label](const Eigen::Vector3d& p) { return label(p); };
   VolumeCriteria criteria;
   criteria.facetAngleDeg = options.facetAngleDeg;
-  criteria.facetDistanceMm = options.facetDistanceMm;
+  criteria.facetDistanceMm = options.facetDistanceVoxels * g.spacing.minCoeff();
   criteria.radiusEdgeRatio = options.radiusEdgeRatio;
   criteria.sizing = &sizing;
 
@@ -169,7 +170,7 @@ TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, con
         for (std::int64_t j = std::max<std::int64_t>(0, pc[1] - reach[1]); j <= std::min(padded.dims[1] - 1, pc[1] + reach[1]); ++j)
           for (std::int64_t i = std::max<std::int64_t>(0, pc[0] - reach[0]); i <= std::min(padded.dims[0] - 1, pc[0] + reach[0]); ++i) {
             const double d = (padded.voxelCenter(i, j, k) - centre).norm();
-            if (d < radius) bump.at(i, j, k) = std::max(bump.at(i, j, k), float(0.5 * options.boundaryOffsetMm * (1.0 - d / radius)));
+            if (d < radius) bump.at(i, j, k) = std::max(bump.at(i, j, k), float(0.5 * offset * (1.0 - d / radius)));
           }
     }
     for (std::size_t v = 0; v < bump.values.size(); ++v) dt.distance.values[v] -= bump.values[v];
@@ -218,7 +219,8 @@ CutReport cutTransferMesh(TetMesh& mesh, std::int32_t groupA, std::int32_t group
   const std::vector<Tet> original = mesh.tets;
   std::vector<std::int32_t> fanOf;
   std::unordered_map<std::int32_t, std::int32_t> local;
-  for (std::int32_t v = 0; v < std::int32_t(mesh.vertexCount()); ++v) {
+  const auto originalVertices = std::int32_t(vertexOnCut.size());
+  for (std::int32_t v = 0; v < originalVertices; ++v) {
     if (!vertexOnCut[v]) continue;
     // Fans of groupB tets around v: joined through groupB-groupB faces
     // containing v (the faces opposite the tets' other vertices).

@@ -15,15 +15,17 @@
 
 namespace vox {
 
+// Lengths tied to voxel coverage are in units of the grid's finest spacing
+// (2.137 mm on the ICRP adult male).
 struct TransferMeshOptions {
-  // The mesh's boundary is the level set at this distance (mm) from the
+  // The mesh's boundary is the level set at this distance from the
   // foreground's voxel centres, so every foreground voxel centre lies in a
   // tet (the rasterizer needs that) while the volume stays within a few %
-  // of the voxels' volume. Where Delaunay facets still cut a centre off
-  // (sharp convex features), the offset is raised locally and the mesh
-  // rebuilt, at most three times.
-  double boundaryOffsetMm = 3.0;
-  double facetDistanceMm = 1.0;  // upper bound on boundary/interface facet to surface distance
+  // of the voxels' volume on a body. Where Delaunay facets still cut a
+  // centre off (sharp convex features), the offset is raised locally and
+  // the mesh rebuilt, at most three times.
+  double boundaryOffsetVoxels = 1.4;
+  double facetDistanceVoxels = 0.5;  // upper bound on boundary/interface facet to surface distance
   double facetAngleDeg = 25.0;   // lower bound on boundary/interface facet angles
   double radiusEdgeRatio = 3.0;  // upper bound on tet circumradius / shortest edge
 };
