@@ -19,8 +19,9 @@ std::vector<std::uint8_t> maskOf(const LabelGrid& labels, Label value) {
   return mask;
 }
 
-// Marks the voxels of group `from` within `depth` mm of group `to` (centre
-// to centre) inside `region`: one side of a limb interface (thesis 4.2.1).
+// Marks the voxels of group `from` within `depth` mm (centre to centre) of
+// the other group, given as the distance to it, inside `region`: one side
+// of a limb interface (thesis 4.2.1). Returns how many were newly marked.
 std::int64_t markInterface(const LabelGrid& labels, Label from, const ScalarGrid& distanceToOther, double depth,
                            const std::optional<Eigen::AlignedBox3d>& region, std::vector<std::uint8_t>& eroded) {
   const GridGeometry& g = labels.geometry();
@@ -64,6 +65,8 @@ CageResult buildCage(const LabelGrid& groups, const CageOptions& options) {
     result.report.erodedVoxels += markInterface(labels, s.groupB, toA, options.erosionMm, s.region, eroded);
   }
   for (std::size_t v = 0; v < core.size(); ++v) core[v] &= std::uint8_t(!eroded[v]);
+  if (std::find(core.begin(), core.end(), 1) == core.end())
+    throw InputError("cage", "limb separation erodes the whole foreground (erosion " + std::to_string(options.erosionMm) + " mm)");
   reportProgress("cage", 0.1);
 
   // Dilation radius of each kept voxel: dilationMm, except that inside a
@@ -88,8 +91,9 @@ CageResult buildCage(const LabelGrid& groups, const CageOptions& options) {
   }
   reportProgress("cage", 0.2);
 
-  // Cage field, negative inside: the union of the balls, evaluated through
-  // each voxel's nearest kept voxel (distance to it minus its radius).
+  // Cage field, negative inside: the union of the balls, approximated
+  // through each voxel's nearest kept voxel (distance to it minus its
+  // radius; exact where the radius is constant).
   const DistanceTransform toCore = euclideanDistanceTransform(padded, core, !options.separations.empty());
   ScalarGrid field = toCore.distance;
   for (std::size_t v = 0; v < field.values.size(); ++v)

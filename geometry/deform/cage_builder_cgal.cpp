@@ -2,6 +2,10 @@
 // refuses collapses creating self-intersections.
 #include "geometry/deform/cage_builder.h"
 
+// GCC 12 reports the Eigen 4x4 quadrics that CGAL's Garland-Heckbert
+// policies copy around as maybe uninitialized (they are set before use).
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+
 #include "geometry/error.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>

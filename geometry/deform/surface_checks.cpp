@@ -1,6 +1,7 @@
 #include "geometry/deform/surface_checks.h"
 
 #include "geometry/error.h"
+#include "geometry/io/mesh_io.h"
 
 #include <Eigen/Geometry>
 
@@ -121,6 +122,12 @@ void validateCage(const TriMesh& cage, const std::string& source) {
   if (!(c.volume > 0.0)) throw InputError(source, "cage is inverted: its triangles face inwards (enclosed volume " + std::to_string(c.volume) + " mm^3)");
   const std::size_t crossings = countSelfIntersections(cage);
   if (crossings) throw InputError(source, "cage intersects itself (" + n(crossings, "pair") + " of intersecting triangles)");
+}
+
+TriMesh readCage(const std::string& path) {
+  TriMesh cage = readSurface(path);
+  validateCage(cage, path);
+  return cage;
 }
 
 // ---------------------------------------------------------------------------

@@ -53,6 +53,10 @@ SurfaceCheck checkSurface(const TriMesh& surface);
 // inverted orientation, unused vertices, degenerate faces, self-intersections.
 void validateCage(const TriMesh& cage, const std::string& source);
 
+// Reads a cage from an OBJ, OFF or PLY file and validates it (validateCage):
+// a file that cannot be used as a cage is an InputError naming it.
+TriMesh readCage(const std::string& path);
+
 // Inside test against a closed oriented surface: the winding number along
 // the +x ray, counted on the faces' projections onto the yz plane with
 // simulation of simplicity, so a ray through an edge or vertex is counted

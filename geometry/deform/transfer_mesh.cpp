@@ -63,10 +63,6 @@ private:
   double offset_;
 };
 
-}  // namespace
-
-namespace {
-
 // Foreground voxels of `grid` (linear indices) whose centres lie in no tet.
 std::vector<std::int64_t> uncoveredVoxels(const TetMesh& mesh, const LabelGrid& grid) {
   const GridGeometry& g = grid.geometry();
@@ -186,7 +182,7 @@ CutReport cutTransferMesh(TetMesh& mesh, std::int32_t groupA, std::int32_t group
   const auto neighbors = faceNeighbors(mesh, "transfer mesh");
   const std::size_t nt = mesh.tetCount();
 
-  // Cut faces, seen from their groupB tet: (tet, local face).
+  // Cut faces: groupB tet against groupA tet, centroid in the region.
   std::vector<std::uint8_t> tetHasCutFace(nt, 0);
   std::vector<std::uint8_t> vertexOnCut(mesh.vertexCount(), 0);
   for (std::size_t t = 0; t < nt; ++t) {
@@ -244,8 +240,8 @@ CutReport cutTransferMesh(TetMesh& mesh, std::int32_t groupA, std::int32_t group
         stack.pop_back();
         members.push_back(b);
         const std::int32_t t = btets[b];
-        // Does t own a cut face at v? Cut faces were recorded per tet, so
-        // check its faces against groupA neighbours in the region again.
+        // Faces of t containing v: grow the fan through groupB neighbours,
+        // and note whether one of them is a cut face.
         for (int k = 0; k < 4; ++k) {
           if (original[t][k] == v) continue;
           const std::int32_t n = neighbors[t][k];

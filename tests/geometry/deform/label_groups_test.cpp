@@ -96,8 +96,11 @@ TEST(LabelGroups, SidesFromGeometry) {
   EXPECT_EQ(fromGeometry.labels(), fromNames.labels());
   // Mirrored convention: the sides swap.
   const LabelGrid mirrored = labelGroupGrid(grid, unsided, {.rightSideAtLowX = false});
-  for (std::size_t v = 0; v < grid.labels().size(); ++v)
-    if (fromNames.labels()[v] == Label(BodyPart::RightArm)) ASSERT_EQ(mirrored.labels()[v], Label(BodyPart::LeftArm));
+  for (std::size_t v = 0; v < grid.labels().size(); ++v) {
+    if (fromNames.labels()[v] == Label(BodyPart::RightArm)) {
+      ASSERT_EQ(mirrored.labels()[v], Label(BodyPart::LeftArm));
+    }
+  }
 }
 
 TEST(LabelGroups, AdultMalePhantom) {

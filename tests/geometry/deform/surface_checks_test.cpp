@@ -1,6 +1,8 @@
 #include "geometry/deform/surface_checks.h"
 
 #include "geometry/error.h"
+#include "geometry/io/mesh_io.h"
+#include "tests/support/test_environment.h"
 
 #include <gtest/gtest.h>
 
@@ -150,6 +152,29 @@ TEST(SurfaceChecks, RejectsOpenNonManifoldInvertedAndSelfIntersectingCages) {
   EXPECT_NE(validationError(badIndex).find("references vertex 42"), std::string::npos);
 }
 
+TEST(SurfaceChecks, CagesFromFiles) {
+  const std::string dir = test::tempDir();
+  const TriMesh good = box({0, 0, 0}, {10, 20, 30});
+  for (const char* ext : {".obj", ".off"}) {
+    writeSurface(dir + "/good" + ext, good);
+    const TriMesh back = readCage(dir + "/good" + ext);
+    EXPECT_EQ(back.triangles, good.triangles);
+    TriMesh open = good;
+    open.triangles.erase(open.triangles.begin() + 4);
+    writeSurface(dir + "/open" + ext, open);
+    try {
+      readCage(dir + "/open" + ext);
+      FAIL() << "no error";
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()), dir + "/open" + ext + ": cage is not closed: 3 boundary edges");
+    }
+    TriMesh inverted = good;
+    for (Tri& t : inverted.triangles) std::swap(t[0], t[1]);
+    writeSurface(dir + "/inverted" + ext, inverted);
+    EXPECT_THROW(readCage(dir + "/inverted" + ext), InputError);
+  }
+}
+
 TEST(SurfaceChecks, InsideTestOnSphere) {
   const Eigen::Vector3d centre(1.0, -2.0, 3.0);
   const TriMesh s = sphere(centre, 10.0, 3);
@@ -186,8 +211,12 @@ TEST(SurfaceChecks, VoxelMaskThroughEdgesAndVertices) {
         EXPECT_EQ(m, inside.contains(g.voxelCenter(i, j, k))) << i << " " << j << " " << k;
         // Rows strictly inside along y and z: inside between the x faces
         // (centres on the faces themselves may go either way).
-        if (j > 2 && j < 7 && k > 2 && k < 5 && i != 2 && i != 6) EXPECT_EQ(m, i > 2 && i < 6) << i << " " << j << " " << k;
-        if (j < 2 || j > 7 || k < 2 || k > 5 || i < 2 || i > 6) EXPECT_FALSE(m);
+        if (j > 2 && j < 7 && k > 2 && k < 5 && i != 2 && i != 6) {
+          EXPECT_EQ(m, i > 2 && i < 6) << i << " " << j << " " << k;
+        }
+        if (j < 2 || j > 7 || k < 2 || k > 5 || i < 2 || i > 6) {
+          EXPECT_FALSE(m);
+        }
       }
   // Centres on the boundary planes go to one side or the other, but each
   // row's count is consistent: at most the closed box, at least the open one.
