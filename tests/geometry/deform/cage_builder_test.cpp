@@ -3,6 +3,7 @@
 #include "geometry/deform/label_groups.h"
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
+#include "geometry/organ_table.h"
 #include "geometry/synth.h"
 #include "tests/support/test_environment.h"
 
@@ -108,15 +109,61 @@ TEST(CageBuilder, BadRequests) {
   EXPECT_THROW(buildCage(groups, o), InputError);
 }
 
-TEST(CageBuilder, AdultMaleDefaultCage) {
+// Midpoint of the background gap between the right arm and the trunk along
+// the row (j, k), or nothing when they touch or the row misses one of them.
+std::optional<Eigen::Vector3d> gapBetweenArmAndTrunk(const LabelGrid& groups, std::int64_t j, std::int64_t k) {
+  const GridGeometry& g = groups.geometry();
+  std::int64_t armEnd = -1;
+  for (std::int64_t i = 0; i < g.dims[0]; ++i) {
+    const Label s = groups.at(i, j, k);
+    if (s == Label(BodyPart::RightArm)) armEnd = i;
+    if (s == Label(BodyPart::Trunk) && armEnd >= 0) {
+      if (i - armEnd < 3) return std::nullopt;
+      return g.voxelCenter(armEnd, j, k) + 0.5 * (g.voxelCenter(i, j, k) - g.voxelCenter(armEnd, j, k));
+    }
+    if (s != 0 && s != Label(BodyPart::RightArm)) armEnd = -1;
+  }
+  return std::nullopt;
+}
+
+TEST(CageBuilder, AdultMaleCages) {
   const LabelGrid grid = readGrid(test::assetPath("icrp110_am.nii.gz"));
-  const CageResult r = buildCage(grid);
-  expectValidCage(r, 300);
+  const LabelGrid groups = labelGroupGrid(grid, OrganTable::read(test::assetPath("icrp110_am_organs.dat")));
+  const CageResult plain = buildCage(grid);
+  expectValidCage(plain, 300);
   // The default 20 mm dilation keeps QEM's cuts out of the body almost
   // everywhere; the count is reported (outliers for the propagation).
-  EXPECT_LT(r.report.foregroundOutside, 1000);
-  RecordProperty("cage_vertices", int(r.cage.vertexCount()));
-  RecordProperty("foreground_outside", int(r.report.foregroundOutside));
+  EXPECT_LT(plain.report.foregroundOutside, 1000);
+  RecordProperty("cage_vertices", int(plain.cage.vertexCount()));
+  RecordProperty("foreground_outside", int(plain.report.foregroundOutside));
+
+  // Both arms separated from the trunk below the shoulders (they touch it
+  // between z = 1270 and 1480 mm and hang 10-25 mm from it below).
+  CageOptions options;
+  const Eigen::AlignedBox3d belowShoulders(Eigen::Vector3d::Constant(-1e4), Eigen::Vector3d(1e4, 1e4, 1300.0));
+  for (const auto arm : {BodyPart::RightArm, BodyPart::LeftArm})
+    options.separations.push_back({Label(arm), Label(BodyPart::Trunk), belowShoulders});
+  const CageResult inset = buildCage(groups, options);
+  expectValidCage(inset, 300);
+  EXPECT_GT(inset.report.erodedVoxels, 0);
+  EXPECT_GT(inset.report.check.genus, plain.report.check.genus);
+  RecordProperty("inset_outside", int(inset.report.foregroundOutside));
+
+  // Gaps between the right arm and the trunk: inside the plain cage (the
+  // dilation bridges them), outside the inset one.
+  const SurfaceInsideTest plainInside(plain.cage), insetInside(inset.cage);
+  int gaps = 0, separated = 0;
+  for (std::int64_t k = 110; k <= 155; k += 3)
+    for (std::int64_t j = 30; j <= 100; j += 3)
+      if (const auto gap = gapBetweenArmAndTrunk(groups, j, k)) {
+        ++gaps;
+        EXPECT_TRUE(plainInside.contains(*gap)) << gap->transpose();
+        separated += !insetInside.contains(*gap);
+      }
+  RecordProperty("gaps", gaps);
+  RecordProperty("gaps_outside_inset_cage", separated);
+  ASSERT_GT(gaps, 30);
+  EXPECT_GE(separated, gaps * 9 / 10);
 }
 
 }  // namespace
