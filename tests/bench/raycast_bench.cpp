@@ -10,14 +10,19 @@
 // (all lavapipe threads), which on a loaded machine says more than wall
 // time; gpu_ms the kernels' timestamps.
 //
-// The transfer mesh is a coarse voxel TM (the six-tet decomposition of the
-// grid downsampled by kTmFactor), or the Medit file named by
-// VOXMORPH_BENCH_TM_AM / VOXMORPH_BENCH_TM_AF (a TM of the original grid,
-// used for the upsampled grid too: it lives in millimetres).
+// The transfer mesh is the pipeline's (buildTransferMesh: CGAL Mesh_3 of the
+// foreground, default sizing field, built once per phantom on the original
+// grid and used for the upsampled grid too: it lives in millimetres), or the
+// Medit file named by VOXMORPH_BENCH_TM_AM / VOXMORPH_BENCH_TM_AF; with
+// VOXMORPH_BENCH_TM=coarse, a coarse voxel TM (the six-tet decomposition of
+// the grid downsampled by kTmFactor), whose air layer around the body makes
+// every ray longer.
 //
 //   build/release/bench/raycast_bench [--benchmark_filter=...]
 //   VOXMORPH_BENCH_SIZE=1920x1080 build/release/bench/raycast_bench
 
+#include "geometry/deform/label_groups.h"
+#include "geometry/deform/transfer_mesh.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/io/mesh_io.h"
 #include "geometry/organ_table.h"
@@ -96,7 +101,16 @@ Scene& scene(const std::string& name) {
   const LabelGrid original = readGrid(std::string(VOX_ASSETS_DIR) + "/icrp110_" + phantom + ".nii.gz");
   const std::string envName = "VOXMORPH_BENCH_TM_" + std::string(phantom == "am" ? "AM" : "AF");
   const char* tmFile = std::getenv(envName.c_str());
-  s->rest = tmFile ? readTetMesh(tmFile) : coarseVoxelTransferMesh(original, kTmFactor);
+  const char* tmKind = std::getenv("VOXMORPH_BENCH_TM");
+  const bool coarse = tmKind && std::string(tmKind) == "coarse";
+  const std::string tmName = tmFile ? tmFile : coarse ? "coarse voxel TM" : "buildTransferMesh";
+  static std::map<std::string, TetMesh> meshes;  // one TM per phantom, shared by its upsampled grid
+  if (!meshes.count(phantom)) {
+    if (tmFile) meshes[phantom] = readTetMesh(tmFile);
+    else if (coarse) meshes[phantom] = coarseVoxelTransferMesh(original, kTmFactor);
+    else meshes[phantom] = buildTransferMesh(binaryGroupGrid(original), defaultSizingField(original.geometry()));
+  }
+  s->rest = meshes[phantom];
   s->restGrid = original.geometry();
   s->grid = name.find("upsampled") != std::string::npos ? upsample(original, {2, 2, 3}) : original;
   const OrganTable organs = OrganTable::read(std::string(VOX_ASSETS_DIR) + "/icrp110_" + phantom + "_organs.dat");
@@ -106,8 +120,7 @@ Scene& scene(const std::string& name) {
   s->kernel = std::make_unique<gpu::RaycastKernel>(context(), s->grid, s->mesh);
   s->setupMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - w0).count();
   std::fprintf(stderr, "%s: %lld voxels, TM %zu tets (%s), %zu label slabs, setup %.0f ms\n", name.c_str(),
-               (long long)s->grid.voxelCount(), s->mesh.tets.size(), tmFile ? tmFile : "coarse voxel TM", s->kernel->slabCount(),
-               s->setupMs);
+               (long long)s->grid.voxelCount(), s->mesh.tets.size(), tmName.c_str(), s->kernel->slabCount(), s->setupMs);
   return *s;
 }
 
