@@ -1,6 +1,8 @@
 // GPU transfer-mesh-guided ray caster against its CPU reference and the
 // golden images: at most 0.1% of the pixels may differ by more than 5/255.
 
+#include "geometry/deform/label_groups.h"
+#include "geometry/deform/transfer_mesh.h"
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/io/png_io.h"
@@ -54,24 +56,27 @@ Frame makeFrame(const RaycastMesh& mesh, const std::vector<Eigen::Vector3d>& pos
 }
 
 TEST(RaycastGpu, SyntheticPosesCutsAndHiddenLabelsEqualTheCpuReference) {
+  // Through a coarse voxel TM and through the pipeline's transfer mesh.
   const LabelGrid grid = stickFigure();
-  const TetMesh rest = coarseVoxelTransferMesh(grid, 3);
-  const RaycastMesh mesh = buildRaycastMesh(rest, grid.geometry());
-  gpu::RaycastKernel kernel(context(), grid, mesh);
-  Palette palette(grid.maxLabel());
-  for (test::Deformation d : {test::Deformation::Rest, test::Deformation::Twist, test::Deformation::Bend})
-    for (const char* cut : {"", "y<14", "plane=1,0.2,-0.5,-50"})
-      for (const char* hide : {"", "1"}) {
-        Palette p = palette;
-        if (*hide) p.hide(hide);
-        const Frame f = makeFrame(mesh, test::deform(rest.positions, grid.geometry(), d), "azimuth=-30,elevation=15", cut, 160, 120);
-        const RgbImage gpuImage = kernel.render(f.frame, f.view, p);
-        const RgbImage cpuImage = raycastReference(grid, mesh, f.frame, f.view, p);
-        const ImageDifference diff = compareImages(gpuImage, cpuImage, kThreshold);
-        EXPECT_LE(diff.differingFraction(), kFraction) << test::deformationName(d) << " cut '" << cut << "' hide '" << hide << "': "
-                                                       << diff.differing << " pixels differ";
-        EXPECT_GT(countNotBackground(cpuImage, RaycastShading{}.background), 300u);
-      }
+  const Palette palette(grid.maxLabel());
+  for (const TetMesh& rest : {coarseVoxelTransferMesh(grid, 3),
+                              buildTransferMesh(binaryGroupGrid(grid), defaultSizingField(grid.geometry()))}) {
+    const RaycastMesh mesh = buildRaycastMesh(rest, grid.geometry());
+    gpu::RaycastKernel kernel(context(), grid, mesh);
+    for (test::Deformation d : {test::Deformation::Rest, test::Deformation::Twist, test::Deformation::Bend})
+      for (const char* cut : {"", "y<14", "plane=1,0.2,-0.5,-50"})
+        for (const char* hide : {"", "1"}) {
+          Palette p = palette;
+          if (*hide) p.hide(hide);
+          const Frame f = makeFrame(mesh, test::deform(rest.positions, grid.geometry(), d), "azimuth=-30,elevation=15", cut, 160, 120);
+          const RgbImage gpuImage = kernel.render(f.frame, f.view, p);
+          const RgbImage cpuImage = raycastReference(grid, mesh, f.frame, f.view, p);
+          const ImageDifference diff = compareImages(gpuImage, cpuImage, kThreshold);
+          EXPECT_LE(diff.differingFraction(), kFraction) << rest.tetCount() << " tets, " << test::deformationName(d) << " cut '"
+                                                         << cut << "' hide '" << hide << "': " << diff.differing << " pixels differ";
+          EXPECT_GT(countNotBackground(cpuImage, RaycastShading{}.background), 300u);
+        }
+  }
 }
 
 TEST(RaycastGpu, ManySlabsGiveTheSameImage) {
