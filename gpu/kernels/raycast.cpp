@@ -89,6 +89,8 @@ RaycastKernel::RaycastKernel(Context& context, const LabelGrid& source, const Ra
       raycast_(context, raycastPipeline()),
       batch_(context) {
   const GridGeometry& g = source.geometry();
+  if (g.dims != mesh.source.dims || !g.spacing.isApprox(mesh.source.spacing) || !g.origin.isApprox(mesh.source.origin))
+    throw RuntimeFailure("ray caster: the mesh was built for another grid");
   for (int a = 0; a < 3; ++a)
     if (g.dims[a] < 1 || g.dims[a] > std::numeric_limits<std::int32_t>::max() / 2)
       throw RuntimeFailure("ray caster: source grid dims out of range");

@@ -48,8 +48,9 @@ struct RaycastFrameTimes {
 
 class RaycastKernel {
 public:
-  // Throws RuntimeFailure when the grid needs more than VOX_RAYCAST_MAX_SLABS
-  // slabs or a mesh array exceeds one binding.
+  // `mesh` must have been built for `source` (buildRaycastMesh). Throws
+  // RuntimeFailure when it was not, when the grid needs more than
+  // VOX_RAYCAST_MAX_SLABS slabs, or when a mesh array exceeds one binding.
   RaycastKernel(Context& context, const LabelGrid& source, const RaycastMesh& mesh, RaycastKernelOptions options = {});
 
   RgbImage render(const RaycastFrame& frame, const RaycastView& view, const Palette& palette, const RaycastShading& shading = {},

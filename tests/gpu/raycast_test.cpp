@@ -117,13 +117,16 @@ TEST(RaycastGpu, OnlyPositionsChangeBetweenFrames) {
   EXPECT_GT(kernel.lastTimes().totalMs, 0.0);
 }
 
-TEST(RaycastGpu, RejectsFramesOfAnotherMesh) {
+TEST(RaycastGpu, RejectsFramesAndGridsOfAnotherMesh) {
   const LabelGrid grid = stickFigure();
   const TetMesh a = coarseVoxelTransferMesh(grid, 3), b = coarseVoxelTransferMesh(grid, 4);
   const RaycastMesh meshA = buildRaycastMesh(a, grid.geometry()), meshB = buildRaycastMesh(b, grid.geometry());
   gpu::RaycastKernel kernel(context(), grid, meshA);
   const Frame f = makeFrame(meshB, b.positions, "", "", 32, 24);
   EXPECT_THROW(kernel.render(f.frame, f.view, Palette(grid.maxLabel())), RuntimeFailure);
+  LabelGrid shifted = grid;
+  shifted.geometry().origin[0] += 1.0;
+  EXPECT_THROW(gpu::RaycastKernel(context(), shifted, meshA), RuntimeFailure);
 }
 
 TEST(RaycastGpu, GoldenImagesAndCpuReferenceOnTheAmPhantom) {
