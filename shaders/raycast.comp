@@ -247,7 +247,8 @@ Hit trace(vec3 e, vec3 d, uint pixel) {
       return res;
     }
   }
-  for (uint c = 0u; c < P.cutCount; ++c) {
+  for (uint c = 0u; c < VOX_RAYCAST_MAX_CUTS; ++c) {
+    if (c >= P.cutCount) break;
     const vec3 n = vec3(P.cuts[4 * c], P.cuts[4 * c + 1], P.cuts[4 * c + 2]);
     const float nd = dot(n, d);
     const float bound = P.cuts[4 * c + 3] + 0.5 * (abs(n.x) + abs(n.y) + abs(n.z)) - dot(n, e);
@@ -295,9 +296,11 @@ Hit trace(vec3 e, vec3 d, uint pixel) {
     bool needQuery = false;
     while (cells < P.maxCells && dda.tEnter <= tHi) {
       const vec3 c = dda.cell;
+      // Constant trip counts unroll: lavapipe ends an invocation after 65535
+      // loop iterations, so per-cell loops are kept to the walk.
       bool removed = false;
-      for (uint k = 0u; k < P.cutCount; ++k)
-        removed = removed || dot(vec3(P.cuts[4 * k], P.cuts[4 * k + 1], P.cuts[4 * k + 2]), c) > P.cuts[4 * k + 3];
+      for (uint k = 0u; k < VOX_RAYCAST_MAX_CUTS; ++k)
+        removed = removed || (k < P.cutCount && dot(vec3(P.cuts[4 * k], P.cuts[4 * k + 1], P.cuts[4 * k + 2]), c) > P.cuts[4 * k + 3]);
       if (!removed) {
         vec4 lambda;
         bool found = false, rayInside = false;

@@ -21,7 +21,7 @@ layout(push_constant) uniform Push { RaycastEntriesPush pc; };
 #include "shared/raycast.glsl"
 
 // Depth (t) below which a triangle is clipped away: hits need t >= 0.
-const float kNearDepth = 1e-3;
+const float kNearDepth = VOX_RAYCAST_NEAR_DEPTH;
 // Pixels of slack around a face's projected bounds.
 const float kPixelSlack = 0.05;
 
@@ -73,19 +73,24 @@ void main() {
   const uint px0 = uint(max(x0, 0.0)), px1 = uint(min(x1, float(P.width - 1u)));
   const uint py0 = uint(max(y0, 0.0)), py1 = uint(min(y1, float(P.height - 1u)));
 
+  // The bounded pixels in row order; work group row gl_WorkGroupID.y takes
+  // its chunk of VOX_RAYCAST_ENTRIES_CHUNK_PIXELS of them.
+  const uint columns = px1 - px0 + 1u;
+  const uint first = gl_WorkGroupID.y * VOX_RAYCAST_ENTRIES_CHUNK_PIXELS;
+  const uint last = min(first + VOX_RAYCAST_ENTRIES_CHUNK_PIXELS, columns * (py1 - py0 + 1u));
   const uint plane = P.width * P.height;
-  for (uint y = py0; y <= py1; ++y)
-    for (uint x = px0; x <= px1; ++x) {
-      float t;
-      if (!rayFrontFace(eye, pixelDirection(uvec2(x, y)), a, b, c, t) || !(t >= 0.0)) continue;
-      const uint pixel = y * P.width + x;
-      if (pc.pass == 0u) {
-        atomicMin(entries[pixel], floatBitsToUint(t));
-        atomicAdd(entries[2u * plane + pixel], 1u);
-        const uint tilesX = (P.width + VOX_RAYCAST_GROUP_X - 1u) / VOX_RAYCAST_GROUP_X;
-        tileFlags[(y / VOX_RAYCAST_GROUP_Y) * tilesX + x / VOX_RAYCAST_GROUP_X] = 1u;
-      } else if (floatBitsToUint(t) == entries[pixel]) {
-        atomicMin(entries[plane + pixel], f);
-      }
+  const uint tilesX = (P.width + VOX_RAYCAST_GROUP_X - 1u) / VOX_RAYCAST_GROUP_X;
+  for (uint i = first; i < last; ++i) {
+    const uint x = px0 + i % columns, y = py0 + i / columns;
+    float t;
+    if (!rayFrontFace(eye, pixelDirection(uvec2(x, y)), a, b, c, t) || !(t >= 0.0)) continue;
+    const uint pixel = y * P.width + x;
+    if (pc.pass == 0u) {
+      atomicMin(entries[pixel], floatBitsToUint(t));
+      atomicAdd(entries[2u * plane + pixel], 1u);
+      tileFlags[(y / VOX_RAYCAST_GROUP_Y) * tilesX + x / VOX_RAYCAST_GROUP_X] = 1u;
+    } else if (floatBitsToUint(t) == entries[pixel]) {
+      atomicMin(entries[plane + pixel], f);
     }
+  }
 }

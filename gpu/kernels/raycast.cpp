@@ -65,6 +65,37 @@ std::uint32_t packRgba(Rgb c, bool opaque) {
   return std::uint32_t(c.r) | (std::uint32_t(c.g) << 8) | (std::uint32_t(c.b) << 16) | (opaque ? 0xFF000000u : 0u);
 }
 
+// An upper bound of the pixels the entry pass tests for any face: the pixel
+// box of its projection, one pixel of slack (the whole image when a vertex
+// lies near or behind the eye).
+std::uint64_t maxFacePixels(const std::vector<Tri>& faces, const std::vector<Eigen::Vector3d>& positions, const RaycastView& view,
+                            const Eigen::Matrix3d& toCamera) {
+  const int w = view.camera.width, h = view.camera.height;
+  const double sxScale = view.camera.tanHalfFovY * view.camera.aspect, syScale = view.camera.tanHalfFovY;
+  std::uint64_t most = 0;
+  for (const Tri& f : faces) {
+    double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
+    bool behind = false;
+    for (std::int32_t v : f) {
+      const Eigen::Vector3d k = toCamera * (positions[std::size_t(v)] - view.eye);
+      if (k[0] < 2.0 * VOX_RAYCAST_NEAR_DEPTH) {
+        behind = true;
+        break;
+      }
+      const double x = (k[1] / k[0] / sxScale + 1.0) * 0.5 * w - 0.5, y = (1.0 - k[2] / k[0] / syScale) * 0.5 * h - 0.5;
+      x0 = std::min(x0, x);
+      x1 = std::max(x1, x);
+      y0 = std::min(y0, y);
+      y1 = std::max(y1, y);
+    }
+    if (behind) return std::uint64_t(w) * std::uint64_t(h);
+    const double cx = std::min(x1 + 1.0, w - 1.0) - std::max(x0 - 1.0, 0.0) + 1.0;
+    const double cy = std::min(y1 + 1.0, h - 1.0) - std::max(y0 - 1.0, 0.0) + 1.0;
+    if (cx > 0.0 && cy > 0.0) most = std::max(most, std::uint64_t(std::ceil(cx)) * std::uint64_t(std::ceil(cy)));
+  }
+  return most;
+}
+
 double msSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -129,7 +160,9 @@ RaycastKernel::RaycastKernel(Context& context, const LabelGrid& source, const Ra
     }
   }
   std::vector<std::uint32_t> faces(4 * mesh.boundary.size());
+  faceVertices_.reserve(mesh.boundary.size());
   for (std::size_t f = 0; f < mesh.boundary.size(); ++f) {
+    faceVertices_.push_back(mesh.boundary[f].vertices);
     for (int k = 0; k < 3; ++k) faces[4 * f + std::size_t(k)] = std::uint32_t(mesh.boundary[f].vertices[std::size_t(k)]);
     faces[4 * f + 3] = std::uint32_t(mesh.boundary[f].tet);
   }
@@ -241,12 +274,14 @@ RgbImage RaycastKernel::render(const RaycastFrame& frame, const RaycastView& vie
   batch_.fill(entryBuffer_, 0u, 2 * imageBytes, imageBytes);
   batch_.fill(tileFlags_, 0u);
   const auto faceGroups = std::uint32_t((faceCount_ + VOX_RAYCAST_ENTRIES_GROUP_SIZE - 1) / VOX_RAYCAST_ENTRIES_GROUP_SIZE);
+  const std::uint64_t pixels = maxFacePixels(faceVertices_, frame.positions, view, toCamera);
+  const auto chunks = std::uint32_t(std::max<std::uint64_t>(1, (pixels + VOX_RAYCAST_ENTRIES_CHUNK_PIXELS - 1) / VOX_RAYCAST_ENTRIES_CHUNK_PIXELS));
   for (std::uint32_t pass = 0; pass < 2; ++pass) {
     const RaycastEntriesPush entriesPush{std::uint32_t(faceCount_), pass, 0, 0};
     batch_.dispatch(entries_,
                     {Binding::storage(params_), Binding::storage(faces_), Binding::storage(positions_), Binding::storage(entryBuffer_),
                      Binding::storage(tileFlags_)},
-                    entriesPush, faceGroups);
+                    entriesPush, faceGroups, chunks);
     batch_.barrier();
   }
   batch_.timestamp("entries");

@@ -65,6 +65,7 @@ private:
   GridGeometry source_;
   Index3 sourceShift_{0, 0, 0};
   std::size_t vertexCount_ = 0, tetCount_ = 0, nodeCount_ = 0, faceCount_ = 0;
+  std::vector<Tri> faceVertices_;  // host copy of the boundary faces, to bound their projections
   ComputePipeline prepare_;
   ComputePipeline entries_;
   ComputePipeline raycast_;

@@ -191,6 +191,11 @@ static_assert(sizeof(RasterReducePush) == 32);
 // (VOX_RAYCAST_GROUP_X x VOX_RAYCAST_GROUP_Y pixels, row by row) that hold a
 // hit pixel: only those tiles run the ray pass.
 #define VOX_RAYCAST_ENTRIES_GROUP_SIZE 64
+// Pixels one invocation tests at most: lavapipe ends any invocation after
+// 65535 loop iterations, so faces that cover more pixels are split over the
+// dispatch's second dimension (the host bounds every face's pixel count).
+#define VOX_RAYCAST_ENTRIES_CHUNK_PIXELS 16384
+#define VOX_RAYCAST_NEAR_DEPTH 1e-3  // faces are clipped to depth t >= this (mm)
 #define VOX_RAYCAST_ENTRIES_BINDING_PARAMS 0
 #define VOX_RAYCAST_ENTRIES_BINDING_FACES 1
 #define VOX_RAYCAST_ENTRIES_BINDING_POSITIONS 2

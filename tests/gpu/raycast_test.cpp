@@ -79,6 +79,24 @@ TEST(RaycastGpu, SyntheticPosesCutsAndHiddenLabelsEqualTheCpuReference) {
   }
 }
 
+TEST(RaycastGpu, FacesCoveringTheWholeImageEqualTheCpuReference) {
+  // The identity TM's six tets seen from close by: a face covers nearly every
+  // pixel, more than one invocation of the entry pass may test on lavapipe.
+  const LabelGrid grid = stickFigure();
+  const TetMesh box = boxTransferMesh(grid);
+  const RaycastMesh mesh = buildRaycastMesh(box, grid.geometry());
+  gpu::RaycastKernel kernel(context(), grid, mesh);
+  Palette palette(grid.maxLabel());
+  palette.hide("1");
+  for (const char* camera : {"azimuth=10,elevation=5,distance=0.3", "azimuth=100,distance=0.25,fov=60"}) {
+    const Frame f = makeFrame(mesh, box.positions, camera, "", 640, 480);
+    const RgbImage cpuImage = raycastReference(grid, mesh, f.frame, f.view, palette);
+    const ImageDifference diff = compareImages(kernel.render(f.frame, f.view, palette), cpuImage, kThreshold);
+    EXPECT_LE(diff.differingFraction(), kFraction) << camera << ": " << diff.differing << " pixels differ";
+    EXPECT_GT(countNotBackground(cpuImage, RaycastShading{}.background), 5000u) << camera;
+  }
+}
+
 TEST(RaycastGpu, ManySlabsGiveTheSameImage) {
   // Slabs of 5 slices: the stick figure's 64 slices need 13 slabs, more than
   // the kernel binds; slabs of 8 slices need exactly 8.
