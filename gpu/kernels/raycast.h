@@ -14,6 +14,11 @@
 // casts its ray, querying the BVH only for re-entries. The tile list is made
 // on the host between two submissions: on CPU drivers an invocation of the
 // ray shader costs even when it exits at once, and most tiles see no mesh.
+//
+// lavapipe ends a shader invocation after 65535 loop iterations. The entry
+// pass splits large faces to stay below; a ray takes about three iterations
+// per cell it crosses, so rays longer than about 20,000 cells (grids of over
+// 6,000 voxels per side) would be cut short there.
 
 #include "geometry/label_grid.h"
 #include "geometry/render/palette.h"
