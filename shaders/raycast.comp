@@ -277,9 +277,10 @@ Hit trace(vec3 e, vec3 d, uint pixel) {
 
   // 3. Cells in ray order. The BVH query for the next entry is hoisted out
   // of the cell loop: a cell that needs one leaves the loop, the query runs
-  // once, and the cell is processed again (its location fails again at once,
-  // from the tet where the walk stopped). One query site keeps the loop small,
-  // which matters on SIMD CPU drivers that execute every branch masked.
+  // once, and the cell is processed again from the same tet, with the same
+  // result up to the point where the answer is needed. One query site keeps
+  // the loop small, which matters on SIMD CPU drivers that execute every
+  // branch masked.
   Dda dda;
   dda.e = e;
   dda.d = d;
