@@ -217,8 +217,10 @@ void ddaAdvance(inout Dda s) {
 float entryMargin(int face, vec3 d, float margin) {
   const uvec4 f = faces[face];
   const vec3 a = positions[f.x].xyz;
-  const vec3 n = normalize(cross(positions[f.y].xyz - a, positions[f.z].xyz - a));
-  return min(VOX_RAYCAST_MAX_ENTRY_MARGIN_CELLS * margin, 0.5 * sqrt(3.0) / abs(dot(n, d)));
+  const vec3 n = cross(positions[f.y].xyz - a, positions[f.z].xyz - a);
+  const float grazing = abs(dot(n, d));  // |n . d| / |n| = |cos| |d|
+  if (!(grazing > 0.0)) return VOX_RAYCAST_MAX_ENTRY_MARGIN_CELLS * margin;
+  return min(VOX_RAYCAST_MAX_ENTRY_MARGIN_CELLS * margin, 0.5 * sqrt(3.0) * length(n) / grazing);
 }
 
 struct Hit {

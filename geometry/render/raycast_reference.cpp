@@ -149,8 +149,10 @@ struct Tracer {
     auto entryMargin = [&](const FaceHit& h) {
       const Tri& f = mesh.boundary[std::size_t(h.face)].vertices;
       const Eigen::Vector3d& a = frame.positions[std::size_t(f[0])];
-      const Eigen::Vector3d n = (frame.positions[std::size_t(f[1])] - a).cross(frame.positions[std::size_t(f[2])] - a).normalized();
-      return std::min(kMaxEntryMarginCells * margin, 0.5 * std::sqrt(3.0) / std::abs(n.dot(d)));
+      const Eigen::Vector3d n = (frame.positions[std::size_t(f[1])] - a).cross(frame.positions[std::size_t(f[2])] - a);
+      const double grazing = std::abs(n.dot(d));  // |n . d| / |n| = |cos| |d|
+      if (!(grazing > 0.0)) return kMaxEntryMarginCells * margin;
+      return std::min(kMaxEntryMarginCells * margin, 0.5 * std::sqrt(3.0) * n.norm() / grazing);
     };
     std::int32_t tet = mesh.boundary[std::size_t(key.face)].tet;
     int entries = 1;
