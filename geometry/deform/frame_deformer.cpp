@@ -89,6 +89,7 @@ void FrameDeformer::precompute(const TriMesh& cage, std::span<const Eigen::Vecto
     }
   stats_.envelopeInside = envelopeInsideIds_.size();
   stats_.envelopeOutside = envelope.size() - envelopeInsideIds_.size();
+  envelopeInsideRest_ = points;
   start = Clock::now();
   envelopeGreen_ = greenCoordinates(cage, points, options.precision);
   stats_.greenEnvelopeMs = millisecondsSince(start);
@@ -101,6 +102,7 @@ void FrameDeformer::precompute(const TriMesh& cage, std::span<const Eigen::Vecto
     }
   stats_.transferMeshInside = tmInsideIds_.size();
   stats_.transferMeshOutside = transferMesh.vertexCount() - tmInsideIds_.size();
+  tmInsideRest_ = points;
   start = Clock::now();
   tmGreen_ = greenCoordinates(cage, points, options.precision);
   stats_.greenTransferMeshMs = millisecondsSince(start);
@@ -167,15 +169,17 @@ void FrameDeformer::update(const Eigen::MatrixX3d& handleTargets, int arapIterat
   timings_.arap = millisecondsSince(start);
 
   start = Clock::now();
-  const GreenCageFrame frame = greenCageFrame(restCage_, cage, envelopeGreen_.stride());
+  // Displacement form: the rest pose comes out exactly, and float
+  // coordinates err in proportion to how far the cage moved.
+  const GreenCageFrame frame = greenCageDisplacement(restCage_, cage, envelopeGreen_.stride());
   scratch_.resize(envelopeInsideIds_.size());
-  applyGreenCoordinates(envelopeGreen_, frame, scratch_);
+  applyGreenCoordinates(envelopeGreen_, frame, scratch_, envelopeInsideRest_);
   for (std::size_t k = 0; k < envelopeInsideIds_.size(); ++k) envelope_[std::size_t(envelopeInsideIds_[k])] = scratch_[k];
   timings_.greenEnvelope = millisecondsSince(start);
 
   start = Clock::now();
   scratch_.resize(tmInsideIds_.size());
-  applyGreenCoordinates(tmGreen_, frame, scratch_);
+  applyGreenCoordinates(tmGreen_, frame, scratch_, tmInsideRest_);
   for (std::size_t k = 0; k < tmInsideIds_.size(); ++k) transferMesh_[std::size_t(tmInsideIds_[k])] = scratch_[k];
   timings_.greenTransferMesh = millisecondsSince(start);
 

@@ -85,6 +85,7 @@ private:
   CageArap arap_;
   GreenCoordinates envelopeGreen_, tmGreen_;
   std::vector<std::int32_t> envelopeInsideIds_, tmInsideIds_;
+  std::vector<Eigen::Vector3d> envelopeInsideRest_, tmInsideRest_;
   std::vector<std::uint8_t> envelopeInside_, tmInside_;
   RigidityPropagation propagation_;
   // Envelope vertices outside the cage: vertex, TM tet, barycentric weights.

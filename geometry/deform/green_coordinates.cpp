@@ -231,7 +231,7 @@ void coordinatesOfPoint(const CageGeometry& g, const Eigen::Vector3d& eta, Point
 
 template <typename Scalar>
 void applyRows(const Scalar* coefficients, Eigen::Index stride, const Scalar* basis, std::size_t begin, std::size_t end,
-               const Eigen::Vector3d& offset, std::span<Eigen::Vector3d> out) {
+               const Eigen::Vector3d& offset, std::span<Eigen::Vector3d> out, std::span<const Eigen::Vector3d> base) {
   using Block = Eigen::Array<Scalar, GreenCoordinates::kGreenColumnBlock, 1>;
   constexpr Eigen::Index kBlock = GreenCoordinates::kGreenColumnBlock;
   const Scalar* bx = basis;
@@ -246,7 +246,8 @@ void applyRows(const Scalar* coefficients, Eigen::Index stride, const Scalar* ba
       y += a * Eigen::Map<const Block>(by + c);
       z += a * Eigen::Map<const Block>(bz + c);
     }
-    out[p] = Eigen::Vector3d(double(x.sum()), double(y.sum()), double(z.sum())) + offset;
+    const Eigen::Vector3d sum(double(x.sum()), double(y.sum()), double(z.sum()));
+    out[p] = base.empty() ? Eigen::Vector3d(sum + offset) : Eigen::Vector3d(base[p] + (sum + offset));
   }
 }
 
@@ -334,8 +335,17 @@ GreenCageFrame greenCageFrame(const TriMesh& restCage, std::span<const Eigen::Ve
   return frame;
 }
 
-void applyGreenCoordinates(const GreenCoordinates& coordinates, const GreenCageFrame& frame, std::span<Eigen::Vector3d> out) {
-  if (out.size() != std::size_t(coordinates.pointCount()))
+GreenCageFrame greenCageDisplacement(const TriMesh& restCage, std::span<const Eigen::Vector3d> deformed, Eigen::Index stride) {
+  GreenCageFrame frame = greenCageFrame(restCage, deformed, stride);
+  const GreenCageFrame rest = greenCageFrame(restCage, restCage.positions, stride);
+  frame.rows -= rest.rows;
+  frame.offset -= rest.offset;
+  return frame;
+}
+
+void applyGreenCoordinates(const GreenCoordinates& coordinates, const GreenCageFrame& frame, std::span<Eigen::Vector3d> out,
+                           std::span<const Eigen::Vector3d> base) {
+  if (out.size() != std::size_t(coordinates.pointCount()) || (!base.empty() && base.size() != out.size()))
     throw RuntimeFailure("green coordinates: output size does not match the point count");
   if (frame.rows.rows() != coordinates.stride()) throw RuntimeFailure("green coordinates: cage frame of the wrong size");
   const std::size_t n = out.size();
@@ -343,12 +353,12 @@ void applyGreenCoordinates(const GreenCoordinates& coordinates, const GreenCageF
   if (coordinates.precision() == GreenPrecision::Double) {
     const Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::RowMajor> basis = frame.rows.transpose();
     parallelBlocks(n, std::max<std::size_t>(chunk, 1), [&](std::size_t begin, std::size_t end) {
-      applyRows(coordinates.coefficientsDouble().data(), coordinates.stride(), basis.data(), begin, end, frame.offset, out);
+      applyRows(coordinates.coefficientsDouble().data(), coordinates.stride(), basis.data(), begin, end, frame.offset, out, base);
     });
   } else {
     const Eigen::Matrix<float, 3, Eigen::Dynamic, Eigen::RowMajor> basis = frame.rows.transpose().cast<float>();
     parallelBlocks(n, std::max<std::size_t>(chunk, 1), [&](std::size_t begin, std::size_t end) {
-      applyRows(coordinates.coefficientsFloat().data(), coordinates.stride(), basis.data(), begin, end, frame.offset, out);
+      applyRows(coordinates.coefficientsFloat().data(), coordinates.stride(), basis.data(), begin, end, frame.offset, out, base);
     });
   }
 }

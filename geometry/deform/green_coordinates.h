@@ -100,10 +100,18 @@ struct GreenCageFrame {
 };
 GreenCageFrame greenCageFrame(const TriMesh& restCage, std::span<const Eigen::Vector3d> deformed, Eigen::Index stride);
 
-// eta'_p = sum_c coefficients(p, c) rows(c) + offset for every point, written to
-// out (#P). Runs on all hardware threads (a dense product, memory bound).
-void applyGreenCoordinates(const GreenCoordinates& coordinates, const GreenCageFrame& frame,
-                           std::span<Eigen::Vector3d> out);
+// greenCageFrame(deformed) minus greenCageFrame(rest cage). Applied on top of
+// the points' rest positions (applyGreenCoordinates' `base`) it gives the
+// same deformation, reproduces the rest cage bit for bit, and makes the
+// error of float coordinates proportional to the cage displacement rather
+// than to the cage size.
+GreenCageFrame greenCageDisplacement(const TriMesh& restCage, std::span<const Eigen::Vector3d> deformed, Eigen::Index stride);
+
+// out[p] = base[p] + sum_c coefficients(p, c) rows(c) + offset for every
+// point (#P); base may be empty (zero). Runs on all hardware threads (a
+// dense product, bound by memory bandwidth).
+void applyGreenCoordinates(const GreenCoordinates& coordinates, const GreenCageFrame& frame, std::span<Eigen::Vector3d> out,
+                           std::span<const Eigen::Vector3d> base = {});
 
 // Convenience: deformed positions of the points of `coordinates` for the cage
 // deformed to `deformed` (#V), stretch factors included.

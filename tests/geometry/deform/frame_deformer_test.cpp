@@ -87,6 +87,31 @@ TEST(FrameDeformer, RigidCageMotionMovesEverythingRigidly) {
   }
 }
 
+TEST(FrameDeformer, RestTargetsReproduceTheRestExactly) {
+  const Scene s = scene();
+  const auto handles = allVertices(s.cage);
+  Eigen::MatrixX3d targets(Eigen::Index(handles.size()), 3);
+  for (std::size_t k = 0; k < handles.size(); ++k) targets.row(Eigen::Index(k)) = s.cage.positions[k].transpose();
+  FrameDeformer deformer;
+  deformer.precompute(s.cage, s.envelope, s.tm, handles);  // float coordinates
+  deformer.update(targets, 3);
+  double worstOutside = 0;
+  for (std::size_t v = 0; v < s.tm.vertexCount(); ++v) {
+    if (deformer.transferMeshInside()[v]) {
+      EXPECT_EQ(deformer.transferMeshPositions()[v], s.tm.positions[v]) << v;
+    } else {
+      worstOutside = std::max(worstOutside, (deformer.transferMeshPositions()[v] - s.tm.positions[v]).norm());
+    }
+  }
+  for (std::size_t v = 0; v < s.envelope.size(); ++v) {
+    if (deformer.envelopeInside()[v]) {
+      EXPECT_EQ(deformer.envelopePositions()[v], s.envelope[v]) << v;
+    }
+  }
+  // Outside: back-substitution through the normal equations.
+  EXPECT_LT(worstOutside, 1e-10 * 25.0);
+}
+
 TEST(FrameDeformer, PoseDrivenBendKeepsTetsPositive) {
   const Scene s = scene();
   const Pose pose = parsePose(R"({"selections": [
