@@ -44,7 +44,7 @@ enum class GreenPrecision { Double, Float };
 // the row length is a multiple of kGreenColumnBlock.
 class GreenCoordinates {
 public:
-  static constexpr Eigen::Index kGreenColumnBlock = 8;
+  static constexpr Eigen::Index kGreenColumnBlock = 16;
 
   GreenCoordinates() = default;
 

@@ -11,7 +11,9 @@
 // constraints, computed from the GC positions. Rows
 //   sqrt|t| Delta B_t = 0   for t in T_u      (Delta B_t of eq. 4.1),
 // solved in the least-squares sense for the 9 entries at once (one
-// factorization of the normal equations, 9 right-hand sides).
+// factorization, 9 right-hand sides). With the constraints eliminated the
+// system is square with a zero-residual solution, which is computed from the
+// equivalent symmetric form sum_n |t||n| (B_t - B_n) = 0 (see the .cpp).
 // Step 2 (eq. 4.4): unknowns the outside vertex positions. Rows
 //   sqrt(W_e) (v_i - v_j) = sum_{t in T1(e)} |t| B_t (v_i^0 - v_j^0) / sqrt(W_e),
 // W_e = sum_{t in T1(e)} |t|, for every edge with an outside end; the inside
@@ -87,7 +89,7 @@ private:
   // for a pinned representative.
   std::vector<std::int32_t> tuTets_;
   std::vector<std::int32_t> tuSlot_;
-  Eigen::SparseMatrix<double> step1Rhs_;  // A^T C: unknown rows by known slots
+  Eigen::SparseMatrix<double> step1Rhs_;  // unknown rows by known slots
   SparseCholesky step1_;
 
   // Step 2. Unknown vertices and pinned representative vertices.

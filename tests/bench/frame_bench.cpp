@@ -4,10 +4,10 @@
 // male phantom.
 //
 // Setup (synthetic until the CGAL cage / transfer-mesh builders are wired in):
-//  - cage: a closed box around the foreground's bounding box, 20 mm margin,
-//    its sides split 5 x 4 x 14 (294 vertices, 584 faces), pulled in by
-//    25 mm on both x sides so the outer skin of the arms lies outside it and
-//    the propagation solver has work;
+//  - cage: a closed box around the foreground's bounding box, 20 mm margin in
+//    y and z, 40 mm INSIDE it on both x sides so the outer part of each arm
+//    lies outside the cage and the propagation solver has work; its sides
+//    split 5 x 4 x 14 (294 vertices, 584 faces);
 //  - transfer mesh: six-tet decomposition of the foreground downsampled
 //    6 x 6 x 2 (a voxel is kept when any of its 72 source voxels is
 //    foreground): ~39 k vertices, ~192 k tets;
@@ -121,7 +121,9 @@ const Scene& scene() {
       lo = lo.cwiseMin(p);
       hi = hi.cwiseMax(p);
     }
-    const Eigen::Vector3d margin(20.0 - 25.0, 20.0, 20.0);
+    // x: 40 mm inside the foreground's extent, so the outer side of each
+    // arm is outside the cage (an inset cage, as with limb separation).
+    const Eigen::Vector3d margin(-40.0, 20.0, 20.0);
     sc->cage = boxCage(lo - margin, hi + margin, {5, 4, 14});
     const double height = hi.z() - lo.z();
     const Eigen::Vector3d centre = 0.5 * (lo + hi);
