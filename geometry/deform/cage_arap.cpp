@@ -226,4 +226,11 @@ double CageArap::energy(std::span<const Eigen::Vector3d> positions) const {
   return total;
 }
 
+std::vector<Eigen::Vector3d> arapDeformCage(const TriMesh& restCage, std::span<const std::int32_t> handles,
+                                            const Eigen::MatrixX3d& handleTargets, int iterations) {
+  CageArap arap;
+  arap.precompute(restCage, handles);
+  return arap.solve(handleTargets, iterations);
+}
+
 }  // namespace vox

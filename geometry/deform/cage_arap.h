@@ -98,4 +98,8 @@ private:
   std::vector<Eigen::Vector3d> current_;
 };
 
+// One call: precompute + solve from the rest cage. Returns #V positions.
+std::vector<Eigen::Vector3d> arapDeformCage(const TriMesh& restCage, std::span<const std::int32_t> handles,
+                                            const Eigen::MatrixX3d& handleTargets, int iterations);
+
 }  // namespace vox
