@@ -87,12 +87,11 @@ void RigidityPropagation::precompute(const TetMesh& rest, std::span<const std::u
   }
   for (std::size_t v = 0; v < vertexCount_; ++v) (inside[v] ? diagnostics_.insideVertexCount : diagnostics_.outsideVertexCount)++;
   diagnostics_.constrainedTetCount = tcTets.size();
-  restEdgeInv_.assign(nt, Eigen::Matrix3d::Zero());
-  for (std::size_t t = 0; t < nt; ++t) restEdgeInv_[t] = restEdgeInverse(rest_, tets_[t]);
 
   tuTets_.clear();
   tuSlot_.clear();
   knownSource_.clear();
+  knownEdgeInv_.clear();
   unknownVertices_.clear();
   pinnedVertices_.clear();
   edgeTerms_.clear();
@@ -218,7 +217,7 @@ void RigidityPropagation::precompute(const TetMesh& rest, std::span<const std::u
         c /= double(group.size());
         const std::int32_t representative = nearestOf(group, c, positionOfVertex);
         const std::int32_t sourceTet = nearestOf(tcTets, rest_[std::size_t(representative)], centroidOfTet);
-        pinnedVertices_.push_back({representative, sourceTet});
+        pinnedVertices_.push_back({representative, sourceTet, Eigen::Matrix3d::Zero()});
         pinned[std::size_t(representative)] = 1;
         ++diagnostics_.unconstrainedVertexGroups;
       });
@@ -249,6 +248,9 @@ void RigidityPropagation::precompute(const TetMesh& rest, std::span<const std::u
       }
     }
   }
+  // Rest edge inverses of the tets whose B_t is read every frame.
+  for (std::int32_t t : knownSource_) knownEdgeInv_.push_back(restEdgeInverse(rest_, tets_[std::size_t(t)]));
+  for (PinnedVertex& p : pinnedVertices_) p.sourceEdgeInv = restEdgeInverse(rest_, tets_[std::size_t(p.sourceTet)]);
   Eigen::SparseMatrix<double> lm(nu, nu);
   lm.setFromTriplets(l.begin(), l.end());
   step2_.factorize(lm);
@@ -263,7 +265,7 @@ void RigidityPropagation::propagate(std::span<Eigen::Vector3d> positions) {
   Eigen::MatrixXd known(Eigen::Index(knownSource_.size()), 9);
   for (std::size_t k = 0; k < knownSource_.size(); ++k) {
     const auto t = std::size_t(knownSource_[k]);
-    const Eigen::Matrix3d b = basisChange(restEdgeInv_[t], positions, tets_[t]);
+    const Eigen::Matrix3d b = basisChange(knownEdgeInv_[k], positions, tets_[t]);
     known.row(Eigen::Index(k)) = Eigen::Map<const Eigen::Matrix<double, 1, 9>>(b.data());
   }
   const Eigen::MatrixXd x = step1_.solve(step1Rhs_ * known);
@@ -280,7 +282,7 @@ void RigidityPropagation::propagate(std::span<Eigen::Vector3d> positions) {
   // Pinned representatives follow the affine map of their source tet.
   for (const PinnedVertex& p : pinnedVertices_) {
     const Tet& t = tets_[std::size_t(p.sourceTet)];
-    const Eigen::Matrix3d b = basisChange(restEdgeInv_[std::size_t(p.sourceTet)], positions, t);
+    const Eigen::Matrix3d b = basisChange(p.sourceEdgeInv, positions, t);
     positions[std::size_t(p.vertex)] =
         positions[std::size_t(t[0])] + b * (rest_[std::size_t(p.vertex)] - rest_[std::size_t(t[0])]);
   }

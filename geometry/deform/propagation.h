@@ -81,10 +81,10 @@ private:
   std::size_t vertexCount_ = 0;
   std::vector<Eigen::Vector3d> rest_;
   std::vector<Tet> tets_;
-  std::vector<Eigen::Matrix3d> restEdgeInv_;  // per tet (only T_c and T_u entries are used)
 
   // Step 1. Known transforms: slot k takes B of T_c tet knownSource_[k].
   std::vector<std::int32_t> knownSource_;
+  std::vector<Eigen::Matrix3d> knownEdgeInv_;  // rest edge inverse of each knownSource_ tet
   // tuTets_: the T_u tets; tuSlot_[k] >= 0: unknown row, or -1 - knownSlot
   // for a pinned representative.
   std::vector<std::int32_t> tuTets_;
@@ -97,6 +97,7 @@ private:
   struct PinnedVertex {
     std::int32_t vertex;
     std::int32_t sourceTet;  // T_c tet whose affine map it follows
+    Eigen::Matrix3d sourceEdgeInv;
   };
   std::vector<PinnedVertex> pinnedVertices_;
   std::vector<std::int32_t> vertexSlot_;  // #V: unknown row, or -1
