@@ -288,13 +288,16 @@ void RigidityPropagation::propagate(std::span<Eigen::Vector3d> positions) {
   }
 
   // Step 2: edges target |t| B_t (v_i^0 - v_j^0) summed over their tets.
-  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(Eigen::Index(unknownVertices_.size()), 3);
+  // Accumulated per vertex (contiguous), then handed over as 3 columns.
+  std::vector<Eigen::Vector3d> sums(unknownVertices_.size(), Eigen::Vector3d::Zero());
   for (const EdgeTerm& e : edgeTerms_) {
     const Eigen::Vector3d target = e.volume * (tuBasis_[std::size_t(e.tuIndex)] * e.restEdge);
-    if (e.i >= 0) rhs.row(e.i) += target.transpose();
-    if (e.j >= 0) rhs.row(e.j) -= target.transpose();
+    if (e.i >= 0) sums[std::size_t(e.i)] += target;
+    if (e.j >= 0) sums[std::size_t(e.j)] -= target;
   }
-  for (const Coupling& c : couplings_) rhs.row(c.row) += c.weight * positions[std::size_t(c.vertex)].transpose();
+  for (const Coupling& c : couplings_) sums[std::size_t(c.row)] += c.weight * positions[std::size_t(c.vertex)];
+  const Eigen::MatrixXd rhs =
+      Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(sums.data()->data(), Eigen::Index(sums.size()), 3);
   const Eigen::MatrixXd placed = step2_.solve(rhs);
   for (std::size_t k = 0; k < unknownVertices_.size(); ++k)
     positions[std::size_t(unknownVertices_[k])] = placed.row(Eigen::Index(k)).transpose();
