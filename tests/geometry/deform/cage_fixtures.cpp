@@ -87,6 +87,38 @@ TriMesh subdividedBox(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, cons
   return m;
 }
 
+TriMesh voxelShapeCage(const std::vector<Eigen::Vector3i>& cells) {
+  auto occupied = [&](const Eigen::Vector3i& c) { return std::find(cells.begin(), cells.end(), c) != cells.end(); };
+  TriMesh m;
+  std::map<std::array<int, 3>, int> index;
+  auto vertex = [&](const Eigen::Vector3i& p) {
+    auto [it, inserted] = index.try_emplace({p.x(), p.y(), p.z()}, int(m.positions.size()));
+    if (inserted) m.positions.push_back(p.cast<double>());
+    return it->second;
+  };
+  for (const Eigen::Vector3i& c : cells)
+    for (int axis = 0; axis < 3; ++axis)
+      for (int side = 0; side < 2; ++side) {
+        Eigen::Vector3i step = Eigen::Vector3i::Zero();
+        step[axis] = side ? 1 : -1;
+        if (occupied(c + step)) continue;
+        const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+        auto corner = [&](int du, int dv) {
+          Eigen::Vector3i p = c;
+          p[axis] += side;
+          p[u] += du;
+          p[v] += dv;
+          return vertex(p);
+        };
+        int a = corner(0, 0), b = corner(1, 0), d = corner(0, 1);
+        const int cc = corner(1, 1);
+        if (side == 0) std::swap(b, d);
+        m.triangles.push_back({a, b, cc});
+        m.triangles.push_back({a, cc, d});
+      }
+  return m;
+}
+
 double pointTriangleDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                              const Eigen::Vector3d& c) {
   // Closest point by Voronoi regions (Ericson, Real-Time Collision Detection 5.1.5).

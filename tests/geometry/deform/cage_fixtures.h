@@ -21,6 +21,11 @@ TriMesh bumpyCage(int subdivisions, double radius, double bump, const Eigen::Vec
 // Closed box surface around [lo, hi], each side split into n[axis] segments.
 TriMesh subdividedBox(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const Eigen::Vector3i& n);
 
+// Closed surface of a union of unit cubes (integer cell coordinates), each
+// boundary square split into two triangles. Cells must not touch along an
+// edge or a vertex only.
+TriMesh voxelShapeCage(const std::vector<Eigen::Vector3i>& cells);
+
 // Random points strictly inside `cage` (winding number > 1/2), at least
 // `clearance` away from every cage face.
 std::vector<Eigen::Vector3d> randomInteriorPoints(const TriMesh& cage, int count, double clearance, std::mt19937& rng);

@@ -223,6 +223,26 @@ TEST(GreenCoordinates, SimilarityOfTheCageMovesInteriorPointsAlike) {
   }
 }
 
+TEST(GreenCoordinates, NonConvexCageWithPointsInExtendedFacePlanes) {
+  // An L of three unit cubes: the plane of the top face of one arm passes
+  // through the inside of the other, and so do the lines of many edges.
+  const TriMesh cage = test::voxelShapeCage({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}});
+  std::vector<Eigen::Vector3d> points{{0.5, 1.0, 0.5}, {1.0, 0.5, 0.5}, {0.5, 1.0, 1e-9}, {0.25, 1.0, 0.5},
+                                      {0.5, 0.5, 0.5}, {1.5, 0.5, 0.5}, {0.5, 1.5, 0.5}, {0.999999999, 0.5, 0.5}};
+  std::mt19937 rng(3);
+  const auto random = randomInteriorPoints(cage, 50, 1e-3, rng);
+  points.insert(points.end(), random.begin(), random.end());
+  const GreenCoordinates gc = greenCoordinates(cage, points);
+  double worst = 0;
+  for (std::size_t p = 0; p < points.size(); ++p) {
+    ASSERT_GT(cageWindingNumber(cage, points[p]), 0.5) << p;
+    worst = std::max(worst, (reproduce(gc, cage, Eigen::Index(p)) - points[p]).norm());
+  }
+  RecordProperty("l_shape_error", sci(worst));
+  // (0.5, 1, 1e-9) lies 1e-9 from a cage edge: ~1e-11 there, 1e-15 elsewhere.
+  EXPECT_LT(worst, 1e-10);
+}
+
 TEST(GreenCoordinates, WindingNumberClassifiesPoints) {
   const TriMesh cage = bumpyCage(2, 1.0, 0.3, Eigen::Vector3d::Zero());
   std::vector<Eigen::Vector3d> points;
