@@ -232,31 +232,64 @@ void coordinatesOfPoint(const CageGeometry& g, const Eigen::Vector3d& eta, Point
   }
 }
 
-// The per-frame product is bound by memory traffic once it runs at AVX2 +
-// FMA speed; the portable kernel below (SSE2 through Eigen's fixed-size
-// arrays) is compute bound at about twice the time. The AVX2 kernel is
-// compiled for that target only and chosen at run time.
+// The per-frame product: out[p] = base[p] + coefficients(p, :) * basis + offset.
+// It is bound by memory traffic when it runs at AVX2 + FMA speed; the
+// portable kernel (SSE2 through Eigen's fixed-size arrays) is compute bound
+// at about twice the time. The AVX2 kernels are compiled for that target only
+// and chosen at run time. Accumulation is in float for float and half
+// coefficients, in double for double ones.
+template <typename Coefficient, typename Accumulator>
+void applyRows(const Coefficient* coefficients, Eigen::Index stride, const Accumulator* basis, std::size_t begin, std::size_t end,
+               const Eigen::Vector3d& offset, std::span<Eigen::Vector3d> out, std::span<const Eigen::Vector3d> base) {
+  constexpr Eigen::Index kBlock = GreenCoordinates::kGreenColumnBlock;
+  using Block = Eigen::Array<Accumulator, kBlock, 1>;
+  const Accumulator* bx = basis;
+  const Accumulator* by = basis + stride;
+  const Accumulator* bz = basis + 2 * stride;
+  for (std::size_t p = begin; p < end; ++p) {
+    const Coefficient* row = coefficients + Eigen::Index(p) * stride;
+    Block x = Block::Zero(), y = Block::Zero(), z = Block::Zero();
+    for (Eigen::Index c = 0; c < stride; c += kBlock) {
+      const Block a = Eigen::Map<const Eigen::Array<Coefficient, kBlock, 1>>(row + c).template cast<Accumulator>();
+      x += a * Eigen::Map<const Block>(bx + c);
+      y += a * Eigen::Map<const Block>(by + c);
+      z += a * Eigen::Map<const Block>(bz + c);
+    }
+    const Eigen::Vector3d sum(double(x.sum()), double(y.sum()), double(z.sum()));
+    out[p] = base.empty() ? Eigen::Vector3d(sum + offset) : Eigen::Vector3d(base[p] + (sum + offset));
+  }
+}
+
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 #define VOX_GREEN_AVX2 1
-__attribute__((target("avx2,fma"))) double horizontalSum(__m256 v) {
+
+__attribute__((target("avx2,fma,f16c"))) double horizontalSum(__m256 v) {
   const __m128 h = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
   const __m128 q = _mm_add_ps(h, _mm_movehl_ps(h, h));
   return double(_mm_cvtss_f32(_mm_add_ss(q, _mm_shuffle_ps(q, q, 1))));
 }
 
-__attribute__((target("avx2,fma"))) void applyRowsAvx2(const float* coefficients, Eigen::Index stride, const float* basis,
-                                                       std::size_t begin, std::size_t end, const Eigen::Vector3d& offset,
-                                                       std::span<Eigen::Vector3d> out, std::span<const Eigen::Vector3d> base) {
+// 8 coefficients as floats: loaded, or converted from binary16.
+__attribute__((target("avx2,fma,f16c"))) inline __m256 load8(const float* p) { return _mm256_loadu_ps(p); }
+__attribute__((target("avx2,fma,f16c"))) inline __m256 load8(const Eigen::half* p) {
+  return _mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p)));
+}
+
+template <typename Coefficient>
+__attribute__((target("avx2,fma,f16c"))) void applyRowsAvx2(const Coefficient* coefficients, Eigen::Index stride,
+                                                            const float* basis, std::size_t begin, std::size_t end,
+                                                            const Eigen::Vector3d& offset, std::span<Eigen::Vector3d> out,
+                                                            std::span<const Eigen::Vector3d> base) {
   const float* bx = basis;
   const float* by = basis + stride;
   const float* bz = basis + 2 * stride;
   for (std::size_t p = begin; p < end; ++p) {
-    const float* row = coefficients + Eigen::Index(p) * stride;
+    const Coefficient* row = coefficients + Eigen::Index(p) * stride;
     // Two independent accumulator sets hide the FMA latency.
     __m256 x0 = _mm256_setzero_ps(), y0 = x0, z0 = x0, x1 = x0, y1 = x0, z1 = x0;
     for (Eigen::Index c = 0; c < stride; c += 16) {
-      const __m256 a0 = _mm256_loadu_ps(row + c);
-      const __m256 a1 = _mm256_loadu_ps(row + c + 8);
+      const __m256 a0 = load8(row + c);
+      const __m256 a1 = load8(row + c + 8);
       x0 = _mm256_fmadd_ps(a0, _mm256_loadu_ps(bx + c), x0);
       y0 = _mm256_fmadd_ps(a0, _mm256_loadu_ps(by + c), y0);
       z0 = _mm256_fmadd_ps(a0, _mm256_loadu_ps(bz + c), z0);
@@ -271,31 +304,22 @@ __attribute__((target("avx2,fma"))) void applyRowsAvx2(const float* coefficients
 }
 
 bool haveAvx2() {
-  static const bool have = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  static const bool have = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && __builtin_cpu_supports("f16c");
   return have;
 }
 #endif
 
-template <typename Scalar>
-void applyRows(const Scalar* coefficients, Eigen::Index stride, const Scalar* basis, std::size_t begin, std::size_t end,
-               const Eigen::Vector3d& offset, std::span<Eigen::Vector3d> out, std::span<const Eigen::Vector3d> base) {
-  using Block = Eigen::Array<Scalar, GreenCoordinates::kGreenColumnBlock, 1>;
-  constexpr Eigen::Index kBlock = GreenCoordinates::kGreenColumnBlock;
-  const Scalar* bx = basis;
-  const Scalar* by = basis + stride;
-  const Scalar* bz = basis + 2 * stride;
-  for (std::size_t p = begin; p < end; ++p) {
-    const Scalar* row = coefficients + Eigen::Index(p) * stride;
-    Block x = Block::Zero(), y = Block::Zero(), z = Block::Zero();
-    for (Eigen::Index c = 0; c < stride; c += kBlock) {
-      const Eigen::Map<const Block> a(row + c);
-      x += a * Eigen::Map<const Block>(bx + c);
-      y += a * Eigen::Map<const Block>(by + c);
-      z += a * Eigen::Map<const Block>(bz + c);
-    }
-    const Eigen::Vector3d sum(double(x.sum()), double(y.sum()), double(z.sum()));
-    out[p] = base.empty() ? Eigen::Vector3d(sum + offset) : Eigen::Vector3d(base[p] + (sum + offset));
+// Single-precision coefficients (float or half) against a float basis.
+template <typename Coefficient>
+void applyRowsSingle(const Coefficient* coefficients, Eigen::Index stride, const float* basis, std::size_t begin, std::size_t end,
+                     const Eigen::Vector3d& offset, std::span<Eigen::Vector3d> out, std::span<const Eigen::Vector3d> base) {
+#if VOX_GREEN_AVX2
+  if (haveAvx2()) {
+    applyRowsAvx2(coefficients, stride, basis, begin, end, offset, out, base);
+    return;
   }
+#endif
+  applyRows(coefficients, stride, basis, begin, end, offset, out, base);
 }
 
 }  // namespace
@@ -310,10 +334,11 @@ GreenCoordinates greenCoordinates(const TriMesh& cage, std::span<const Eigen::Ve
   constexpr Eigen::Index kBlock = GreenCoordinates::kGreenColumnBlock;
   gc.stride_ = (used + kBlock - 1) / kBlock * kBlock;
   gc.precision_ = precision;
-  if (precision == GreenPrecision::Double)
-    gc.d_.setZero(gc.rows_, gc.stride_);
-  else
-    gc.f_.setZero(gc.rows_, gc.stride_);
+  switch (precision) {
+    case GreenPrecision::Double: gc.d_.setZero(gc.rows_, gc.stride_); break;
+    case GreenPrecision::Float: gc.f_.setZero(gc.rows_, gc.stride_); break;
+    case GreenPrecision::Half: gc.h_.setConstant(gc.rows_, gc.stride_, Eigen::half(0.0f)); break;
+  }
 
   for (const Eigen::Vector3d& p : points)
     if (!p.allFinite()) throw InputError("points", "a point to embed in the cage has a non-finite coordinate");
@@ -327,10 +352,14 @@ GreenCoordinates greenCoordinates(const TriMesh& cage, std::span<const Eigen::Ve
     for (std::size_t p = begin; p < end; ++p) {
       if (precision == GreenPrecision::Double) {
         coordinatesOfPoint(g, points[p], w, gc.d_.row(Eigen::Index(p)).data());
-      } else {
+      } else if (precision == GreenPrecision::Float) {
         coordinatesOfPoint(g, points[p], w, row.data());
         float* dst = gc.f_.row(Eigen::Index(p)).data();
         for (Eigen::Index c = 0; c < used; ++c) dst[c] = float(row[std::size_t(c)]);
+      } else {
+        coordinatesOfPoint(g, points[p], w, row.data());
+        Eigen::half* dst = gc.h_.row(Eigen::Index(p)).data();
+        for (Eigen::Index c = 0; c < used; ++c) dst[c] = Eigen::half(float(row[std::size_t(c)]));
       }
     }
     const std::size_t total = done += end - begin;
@@ -402,18 +431,15 @@ void applyGreenCoordinates(const GreenCoordinates& coordinates, const GreenCageF
     parallelBlocks(n, std::max<std::size_t>(chunk, 1), [&](std::size_t begin, std::size_t end) {
       applyRows(coordinates.coefficientsDouble().data(), coordinates.stride(), basis.data(), begin, end, frame.offset, out, base);
     });
-  } else {
-    const Eigen::Matrix<float, 3, Eigen::Dynamic, Eigen::RowMajor> basis = frame.rows.transpose().cast<float>();
-    parallelBlocks(n, std::max<std::size_t>(chunk, 1), [&](std::size_t begin, std::size_t end) {
-#if VOX_GREEN_AVX2
-      if (haveAvx2()) {
-        applyRowsAvx2(coordinates.coefficientsFloat().data(), coordinates.stride(), basis.data(), begin, end, frame.offset, out, base);
-        return;
-      }
-#endif
-      applyRows(coordinates.coefficientsFloat().data(), coordinates.stride(), basis.data(), begin, end, frame.offset, out, base);
-    });
+    return;
   }
+  const Eigen::Matrix<float, 3, Eigen::Dynamic, Eigen::RowMajor> basis = frame.rows.transpose().cast<float>();
+  parallelBlocks(n, std::max<std::size_t>(chunk, 1), [&](std::size_t begin, std::size_t end) {
+    if (coordinates.precision() == GreenPrecision::Float)
+      applyRowsSingle(coordinates.coefficientsFloat().data(), coordinates.stride(), basis.data(), begin, end, frame.offset, out, base);
+    else
+      applyRowsSingle(coordinates.coefficientsHalf().data(), coordinates.stride(), basis.data(), begin, end, frame.offset, out, base);
+  });
 }
 
 std::vector<Eigen::Vector3d> greenDeform(const GreenCoordinates& coordinates, const TriMesh& restCage,

@@ -37,9 +37,14 @@
 
 namespace vox {
 
-// Storage precision of the coordinate matrix. Float halves the memory traffic
-// of the per-frame product (which is bound by it) at ~1e-7 relative error.
-enum class GreenPrecision { Double, Float };
+// Storage precision of the coordinate matrix. The per-frame product reads
+// the whole matrix every frame and is bound by memory bandwidth, so its time
+// scales with the bytes per coefficient (8, 4, 2). Applied in displacement
+// form (greenCageDisplacement), the error is a fraction of the cage
+// displacement: ~1e-7 of it for Float, ~1e-4 for Half (IEEE binary16,
+// 11-bit significand; tenths of a millimetre for whole-limb motions, fine
+// for interactive display, not for the final rasterization).
+enum class GreenPrecision { Double, Float, Half };
 
 // Row p holds the coordinates of point p: phi (#V columns, one per cage
 // vertex), then psi (#F columns, one per cage face), then zero padding so that
@@ -63,12 +68,21 @@ public:
   // non-empty.
   using MatrixD = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   using MatrixF = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  using MatrixH = Eigen::Matrix<Eigen::half, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   const MatrixD& coefficientsDouble() const { return d_; }
   const MatrixF& coefficientsFloat() const { return f_; }
+  const MatrixH& coefficientsHalf() const { return h_; }
 
 private:
   friend GreenCoordinates greenCoordinates(const TriMesh&, std::span<const Eigen::Vector3d>, GreenPrecision);
-  double value(Eigen::Index r, Eigen::Index c) const { return precision_ == GreenPrecision::Double ? d_(r, c) : double(f_(r, c)); }
+  double value(Eigen::Index r, Eigen::Index c) const {
+    switch (precision_) {
+      case GreenPrecision::Double: return d_(r, c);
+      case GreenPrecision::Float: return double(f_(r, c));
+      case GreenPrecision::Half: return double(float(h_(r, c)));
+    }
+    return 0.0;
+  }
 
   Eigen::Index rows_ = 0;
   Eigen::Index stride_ = 0;
@@ -77,6 +91,7 @@ private:
   GreenPrecision precision_ = GreenPrecision::Double;
   MatrixD d_;
   MatrixF f_;
+  MatrixH h_;
 };
 
 // Green coordinates of `points` (#P) with respect to `cage` (closed, outward

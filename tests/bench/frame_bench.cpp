@@ -151,7 +151,7 @@ const Scene& scene() {
 void BM_FrameUpdate(benchmark::State& state) {
   const Scene& s = scene();
   const int iterations = int(state.range(0));
-  const auto precision = state.range(1) ? GreenPrecision::Double : GreenPrecision::Float;
+  const auto precision = GreenPrecision(state.range(1));
   FrameDeformer deformer;
   deformer.precompute(s.cage, s.envelope, s.transferMesh, s.handles.vertices, {.precision = precision});
   FrameTimings sum;
@@ -192,11 +192,16 @@ void BM_FrameUpdate(benchmark::State& state) {
   state.counters["unknown_tets"] = double(st.propagation.unknownTetCount);
   state.counters["gc_precompute_s"] = (st.greenEnvelopeMs + st.greenTransferMeshMs) / 1000.0;
   state.counters["propagation_factor_ms"] = st.propagationFactorMs;
-  state.SetLabel(std::string(precision == GreenPrecision::Float ? "float" : "double") + " coordinates, " +
-                 SparseCholesky::backendName());
+  const char* names[] = {"double", "float", "half"};
+  state.SetLabel(std::string(names[state.range(1)]) + " coordinates, " + SparseCholesky::backendName());
 }
-// Args: ARAP iterations per frame, coordinate precision (0 float, 1 double).
-BENCHMARK(BM_FrameUpdate)->Args({1, 0})->Args({5, 0})->Args({10, 0})->Args({5, 1})->Unit(benchmark::kMillisecond)->MinTime(2.0);
+// Args: ARAP iterations per frame, coordinate precision (GreenPrecision:
+// 0 double, 1 float, 2 half).
+BENCHMARK(BM_FrameUpdate)
+    ->ArgsProduct({{1, 5, 10}, {1, 2}})
+    ->Args({5, 0})
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(2.0);
 
 // Computing Green coordinates (the one-time embedding), per point.
 void BM_GreenCoordinatesPrecompute(benchmark::State& state) {

@@ -67,7 +67,7 @@ TEST(FrameDeformer, RigidCageMotionMovesEverythingRigidly) {
   Eigen::MatrixX3d targets(Eigen::Index(handles.size()), 3);
   for (std::size_t k = 0; k < handles.size(); ++k) targets.row(Eigen::Index(k)) = (r * s.cage.positions[k] + shift).transpose();
   const double size = 25.0;
-  for (GreenPrecision precision : {GreenPrecision::Double, GreenPrecision::Float}) {
+  for (GreenPrecision precision : {GreenPrecision::Double, GreenPrecision::Float, GreenPrecision::Half}) {
     FrameDeformer deformer;
     deformer.precompute(s.cage, s.envelope, s.tm, handles, {.precision = precision});
     const FrameDeformerStats& stats = deformer.stats();
@@ -77,10 +77,10 @@ TEST(FrameDeformer, RigidCageMotionMovesEverythingRigidly) {
     deformer.update(targets, 3);
     const double tmError = worstRigidError(deformer.transferMeshPositions(), s.tm.positions, r, shift) / size;
     const double envelopeError = worstRigidError(deformer.envelopePositions(), s.envelope, r, shift) / size;
-    const std::string tag = precision == GreenPrecision::Double ? "double" : "float";
+    const std::string tag = precision == GreenPrecision::Double ? "double" : precision == GreenPrecision::Float ? "float" : "half";
     RecordProperty(tag + "_tm_relative_error", sci(tmError));
     RecordProperty(tag + "_envelope_relative_error", sci(envelopeError));
-    const double tolerance = precision == GreenPrecision::Double ? 1e-9 : 1e-6;
+    const double tolerance = precision == GreenPrecision::Double ? 1e-9 : precision == GreenPrecision::Float ? 1e-6 : 1e-3;
     EXPECT_LT(tmError, tolerance);
     EXPECT_LT(envelopeError, tolerance);
     EXPECT_GE(deformer.timings().total, deformer.timings().arap);

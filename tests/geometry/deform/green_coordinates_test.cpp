@@ -243,6 +243,33 @@ TEST(GreenCoordinates, NonConvexCageWithPointsInExtendedFacePlanes) {
   EXPECT_LT(worst, 1e-10);
 }
 
+TEST(GreenCoordinates, DisplacementFormInEveryPrecision) {
+  const TriMesh cage = bumpyCage(2, 150.0, 0.3, {400.0, -250.0, 900.0});
+  const double size = cageSize(cage);
+  std::mt19937 rng(9);
+  const std::vector<Eigen::Vector3d> points = randomInteriorPoints(cage, 300, 0.01 * size, rng);
+  const Eigen::Matrix3d r = Eigen::AngleAxisd(0.6, Eigen::Vector3d(0.2, 1, 0.4).normalized()).toRotationMatrix();
+  const Eigen::Vector3d shift(40.0, -20.0, 75.0);
+  std::vector<Eigen::Vector3d> moved;
+  for (const auto& v : cage.positions) moved.push_back(r * v + shift);
+  double displacement = 0;
+  for (const auto& p : points) displacement = std::max(displacement, (r * p + shift - p).norm());
+  for (GreenPrecision precision : {GreenPrecision::Double, GreenPrecision::Float, GreenPrecision::Half}) {
+    const GreenCoordinates gc = greenCoordinates(cage, points, precision);
+    std::vector<Eigen::Vector3d> out(points.size());
+    // The rest cage gives the points back exactly.
+    applyGreenCoordinates(gc, greenCageDisplacement(cage, cage.positions, gc.stride()), out, points);
+    for (std::size_t p = 0; p < points.size(); ++p) ASSERT_EQ(out[p], points[p]);
+    applyGreenCoordinates(gc, greenCageDisplacement(cage, moved, gc.stride()), out, points);
+    double worst = 0;
+    for (std::size_t p = 0; p < points.size(); ++p) worst = std::max(worst, (out[p] - (r * points[p] + shift)).norm());
+    const char* tag = precision == GreenPrecision::Double ? "double" : precision == GreenPrecision::Float ? "float" : "half";
+    RecordProperty(std::string(tag) + "_error_over_displacement", sci(worst / displacement));
+    const double tolerance = precision == GreenPrecision::Double ? 1e-12 : precision == GreenPrecision::Float ? 1e-6 : 2e-3;
+    EXPECT_LT(worst / displacement, tolerance) << tag;
+  }
+}
+
 TEST(GreenCoordinates, WindingNumberClassifiesPoints) {
   const TriMesh cage = bumpyCage(2, 1.0, 0.3, Eigen::Vector3d::Zero());
   std::vector<Eigen::Vector3d> points;
