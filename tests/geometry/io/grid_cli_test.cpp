@@ -28,6 +28,7 @@ void expectOneErrorLine(const test::CommandResult& r, const std::string& mention
 }
 
 TEST(GridCli, InfoOnCorruptFilesPrintsOneErrorLine) {
+  VOX_REQUIRE_VOXMORPH();
   const std::string dir = test::tempDir();
   // Each a different reader and fault.
   test::NiftiFields badMagic;
@@ -53,6 +54,7 @@ TEST(GridCli, InfoOnCorruptFilesPrintsOneErrorLine) {
 }
 
 TEST(GridCli, SynthWritesNiftiThatNibabelReads) {
+  VOX_REQUIRE_VOXMORPH();
   if (test::python().empty()) GTEST_SKIP() << "python3 with nibabel is not installed";
   const std::string dir = test::tempDir();
   const std::string path = dir + "/x.nii.gz";
@@ -70,6 +72,7 @@ TEST(GridCli, SynthWritesNiftiThatNibabelReads) {
 }
 
 TEST(GridCli, WriteIntoMissingDirectoryFailsAndLeavesNothing) {
+  VOX_REQUIRE_VOXMORPH();
   const std::string dir = test::tempDir();
   for (const char* name : {"x.nii.gz", "x.mhd", "x.nrrd", "x.inr"}) {
     const std::string target = dir + "/missing/" + name;
@@ -80,6 +83,7 @@ TEST(GridCli, WriteIntoMissingDirectoryFailsAndLeavesNothing) {
 }
 
 TEST(GridCli, FailingWriterLeavesNoTemporary) {
+  VOX_REQUIRE_VOXMORPH();
   // The targets are non-empty directories: every byte is written, then the
   // final rename fails. Nothing else may remain (for .mhd, not the .raw).
   const std::string dir = test::tempDir();
