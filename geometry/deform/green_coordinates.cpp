@@ -1,6 +1,7 @@
 #include "geometry/deform/green_coordinates.h"
 
 #include "geometry/error.h"
+#include "geometry/parallel.h"
 #include "geometry/progress.h"
 
 #include <Eigen/Geometry>
@@ -14,7 +15,6 @@
 #include <map>
 #include <numbers>
 #include <string>
-#include <thread>
 #include <utility>
 
 namespace vox {
@@ -23,28 +23,16 @@ namespace {
 
 constexpr double kInvFourPi = 0.25 / std::numbers::pi;
 
-// Runs body(begin, end) over [0, count) in blocks of `block`, on every
-// hardware thread. Bodies must not throw.
+// Calls body(begin, end) for consecutive ranges of `block` items covering
+// [0, count), spread over every hardware thread.
 template <class Body>
-void parallelBlocks(std::size_t count, std::size_t block, Body&& body) {
-  const std::size_t blocks = (count + block - 1) / block;
-  const std::size_t threads = std::min<std::size_t>(std::max(1u, std::thread::hardware_concurrency()), blocks);
-  if (threads <= 1) {
-    if (count > 0) body(std::size_t(0), count);
-    return;
-  }
-  std::atomic<std::size_t> next{0};
-  auto worker = [&] {
-    for (std::size_t b = next++; b < blocks; b = next++) body(b * block, std::min(count, (b + 1) * block));
-  };
-  std::vector<std::thread> pool;
-  pool.reserve(threads - 1);
-  for (std::size_t t = 1; t < threads; ++t) pool.emplace_back(worker);
-  worker();
-  for (std::thread& t : pool) t.join();
+void forBlocks(std::size_t count, std::size_t block, Body&& body) {
+  const auto blocks = std::int64_t((count + block - 1) / block);
+  parallelFor(blocks, 0, [&](std::int64_t b) {
+    const std::size_t begin = std::size_t(b) * block;
+    body(begin, std::min(count, begin + block));
+  });
 }
-
-std::size_t threadCount() { return std::max(1u, std::thread::hardware_concurrency()); }
 
 struct CageEdge {
   std::int32_t a = 0, b = 0;
@@ -346,7 +334,7 @@ GreenCoordinates greenCoordinates(const TriMesh& cage, std::span<const Eigen::Ve
   std::atomic<std::size_t> done{0};
   std::atomic<int> reported{-1};
   reportProgress("green coordinates", 0.0);
-  parallelBlocks(points.size(), 256, [&](std::size_t begin, std::size_t end) {
+  forBlocks(points.size(), 256, [&](std::size_t begin, std::size_t end) {
     PointWorkspace w(g);
     std::vector<double> row(static_cast<std::size_t>(used));
     for (std::size_t p = begin; p < end; ++p) {
@@ -424,17 +412,19 @@ void applyGreenCoordinates(const GreenCoordinates& coordinates, const GreenCageF
   if (out.size() != std::size_t(coordinates.pointCount()) || (!base.empty() && base.size() != out.size()))
     throw RuntimeFailure("green coordinates: output size does not match the point count");
   if (frame.rows.rows() != coordinates.stride()) throw RuntimeFailure("green coordinates: cage frame of the wrong size");
+  // One contiguous range of rows per thread.
   const std::size_t n = out.size();
-  const std::size_t chunk = (n + threadCount() - 1) / std::max<std::size_t>(1, threadCount());
+  const auto threads = std::size_t(workerThreads(0));
+  const std::size_t chunk = std::max<std::size_t>(1, (n + threads - 1) / threads);
   if (coordinates.precision() == GreenPrecision::Double) {
     const Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::RowMajor> basis = frame.rows.transpose();
-    parallelBlocks(n, std::max<std::size_t>(chunk, 1), [&](std::size_t begin, std::size_t end) {
+    forBlocks(n, chunk, [&](std::size_t begin, std::size_t end) {
       applyRows(coordinates.coefficientsDouble().data(), coordinates.stride(), basis.data(), begin, end, frame.offset, out, base);
     });
     return;
   }
   const Eigen::Matrix<float, 3, Eigen::Dynamic, Eigen::RowMajor> basis = frame.rows.transpose().cast<float>();
-  parallelBlocks(n, std::max<std::size_t>(chunk, 1), [&](std::size_t begin, std::size_t end) {
+  forBlocks(n, chunk, [&](std::size_t begin, std::size_t end) {
     if (coordinates.precision() == GreenPrecision::Float)
       applyRowsSingle(coordinates.coefficientsFloat().data(), coordinates.stride(), basis.data(), begin, end, frame.offset, out, base);
     else
@@ -466,7 +456,7 @@ double cageWindingNumber(const TriMesh& cage, const Eigen::Vector3d& p) {
 std::vector<std::uint8_t> insideCage(const TriMesh& cage, std::span<const Eigen::Vector3d> points) {
   cage.validate("cage");
   std::vector<std::uint8_t> inside(points.size(), 0);
-  parallelBlocks(points.size(), 512, [&](std::size_t begin, std::size_t end) {
+  forBlocks(points.size(), 512, [&](std::size_t begin, std::size_t end) {
     for (std::size_t p = begin; p < end; ++p) inside[p] = cageWindingNumber(cage, points[p]) > 0.5 ? 1 : 0;
   });
   return inside;
