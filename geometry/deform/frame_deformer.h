@@ -9,7 +9,9 @@
 //      by the deformed TM tet they were attached to at rest.
 // Everything that does not depend on the handle targets is done once in
 // precompute(): coordinates, the ARAP factorization, the propagation
-// factorizations, the envelope-to-TM attachment.
+// factorizations, the envelope-to-TM attachment. Per frame, the TM product
+// runs on both cores, then the envelope product (memory bound) runs on one
+// core while the propagation solves (compute bound) run on the other.
 
 #include "geometry/deform/cage_arap.h"
 #include "geometry/deform/green_coordinates.h"
@@ -36,12 +38,14 @@ struct FrameDeformerOptions {
   GreenPrecision precision = GreenPrecision::Float;
 };
 
-// Milliseconds spent in each stage of the last update().
+// Milliseconds spent in each stage of the last update(). The envelope
+// product and the propagation run concurrently, so the stages can add up to
+// more than the total.
 struct FrameTimings {
   double arap = 0;
-  double greenEnvelope = 0;       // envelope vertices inside the cage
-  double greenTransferMesh = 0;   // TM vertices inside the cage
-  double propagation = 0;         // eq. 4.3-4.4
+  double greenTransferMesh = 0;   // TM vertices inside the cage (all threads)
+  double greenEnvelope = 0;       // envelope vertices inside the cage (one thread) ...
+  double propagation = 0;         // ... beside eq. 4.3-4.4 (the other thread)
   double envelopeOutside = 0;     // envelope vertices carried by the TM
   double total = 0;
 };
@@ -100,7 +104,7 @@ private:
   };
   std::vector<Attachment> attachments_;
 
-  std::vector<Eigen::Vector3d> envelope_, transferMesh_, scratch_;
+  std::vector<Eigen::Vector3d> envelope_, transferMesh_, envelopeScratch_, tmScratch_;
   FrameTimings timings_;
   FrameDeformerStats stats_;
 };

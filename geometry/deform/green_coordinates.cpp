@@ -408,14 +408,14 @@ GreenCageFrame greenCageDisplacement(const TriMesh& restCage, std::span<const Ei
 }
 
 void applyGreenCoordinates(const GreenCoordinates& coordinates, const GreenCageFrame& frame, std::span<Eigen::Vector3d> out,
-                           std::span<const Eigen::Vector3d> base) {
+                           std::span<const Eigen::Vector3d> base, int threads) {
   if (out.size() != std::size_t(coordinates.pointCount()) || (!base.empty() && base.size() != out.size()))
     throw RuntimeFailure("green coordinates: output size does not match the point count");
   if (frame.rows.rows() != coordinates.stride()) throw RuntimeFailure("green coordinates: cage frame of the wrong size");
   // One contiguous range of rows per thread.
   const std::size_t n = out.size();
-  const auto threads = std::size_t(workerThreads(0));
-  const std::size_t chunk = std::max<std::size_t>(1, (n + threads - 1) / threads);
+  const auto ranges = std::size_t(workerThreads(threads));
+  const std::size_t chunk = std::max<std::size_t>(1, (n + ranges - 1) / ranges);
   if (coordinates.precision() == GreenPrecision::Double) {
     const Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::RowMajor> basis = frame.rows.transpose();
     forBlocks(n, chunk, [&](std::size_t begin, std::size_t end) {

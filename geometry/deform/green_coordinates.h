@@ -125,10 +125,11 @@ GreenCageFrame greenCageFrame(const TriMesh& restCage, std::span<const Eigen::Ve
 GreenCageFrame greenCageDisplacement(const TriMesh& restCage, std::span<const Eigen::Vector3d> deformed, Eigen::Index stride);
 
 // out[p] = base[p] + sum_c coefficients(p, c) rows(c) + offset for every
-// point (#P); base may be empty (zero). Runs on all hardware threads (a
-// dense product, bound by memory bandwidth).
+// point (#P); base may be empty (zero). A dense product bound by memory
+// bandwidth, on `threads` threads (0: every hardware thread; one thread
+// already streams at nearly the machine's bandwidth).
 void applyGreenCoordinates(const GreenCoordinates& coordinates, const GreenCageFrame& frame, std::span<Eigen::Vector3d> out,
-                           std::span<const Eigen::Vector3d> base = {});
+                           std::span<const Eigen::Vector3d> base = {}, int threads = 0);
 
 // Convenience: deformed positions of the points of `coordinates` for the cage
 // deformed to `deformed` (#V), stretch factors included.
