@@ -178,21 +178,26 @@ void FrameDeformer::update(const Eigen::MatrixX3d& handleTargets, int arapIterat
   for (std::size_t k = 0; k < tmInsideIds_.size(); ++k) transferMesh_[std::size_t(tmInsideIds_[k])] = tmScratch_[k];
   timings_.greenTransferMesh = millisecondsSince(start);
 
-  // The envelope product (memory bound; one thread streams at nearly the
-  // full bandwidth) runs beside the propagation solves (compute bound),
-  // which need only the TM.
-  parallelFor(2, 2, [&](std::int64_t task) {
-    const auto taskStart = Clock::now();
+  // The envelope product (memory bound) and the propagation solves (compute
+  // bound, they need only the TM) share the cores: one task for the solves,
+  // the envelope rows cut into blocks, all handed out dynamically.
+  start = Clock::now();
+  envelopeScratch_.resize(envelopeInsideIds_.size());
+  const std::size_t rows = envelopeScratch_.size();
+  const std::size_t blocks = std::min<std::size_t>(32, (rows + 1023) / 1024);
+  parallelFor(std::int64_t(blocks) + 1, 0, [&](std::int64_t task) {
     if (task == 0) {
-      envelopeScratch_.resize(envelopeInsideIds_.size());
-      applyGreenCoordinates(envelopeGreen_, frame, envelopeScratch_, envelopeInsideRest_, 1);
-      for (std::size_t k = 0; k < envelopeInsideIds_.size(); ++k) envelope_[std::size_t(envelopeInsideIds_[k])] = envelopeScratch_[k];
-      timings_.greenEnvelope = millisecondsSince(taskStart);
-    } else {
+      const auto solveStart = Clock::now();
       propagation_.propagate(transferMesh_);
-      timings_.propagation = millisecondsSince(taskStart);
+      timings_.propagation = millisecondsSince(solveStart);
+      return;
     }
+    const std::size_t block = std::size_t(task - 1);
+    applyGreenCoordinateRows(envelopeGreen_, frame, rows * block / blocks, rows * (block + 1) / blocks, envelopeScratch_,
+                             envelopeInsideRest_);
   });
+  for (std::size_t k = 0; k < envelopeInsideIds_.size(); ++k) envelope_[std::size_t(envelopeInsideIds_[k])] = envelopeScratch_[k];
+  timings_.greenEnvelope = millisecondsSince(start);
 
   start = Clock::now();
   for (const Attachment& a : attachments_) {

@@ -10,8 +10,8 @@
 // Everything that does not depend on the handle targets is done once in
 // precompute(): coordinates, the ARAP factorization, the propagation
 // factorizations, the envelope-to-TM attachment. Per frame, the TM product
-// runs on both cores, then the envelope product (memory bound) runs on one
-// core while the propagation solves (compute bound) run on the other.
+// runs on all cores, then the envelope product (memory bound) and the
+// propagation solves (compute bound) share them.
 
 #include "geometry/deform/cage_arap.h"
 #include "geometry/deform/green_coordinates.h"
@@ -38,14 +38,12 @@ struct FrameDeformerOptions {
   GreenPrecision precision = GreenPrecision::Float;
 };
 
-// Milliseconds spent in each stage of the last update(). The envelope
-// product and the propagation run concurrently, so the stages can add up to
-// more than the total.
+// Milliseconds spent in each stage of the last update().
 struct FrameTimings {
   double arap = 0;
-  double greenTransferMesh = 0;   // TM vertices inside the cage (all threads)
-  double greenEnvelope = 0;       // envelope vertices inside the cage (one thread) ...
-  double propagation = 0;         // ... beside eq. 4.3-4.4 (the other thread)
+  double greenTransferMesh = 0;   // TM vertices inside the cage
+  double greenEnvelope = 0;       // envelope vertices inside the cage, with the propagation running beside it
+  double propagation = 0;         // eq. 4.3-4.4 alone (part of greenEnvelope's time)
   double envelopeOutside = 0;     // envelope vertices carried by the TM
   double total = 0;
 };

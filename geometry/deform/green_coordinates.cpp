@@ -407,29 +407,32 @@ GreenCageFrame greenCageDisplacement(const TriMesh& restCage, std::span<const Ei
   return frame;
 }
 
-void applyGreenCoordinates(const GreenCoordinates& coordinates, const GreenCageFrame& frame, std::span<Eigen::Vector3d> out,
-                           std::span<const Eigen::Vector3d> base, int threads) {
-  if (out.size() != std::size_t(coordinates.pointCount()) || (!base.empty() && base.size() != out.size()))
-    throw RuntimeFailure("green coordinates: output size does not match the point count");
+void applyGreenCoordinateRows(const GreenCoordinates& coordinates, const GreenCageFrame& frame, std::size_t begin,
+                              std::size_t end, std::span<Eigen::Vector3d> out, std::span<const Eigen::Vector3d> base) {
+  if (out.size() != std::size_t(coordinates.pointCount()) || (!base.empty() && base.size() != out.size()) ||
+      end > out.size() || begin > end)
+    throw RuntimeFailure("green coordinates: output size or row range does not match the point count");
   if (frame.rows.rows() != coordinates.stride()) throw RuntimeFailure("green coordinates: cage frame of the wrong size");
-  // One contiguous range of rows per thread.
-  const std::size_t n = out.size();
-  const auto ranges = std::size_t(workerThreads(threads));
-  const std::size_t chunk = std::max<std::size_t>(1, (n + ranges - 1) / ranges);
   if (coordinates.precision() == GreenPrecision::Double) {
     const Eigen::Matrix<double, 3, Eigen::Dynamic, Eigen::RowMajor> basis = frame.rows.transpose();
-    forBlocks(n, chunk, [&](std::size_t begin, std::size_t end) {
-      applyRows(coordinates.coefficientsDouble().data(), coordinates.stride(), basis.data(), begin, end, frame.offset, out, base);
-    });
+    applyRows(coordinates.coefficientsDouble().data(), coordinates.stride(), basis.data(), begin, end, frame.offset, out, base);
     return;
   }
   const Eigen::Matrix<float, 3, Eigen::Dynamic, Eigen::RowMajor> basis = frame.rows.transpose().cast<float>();
-  forBlocks(n, chunk, [&](std::size_t begin, std::size_t end) {
-    if (coordinates.precision() == GreenPrecision::Float)
-      applyRowsSingle(coordinates.coefficientsFloat().data(), coordinates.stride(), basis.data(), begin, end, frame.offset, out, base);
-    else
-      applyRowsSingle(coordinates.coefficientsHalf().data(), coordinates.stride(), basis.data(), begin, end, frame.offset, out, base);
-  });
+  if (coordinates.precision() == GreenPrecision::Float)
+    applyRowsSingle(coordinates.coefficientsFloat().data(), coordinates.stride(), basis.data(), begin, end, frame.offset, out, base);
+  else
+    applyRowsSingle(coordinates.coefficientsHalf().data(), coordinates.stride(), basis.data(), begin, end, frame.offset, out, base);
+}
+
+void applyGreenCoordinates(const GreenCoordinates& coordinates, const GreenCageFrame& frame, std::span<Eigen::Vector3d> out,
+                           std::span<const Eigen::Vector3d> base) {
+  // One contiguous range of rows per thread.
+  const std::size_t n = out.size();
+  const auto threads = std::size_t(workerThreads(0));
+  const std::size_t chunk = std::max<std::size_t>(1, (n + threads - 1) / threads);
+  if (n == 0) applyGreenCoordinateRows(coordinates, frame, 0, 0, out, base);  // argument checks only
+  forBlocks(n, chunk, [&](std::size_t begin, std::size_t end) { applyGreenCoordinateRows(coordinates, frame, begin, end, out, base); });
 }
 
 std::vector<Eigen::Vector3d> greenDeform(const GreenCoordinates& coordinates, const TriMesh& restCage,

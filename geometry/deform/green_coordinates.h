@@ -125,11 +125,15 @@ GreenCageFrame greenCageFrame(const TriMesh& restCage, std::span<const Eigen::Ve
 GreenCageFrame greenCageDisplacement(const TriMesh& restCage, std::span<const Eigen::Vector3d> deformed, Eigen::Index stride);
 
 // out[p] = base[p] + sum_c coefficients(p, c) rows(c) + offset for every
-// point (#P); base may be empty (zero). A dense product bound by memory
-// bandwidth, on `threads` threads (0: every hardware thread; one thread
-// already streams at nearly the machine's bandwidth).
+// point (#P); base may be empty (zero). A dense product, bound by memory
+// bandwidth; runs on every hardware thread.
 void applyGreenCoordinates(const GreenCoordinates& coordinates, const GreenCageFrame& frame, std::span<Eigen::Vector3d> out,
-                           std::span<const Eigen::Vector3d> base = {}, int threads = 0);
+                           std::span<const Eigen::Vector3d> base = {});
+// The same for the points [begin, end) only, on the calling thread, for
+// callers that schedule the product beside other work. out and base span all
+// #P points.
+void applyGreenCoordinateRows(const GreenCoordinates& coordinates, const GreenCageFrame& frame, std::size_t begin,
+                              std::size_t end, std::span<Eigen::Vector3d> out, std::span<const Eigen::Vector3d> base = {});
 
 // Convenience: deformed positions of the points of `coordinates` for the cage
 // deformed to `deformed` (#V), stretch factors included.
