@@ -5,7 +5,12 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <cstdint>
 #include <string>
+
+namespace vox {
+struct LimbSeparation;
+}
 
 namespace vox::app {
 
@@ -13,6 +18,8 @@ namespace vox::app {
 void addInfoCommand(CLI::App& app);
 void addSynthCommand(CLI::App& app);
 void addRenderCommand(CLI::App& app);
+void addCageCommand(CLI::App& app);
+void addDeformCommand(CLI::App& app);
 
 // Prints progress of long operations on stderr ("stage: 42%"), rewriting the
 // line on a terminal and printing every 10% otherwise.
@@ -20,6 +27,13 @@ void installStderrProgress(bool quiet);
 
 // Writes `json` (indented) atomically to `path`, or to stdout for "-".
 void writeJson(const std::string& path, const nlohmann::json& json);
+
+// --separate GROUP:GROUP[@xmin,ymin,zmin,xmax,ymax,zmax] (cage and deform
+// commands). Throws InputError naming the option for bad syntax or groups.
+LimbSeparation parseSeparation(const std::string& text);
+// The warning for a cage that leaves foreground voxels outside although no
+// limb separation asked for it (cage and deform commands).
+void warnForegroundOutside(std::int64_t voxels, bool separated);
 
 // Human-readable number with thousands separators: 7161276 -> "7,161,276".
 std::string withThousands(std::uint64_t n);

@@ -15,6 +15,8 @@ int main(int argc, char** argv) {
   vox::app::addInfoCommand(app);
   vox::app::addSynthCommand(app);
   vox::app::addRenderCommand(app);
+  vox::app::addCageCommand(app);
+  vox::app::addDeformCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -185,6 +185,15 @@ const std::vector<Eigen::Vector3d>& CageArap::solve(const Eigen::MatrixX3d& hand
     throw InputError("cage", "got " + std::to_string(handleTargets.rows()) + " handle targets for " +
                                  std::to_string(handles_.size()) + " handles");
   if (!handleTargets.allFinite()) throw InputError("cage", "a handle target has a non-finite coordinate");
+  // Every handle at rest: the rest cage is the minimum (zero energy), taken
+  // as is rather than through iterations that would only add rounding.
+  bool atRest = true;
+  for (std::size_t k = 0; k < handles_.size() && atRest; ++k)
+    atRest = handleTargets.row(Eigen::Index(k)).transpose() == rest_[std::size_t(handles_[k])];
+  if (atRest) {
+    current_ = rest_;
+    return current_;
+  }
   for (std::size_t k = 0; k < handles_.size(); ++k) current_[std::size_t(handles_[k])] = handleTargets.row(Eigen::Index(k)).transpose();
 
   const auto nf = Eigen::Index(freeVertices_.size());

@@ -154,6 +154,8 @@ void FrameDeformer::precompute(const TriMesh& cage, std::span<const Eigen::Vecto
 
   envelope_.assign(envelope.begin(), envelope.end());
   transferMesh_ = transferMesh.positions;
+  restEnvelope_ = envelope_;
+  restTransferMesh_ = transferMesh_;
   timings_ = {};
 }
 
@@ -168,6 +170,16 @@ void FrameDeformer::update(const Eigen::MatrixX3d& handleTargets, int arapIterat
   auto start = frameStart;
   const std::vector<Eigen::Vector3d>& cage = arap_.solve(handleTargets, arapIterations);
   timings_.arap = millisecondsSince(start);
+  // The rest cage gives the rest pose, bit for bit (the propagation solve
+  // would reproduce it only up to rounding), so an identity pose rasterizes
+  // to the input grid exactly.
+  if (cage == restCage_.positions) {
+    start = Clock::now();
+    transferMesh_ = restTransferMesh_;
+    envelope_ = restEnvelope_;
+    timings_ = {.arap = timings_.arap, .envelopeOutside = millisecondsSince(start), .total = millisecondsSince(frameStart)};
+    return;
+  }
 
   // Displacement form: the rest pose comes out exactly, and float or half
   // coordinates err in proportion to how far the cage moved.

@@ -73,6 +73,7 @@ public:
 
   // One frame. handleTargets: #handles by 3 (handles order). Runs
   // `arapIterations` ARAP iterations warm-started from the previous frame.
+  // Handle targets at their rest positions give the rest pose exactly.
   void update(const Eigen::MatrixX3d& handleTargets, int arapIterations);
 
   const std::vector<Eigen::Vector3d>& cagePositions() const { return arap_.positions(); }
@@ -102,6 +103,7 @@ private:
   };
   std::vector<Attachment> attachments_;
 
+  std::vector<Eigen::Vector3d> restEnvelope_, restTransferMesh_;
   std::vector<Eigen::Vector3d> envelope_, transferMesh_, envelopeScratch_, tmScratch_;
   FrameTimings timings_;
   FrameDeformerStats stats_;

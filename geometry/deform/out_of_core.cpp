@@ -148,12 +148,22 @@ OutOfCoreSource::OutOfCoreSource(const std::string& path, std::int64_t maxDownsa
   factor_ = vox::downsampleFactor(reader->geometry(), maxDownsampledVoxels);
   // Only an uncompressed NIfTI is sure to seek cheaply; other files are
   // copied to raw as they stream by.
+  const std::int64_t sliceVoxels = reader->geometry().sliceVoxels();
+  auto count = [&](const Label* s, std::int64_t n) {
+    for (std::int64_t v = 0; v < n * sliceVoxels; ++v) {
+      if (s[v] >= labelCounts_.size()) labelCounts_.resize(std::size_t(s[v]) + 1, 0);
+      ++labelCounts_[s[v]];
+    }
+  };
   if (endsWith(path, ".nii")) {
-    downsampled_ = streamDownsample(*reader, factor_, maxLabel_, [](const Label*, std::int64_t) {});
+    downsampled_ = streamDownsample(*reader, factor_, maxLabel_, count);
     slices_ = std::move(reader);
   } else {
     auto spool = std::make_unique<SpooledSlices>(reader->geometry(), tempDirectory, path);
-    downsampled_ = streamDownsample(*reader, factor_, maxLabel_, [&](const Label* s, std::int64_t n) { spool->append(s, n); });
+    downsampled_ = streamDownsample(*reader, factor_, maxLabel_, [&](const Label* s, std::int64_t n) {
+      spool->append(s, n);
+      count(s, n);
+    });
     slices_ = std::move(spool);
   }
 }

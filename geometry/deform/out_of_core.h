@@ -36,10 +36,10 @@ int downsampleFactor(const GridGeometry& source, std::int64_t maxVoxels);
 
 // A full-resolution source opened for out-of-core deformation. Construction
 // reads the source once, in slice order: it builds the downsampled grid,
-// finds the largest label, and copies a compressed file (.gz) to a raw
-// temporary in `tempDirectory` so that slab windows can be read in any order
-// (the temporary is unlinked at once: nothing is left behind, even on a
-// crash). Uncompressed files are read in place.
+// finds the largest label, counts the labels, and copies a compressed file
+// (.gz) to a raw temporary in `tempDirectory` so that slab windows can be
+// read in any order (the temporary is unlinked at once: nothing is left
+// behind, even on a crash). Uncompressed files are read in place.
 class OutOfCoreSource {
 public:
   OutOfCoreSource(const std::string& path, std::int64_t maxDownsampledVoxels, const std::string& tempDirectory);
@@ -52,6 +52,9 @@ public:
   Label maxLabel() const { return maxLabel_; }
   int downsampleFactor() const { return factor_; }
   const LabelGrid& downsampled() const { return downsampled_; }
+  // Voxels per label of the full-resolution source (index = label), counted
+  // during the read.
+  const std::vector<std::uint64_t>& labelCounts() const { return labelCounts_; }
   // Random access to full-resolution slices.
   GridSliceReader& slices() { return *slices_; }
 
@@ -61,6 +64,7 @@ private:
   LabelGrid downsampled_;
   Label maxLabel_ = 0;
   int factor_ = 1;
+  std::vector<std::uint64_t> labelCounts_;
 };
 
 struct OutOfCoreOptions {

@@ -1,5 +1,6 @@
 #include "geometry/deform/pose.h"
 
+#include "geometry/deform/label_groups.h"
 #include "geometry/error.h"
 #include "geometry/io/atomic_file.h"
 
@@ -7,7 +8,9 @@
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <limits>
 #include <numbers>
+#include <numeric>
 #include <set>
 #include <sstream>
 
@@ -29,7 +32,7 @@ public:
       fail(std::string("invalid JSON: ") + e.what());
     }
     requireObject(root, "the pose");
-    allowKeys(root, "the pose", {"name", "arap_iterations", "selections"});
+    allowKeys(root, "the pose", {"name", "arap_iterations", "selections", "separations"});
     Pose pose;
     if (root.contains("name")) pose.name = text(root["name"], "'name'");
     if (root.contains("arap_iterations")) {
@@ -42,6 +45,11 @@ public:
     const json& selections = root["selections"];
     if (!selections.is_array() || selections.empty()) fail("'selections' must be a non-empty array");
     for (std::size_t k = 0; k < selections.size(); ++k) pose.selections.push_back(selection(selections[k], k));
+    if (root.contains("separations")) {
+      const json& separations = root["separations"];
+      if (!separations.is_array()) fail("'separations' must be an array");
+      for (std::size_t k = 0; k < separations.size(); ++k) pose.separations.push_back(separation(separations[k], k));
+    }
     return pose;
   }
 
@@ -83,7 +91,7 @@ private:
     PoseSelection s;
     s.name = j.contains("name") ? text(j["name"], fallback + " 'name'") : fallback;
     const std::string what = "selection '" + s.name + "'";
-    allowKeys(j, what, {"name", "box", "sphere", "fixed", "transform"});
+    allowKeys(j, what, {"name", "box", "sphere", "part", "fixed", "transform"});
     if (j.contains("box") == j.contains("sphere")) fail(what + " needs exactly one of 'box' and 'sphere'");
     if (j.contains("box")) {
       const json& box = j["box"];
@@ -102,6 +110,7 @@ private:
       s.radius = number(member(sphere, "radius", what + " 'sphere'"), what + " sphere 'radius'");
       if (!(s.radius > 0)) fail(what + " has a sphere radius <= 0");
     }
+    if (j.contains("part")) s.part = vector3(j["part"], what + " 'part'");
     const bool fixedKey = j.contains("fixed");
     if (fixedKey == j.contains("transform")) fail(what + " needs exactly one of 'fixed' and 'transform'");
     if (fixedKey) {
@@ -126,6 +135,33 @@ private:
     return s;
   }
 
+  std::optional<Eigen::AlignedBox3d> region(const json& j, const char* key, const std::string& what) const {
+    if (!j.contains(key)) return std::nullopt;
+    const json& region = j[key];
+    const std::string name = what + " '" + key + "'";
+    requireObject(region, name);
+    allowKeys(region, name, {"min", "max"});
+    const Eigen::Vector3d lo = vector3(member(region, "min", name), name + " 'min'");
+    const Eigen::Vector3d hi = vector3(member(region, "max", name), name + " 'max'");
+    if ((lo.array() > hi.array()).any()) fail(what + " has a " + key + " with min > max");
+    return Eigen::AlignedBox3d(lo, hi);
+  }
+
+  PoseSeparation separation(const json& j, std::size_t index) {
+    const std::string what = "separation " + std::to_string(index + 1);
+    requireObject(j, what);
+    allowKeys(j, what, {"groups", "region", "cut_region"});
+    const json& groups = member(j, "groups", what);
+    if (!groups.is_array() || groups.size() != 2) fail(what + " 'groups' must be an array of two label group names");
+    PoseSeparation s;
+    s.cage.groupA = Label(bodyPartFromName(text(groups[0], what + " group"), source_));
+    s.cage.groupB = Label(bodyPartFromName(text(groups[1], what + " group"), source_));
+    if (s.cage.groupA == s.cage.groupB) fail(what + " separates a group from itself");
+    s.cage.region = region(j, "region", what);
+    s.cutRegion = region(j, "cut_region", what);
+    return s;
+  }
+
   std::string source_;
 };
 
@@ -135,7 +171,10 @@ json toJson(const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}
 
 Eigen::Vector3d PoseTransform::apply(const Eigen::Vector3d& x, double fraction) const {
   const double angle = fraction * angleDeg * std::numbers::pi / 180.0;
-  return Eigen::AngleAxisd(angle, axis) * (x - center) + center + fraction * translation;
+  // Without a rotation x is not sent through (x - center) + center, which
+  // rounds: the identity (and fraction 0) gives x bit for bit.
+  const Eigen::Vector3d rotated = angle == 0.0 ? x : Eigen::Vector3d(Eigen::AngleAxisd(angle, axis) * (x - center) + center);
+  return rotated + fraction * translation;
 }
 
 bool PoseSelection::contains(const Eigen::Vector3d& p) const {
@@ -173,21 +212,56 @@ std::string poseToJson(const Pose& pose) {
                                       {"center", toJson(s.transform.center)}}},
                         {"translation", toJson(s.transform.translation)}};
     }
+    if (s.part) j["part"] = toJson(*s.part);
     selections.push_back(std::move(j));
   }
   root["selections"] = std::move(selections);
+  if (!pose.separations.empty()) {
+    json separations = json::array();
+    for (const PoseSeparation& s : pose.separations) {
+      json j;
+      j["groups"] = {bodyPartName(BodyPart(s.cage.groupA)), bodyPartName(BodyPart(s.cage.groupB))};
+      if (s.cage.region) j["region"] = {{"min", toJson(s.cage.region->min())}, {"max", toJson(s.cage.region->max())}};
+      if (s.cutRegion) j["cut_region"] = {{"min", toJson(s.cutRegion->min())}, {"max", toJson(s.cutRegion->max())}};
+      separations.push_back(std::move(j));
+    }
+    root["separations"] = std::move(separations);
+  }
   return root.dump(2) + "\n";
 }
 
 void writePose(const std::string& path, const Pose& pose) { writeFileAtomic(path, poseToJson(pose)); }
 
+std::vector<std::int32_t> cageParts(const TriMesh& cage) {
+  std::vector<std::int32_t> part(cage.vertexCount());
+  std::iota(part.begin(), part.end(), 0);
+  const auto root = [&](std::int32_t v) {
+    while (part[std::size_t(v)] != v) v = part[std::size_t(v)] = part[std::size_t(part[std::size_t(v)])];
+    return v;
+  };
+  for (const Tri& t : cage.triangles)
+    for (int k = 1; k < 3; ++k) part[std::size_t(root(t[k]))] = root(t[0]);
+  for (std::size_t v = 0; v < part.size(); ++v) part[v] = root(std::int32_t(v));
+  return part;
+}
+
 PoseHandles selectHandles(const Pose& pose, const TriMesh& cage, const std::string& source) {
   std::vector<std::int32_t> owner(cage.vertexCount(), -1);
+  const std::vector<std::int32_t> parts = cageParts(cage);
   for (std::size_t k = 0; k < pose.selections.size(); ++k) {
     const PoseSelection& s = pose.selections[k];
+    std::int32_t part = -1;
+    if (s.part) {
+      double best = std::numeric_limits<double>::infinity();
+      for (std::size_t v = 0; v < cage.vertexCount(); ++v)
+        if (const double d = (cage.positions[v] - *s.part).squaredNorm(); d < best) {
+          best = d;
+          part = parts[v];
+        }
+    }
     bool any = false;
     for (std::size_t v = 0; v < cage.vertexCount(); ++v)
-      if (s.contains(cage.positions[v])) {
+      if (s.contains(cage.positions[v]) && (part < 0 || parts[v] == part)) {
         owner[v] = std::int32_t(k);
         any = true;
       }

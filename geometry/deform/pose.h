@@ -11,9 +11,15 @@
 //         "fixed": true },                             exactly one of fixed / transform
 //       { "name": "right arm",
 //         "sphere": {"center": [x, y, z], "radius": r},
+//         "part": [x, y, z],                               optional: only the cage part nearest this point
 //         "transform": {
 //           "rotation": {"axis": [x, y, z], "angle_deg": a, "center": [x, y, z]},   optional
 //           "translation": [x, y, z] } }                                              optional
+//     ],
+//     "separations": [                                 optional: limb separation (cage and TM)
+//       { "groups": ["right_arm", "trunk"],            two label groups (label_groups.h names)
+//         "region": {"min": [x, y, z], "max": [x, y, z]},    optional; the whole grid when absent
+//         "cut_region": {"min": [x, y, z], "max": [x, y, z]} }   optional TM cut region; default: region
 //     ]
 //   }
 // Coordinates are millimetres in the grid frame (origin + spacing .* ijk is
@@ -28,11 +34,18 @@
 // keys, wrong types, non-finite numbers, an empty box, a radius <= 0, a zero
 // rotation axis, and a selection that selects no cage vertex:
 //   "<path>: selection 'right arm' selects no cage vertex".
+// Separations are not handles: they tell the pre-processing which label
+// groups the inset cage and the transfer mesh keep apart (thesis 4.2.1), so
+// that a pose that moves a limb away from the trunk carries the separation
+// it needs; an unknown group name is an error naming the file.
 
+#include "geometry/deform/cage_builder.h"
 #include "geometry/tri_mesh.h"
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -60,14 +73,31 @@ struct PoseSelection {
   double radius = 0.0;                               // sphere
   bool fixed = false;                                // else `transform` moves it
   PoseTransform transform;
+  // Restricts the selection to one connected part of the cage: the part of
+  // the cage vertex nearest this point (inset cages split limbs off into
+  // parts whose boxes overlap other parts).
+  std::optional<Eigen::Vector3d> part;
 
   bool contains(const Eigen::Vector3d& p) const;
+};
+
+// A limb separation (cage_builder.h) and where it cuts the transfer mesh.
+// The TM is cut inside cutRegion, or inside the cage's region when empty; a
+// separation whose region covers a joint (so that the cage splits the limb
+// off as its own part) keeps the TM whole at the joint with a cutRegion that
+// stops short of it.
+struct PoseSeparation {
+  LimbSeparation cage;  // groups are BodyPart values (label_groups.h)
+  std::optional<Eigen::AlignedBox3d> cutRegion;
+
+  LimbSeparation cut() const { return {cage.groupA, cage.groupB, cutRegion ? cutRegion : cage.region}; }
 };
 
 struct Pose {
   std::string name;
   std::vector<PoseSelection> selections;
   int arapIterations = 10;
+  std::vector<PoseSeparation> separations;
 };
 
 // Throws InputError(source, ...) on any fault listed above.
@@ -82,6 +112,10 @@ struct PoseHandles {
   std::vector<std::int32_t> vertices;   // cage vertex ids, increasing
   std::vector<std::int32_t> selection;  // per handle: the selection (index into Pose::selections) that owns it
 };
+
+// Connected parts of a cage: per vertex, a representative vertex of its part
+// (vertices joined through triangles share one).
+std::vector<std::int32_t> cageParts(const TriMesh& cage);
 
 // Throws InputError(source, "selection '<name>' selects no cage vertex") for
 // a selection whose box or sphere holds no cage vertex (before later

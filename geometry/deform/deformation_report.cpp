@@ -1,0 +1,292 @@
+#include "geometry/deform/deformation_report.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+namespace vox {
+
+namespace {
+
+using nlohmann::json;
+
+double percentChange(double before, double after) { return before > 0 ? 100.0 * (after - before) / before : 0.0; }
+
+EdgeDistortion summarize(std::vector<double>& values) {
+  EdgeDistortion d;
+  d.edges = values.size();
+  if (values.empty()) return d;
+  double sum = 0;
+  for (const double v : values) sum += v;
+  d.mean = sum / double(values.size());
+  std::sort(values.begin(), values.end());
+  d.p95 = values[std::min(values.size() - 1, std::size_t(0.95 * double(values.size())))];
+  d.max = values.back();
+  return d;
+}
+
+json toJson(const EdgeDistortion& d) { return {{"edges", d.edges}, {"mean", d.mean}, {"p95", d.p95}, {"max", d.max}}; }
+
+json toJson(const DistortionHistogram& h) {
+  return {{"lo", h.lo},     {"hi", h.hi},   {"bins", h.fractions}, {"below", h.below},
+          {"above", h.above}, {"mean", h.mean}, {"min", h.min},   {"max", h.max}, {"rms_deviation", h.rmsDeviation}};
+}
+
+json toJson(const GridGeometry& g) {
+  return {{"dims", {g.dims[0], g.dims[1], g.dims[2]}},
+          {"spacing_mm", {g.spacing.x(), g.spacing.y(), g.spacing.z()}},
+          {"origin_mm", {g.origin.x(), g.origin.y(), g.origin.z()}},
+          {"voxels", g.voxelCount()}};
+}
+
+std::string fixed(double v, int digits) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
+  return buf;
+}
+
+}  // namespace
+
+std::vector<LabelChange> labelChanges(std::span<const std::uint64_t> before, std::span<const std::uint64_t> after,
+                                      double voxelVolumeMm3, const OrganTable* organs) {
+  std::vector<LabelChange> out;
+  const std::size_t n = std::max(before.size(), after.size());
+  for (std::size_t l = 1; l < n; ++l) {
+    LabelChange c;
+    c.label = Label(l);
+    c.before = l < before.size() ? before[l] : 0;
+    c.after = l < after.size() ? after[l] : 0;
+    if (c.before == 0 && c.after == 0) continue;
+    c.volumeChangePercent = percentChange(double(c.before), double(c.after));
+    if (organs) {
+      if (const Organ* o = organs->find(int(l))) c.name = o->name;
+      c.massBeforeGrams = organs->mass(int(l), c.before, voxelVolumeMm3);
+      c.massAfterGrams = organs->mass(int(l), c.after, voxelVolumeMm3);
+    }
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+WholeBodyChange wholeBodyChange(std::span<const LabelChange> labels) {
+  WholeBodyChange w;
+  for (const LabelChange& c : labels) {
+    w.before += c.before;
+    w.after += c.after;
+    w.massBeforeGrams += c.massBeforeGrams;
+    w.massAfterGrams += c.massAfterGrams;
+  }
+  w.volumeChangePercent = percentChange(double(w.before), double(w.after));
+  w.massChangePercent = percentChange(w.massBeforeGrams, w.massAfterGrams);
+  return w;
+}
+
+OutlierDistortion outlierEdgeDistortion(const TetMesh& rest, std::span<const Eigen::Vector3d> deformed,
+                                        std::span<const std::uint8_t> inside, int neighbourhoodRings) {
+  std::vector<std::pair<std::int32_t, std::int32_t>> edges;
+  edges.reserve(rest.tetCount() * 6);
+  for (const Tet& t : rest.tets)
+    for (int a = 0; a < 4; ++a)
+      for (int b = a + 1; b < 4; ++b) edges.emplace_back(std::min(t[a], t[b]), std::max(t[a], t[b]));
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+
+  // Rings around the outside vertices.
+  const std::size_t nv = rest.vertexCount();
+  std::vector<int> ring(nv, -1);
+  for (std::size_t v = 0; v < nv; ++v)
+    if (!inside[v]) ring[v] = 0;
+  for (int r = 1; r <= neighbourhoodRings; ++r)
+    for (const auto& [a, b] : edges) {
+      if (ring[std::size_t(a)] == r - 1 && ring[std::size_t(b)] < 0) ring[std::size_t(b)] = r;
+      if (ring[std::size_t(b)] == r - 1 && ring[std::size_t(a)] < 0) ring[std::size_t(a)] = r;
+    }
+
+  std::vector<double> outside, nearby, all;
+  for (const auto& [a, b] : edges) {
+    const double restLength = (rest.positions[std::size_t(a)] - rest.positions[std::size_t(b)]).norm();
+    const double length = (deformed[std::size_t(a)] - deformed[std::size_t(b)]).norm();
+    if (!(restLength > 0)) continue;
+    const double d = std::abs(std::log(length / restLength));
+    if (!inside[std::size_t(a)] || !inside[std::size_t(b)]) {
+      outside.push_back(d);
+      continue;
+    }
+    all.push_back(d);
+    if (ring[std::size_t(a)] >= 0 && ring[std::size_t(b)] >= 0) nearby.push_back(d);
+  }
+  return {summarize(outside), summarize(nearby), summarize(all)};
+}
+
+void describePipeline(DeformationReport& report, const DeformationPipeline& pipeline) {
+  const PipelineStats& s = pipeline.stats();
+  report.automaticCage = s.automaticCage;
+  report.cageVertices = pipeline.cage().vertexCount();
+  report.cageFaces = pipeline.cage().faceCount();
+  report.cage = s.cage;
+  report.foregroundOutsideCage = s.foregroundOutsideCage;
+  report.envelopeVertices = pipeline.envelope().vertexCount();
+  report.envelopeFaces = pipeline.envelope().faceCount();
+  report.envelopeOutside = pipeline.deformer().stats().envelopeOutside;
+  const TetMesh& tm = pipeline.transferMesh();
+  report.tmVertices = tm.vertexCount();
+  report.tmTets = tm.tetCount();
+  report.tmInside = pipeline.deformer().stats().transferMeshInside;
+  report.tmOutside = pipeline.deformer().stats().transferMeshOutside;
+  report.uncoveredVoxels = s.uncoveredVoxels;
+  report.cuts = s.cuts;
+  const auto& deformed = pipeline.deformedTransferMesh();
+  report.distortion = distortionHistograms(tm, deformed);
+  report.outlierDistortion = outlierEdgeDistortion(tm, deformed, pipeline.transferMeshInside());
+}
+
+std::string deformationReportJson(const DeformationReport& r) {
+  json root;
+  root["input"] = r.input;
+  root["output"] = r.output;
+  root["pose"] = r.pose;
+  root["engine"] = r.engine;
+  root["source_grid"] = toJson(r.source);
+  root["posed_grid"] = toJson(r.posed);
+  root["working_grid"] = {{"downsample_factor", r.workingFactor}, {"voxels", r.workingVoxels}};
+  root["max_memory_bytes"] = r.maxMemoryBytes;
+  root["samples"] = r.samples;
+
+  json stages = json::array();
+  double wall = 0, cpu = 0;
+  for (const StageTime& t : r.stages) {
+    stages.push_back({{"stage", t.name}, {"seconds", t.seconds}, {"cpu_seconds", t.cpuSeconds}});
+    wall += t.seconds;
+    cpu += t.cpuSeconds;
+  }
+  root["stages"] = stages;
+  root["total_seconds"] = wall;
+  root["total_cpu_seconds"] = cpu;
+
+  root["cage"] = {{"automatic", r.automaticCage},
+                  {"vertices", r.cageVertices},
+                  {"faces", r.cageFaces},
+                  {"meshed_vertices_before_qem", r.cage.meshedVertices},
+                  {"eroded_voxels", r.cage.erodedVoxels},
+                  {"valid", r.cage.check.validCage()},
+                  {"genus", r.cage.check.genus},
+                  {"self_intersections", r.cage.check.selfIntersections},
+                  {"volume_mm3", r.cage.check.volume}};
+  root["envelope"] = {{"vertices", r.envelopeVertices}, {"faces", r.envelopeFaces}, {"vertices_outside_cage", r.envelopeOutside}};
+  json cuts = json::array();
+  for (const CutReport& c : r.cuts)
+    cuts.push_back({{"cut_faces", c.cutFaces}, {"duplicated_vertices", c.duplicatedVertices}, {"opened_rim_faces", c.openedRimFaces}});
+  root["transfer_mesh"] = {{"vertices", r.tmVertices},
+                           {"tets", r.tmTets},
+                           {"vertices_inside_cage", r.tmInside},
+                           {"vertices_outside_cage", r.tmOutside},
+                           {"uncovered_foreground_voxels", r.uncoveredVoxels},
+                           {"cuts", cuts}};
+  root["outliers"] = {{"transfer_mesh_vertices_outside_cage", r.tmOutside},
+                      {"foreground_voxels_outside_cage", r.foregroundOutsideCage},
+                      {"edge_length_distortion",
+                       {{"outside", toJson(r.outlierDistortion.outside)},
+                        {"inside_nearby", toJson(r.outlierDistortion.insideNearby)},
+                        {"inside", toJson(r.outlierDistortion.inside)}}}};
+
+  json steps = json::array();
+  for (std::size_t k = 0; k < r.refinement.steps.size(); ++k) {
+    const RefinementStep& s = r.refinement.steps[k];
+    steps.push_back({{"iteration", k},
+                     {"vertices", s.vertices},
+                     {"tets", s.tets},
+                     {"mean_error", s.meanError},
+                     {"max_error", s.maxError},
+                     {"update_strength", s.strength},
+                     {"seconds", s.seconds}});
+  }
+  root["refinement"] = {{"iterations", steps}, {"stop", r.refinement.stopReason}};
+  root["distortion"] = {{"volume_mm3", r.distortion.volume},
+                        {"angle_deg", toJson(r.distortion.angle)},
+                        {"stretch", toJson(r.distortion.stretch)}};
+
+  json labels = json::array();
+  json small = json::array();
+  double largest = 0;
+  json largestLabel = nullptr;
+  for (const LabelChange& c : r.labels) {
+    json j = {{"label", c.label}, {"voxels_before", c.before}, {"voxels_after", c.after}, {"volume_change_pct", c.volumeChangePercent}};
+    if (!c.name.empty()) j["name"] = c.name;
+    if (r.withMasses) {
+      j["mass_before_g"] = c.massBeforeGrams;
+      j["mass_after_g"] = c.massAfterGrams;
+      j["mass_change_pct"] = c.volumeChangePercent;
+    }
+    labels.push_back(std::move(j));
+    if (c.before < kSmallOrganVoxels) {
+      small.push_back({{"label", c.label}, {"name", c.name}, {"voxels_before", c.before}, {"change_pct", c.volumeChangePercent}});
+    } else if (std::abs(c.volumeChangePercent) > std::abs(largest) || largestLabel.is_null()) {
+      largest = c.volumeChangePercent;
+      largestLabel = {{"label", c.label}, {"name", c.name}, {"change_pct", c.volumeChangePercent}};
+    }
+  }
+  root["labels"] = labels;
+  root["small_labels"] = {{"threshold_voxels", kSmallOrganVoxels}, {"labels", small}};
+  root["largest_change_above_threshold"] = largestLabel;
+  json whole = {{"voxels_before", r.wholeBody.before},
+                {"voxels_after", r.wholeBody.after},
+                {"volume_change_pct", r.wholeBody.volumeChangePercent}};
+  if (r.withMasses) {
+    whole["mass_before_g"] = r.wholeBody.massBeforeGrams;
+    whole["mass_after_g"] = r.wholeBody.massAfterGrams;
+    whole["mass_change_pct"] = r.wholeBody.massChangePercent;
+  }
+  root["whole_body"] = whole;
+  return root.dump(2) + "\n";
+}
+
+std::string deformationSummary(const DeformationReport& r) {
+  std::ostringstream s;
+  double wall = 0, cpu = 0;
+  for (const StageTime& t : r.stages) {
+    wall += t.seconds;
+    cpu += t.cpuSeconds;
+  }
+  s << r.output << ": " << r.posed.dims[0] << " x " << r.posed.dims[1] << " x " << r.posed.dims[2] << " voxels";
+  if (r.samples > 1) s << ", " << r.samples << "^3 samples per voxel";
+  s << ", " << r.engine << ", " << fixed(wall, 1) << " s (" << fixed(cpu, 1) << " CPU s)\n";
+  s << "  stages:";
+  for (const StageTime& t : r.stages) s << " " << t.name << " " << fixed(t.seconds, 1) << " s;";
+  s << "\n";
+  s << "  cage " << r.cageVertices << " vertices (" << (r.automaticCage ? "automatic" : "from file") << "), envelope "
+    << r.envelopeVertices << " vertices, transfer mesh " << r.tmVertices << " vertices / " << r.tmTets << " tets";
+  if (r.workingFactor > 1) s << " (working grid downsampled by " << r.workingFactor << ")";
+  s << "\n";
+  s << "  outliers: " << r.tmOutside << " TM vertices and " << r.foregroundOutsideCage << " foreground voxels outside the cage\n";
+  if (!r.refinement.steps.empty()) {
+    s << "  refinement (" << r.refinement.stopReason << "):";
+    for (const RefinementStep& st : r.refinement.steps)
+      s << " " << st.tets << " tets max/mean error " << fixed(st.maxError, 4) << "/" << fixed(st.meanError, 4) << ";";
+    s << "\n";
+  }
+  s << "  whole body: " << r.wholeBody.before << " -> " << r.wholeBody.after << " voxels (" << fixed(r.wholeBody.volumeChangePercent, 2)
+    << " % volume";
+  if (r.withMasses) s << ", " << fixed(r.wholeBody.massChangePercent, 2) << " % mass";
+  s << ")\n";
+  const LabelChange* worst = nullptr;
+  std::size_t small = 0;
+  for (const LabelChange& c : r.labels) {
+    if (c.before < kSmallOrganVoxels) {
+      ++small;
+      continue;
+    }
+    if (!worst || std::abs(c.volumeChangePercent) > std::abs(worst->volumeChangePercent)) worst = &c;
+  }
+  if (worst)
+    s << "  largest change of a label with >= " << kSmallOrganVoxels << " voxels: " << worst->label
+      << (worst->name.empty() ? "" : " (" + worst->name + ")") << " " << fixed(worst->volumeChangePercent, 2) << " %; " << small
+      << " labels under " << kSmallOrganVoxels << " voxels\n";
+  s << "  distortion: angle mean " << fixed(r.distortion.angle.mean, 2) << " deg (rms deviation " << fixed(r.distortion.angle.rmsDeviation, 2)
+    << "), stretch mean " << fixed(r.distortion.stretch.mean, 4) << " (rms deviation " << fixed(r.distortion.stretch.rmsDeviation, 4) << ")\n";
+  return s.str();
+}
+
+}  // namespace vox

@@ -1,0 +1,99 @@
+#pragma once
+// What `voxmorph deform --report` writes: stage times, the sizes of the cage,
+// envelope and transfer mesh (TM) per refinement iteration, outliers (TM
+// vertices and foreground voxels outside the cage), per-label voxel counts
+// with volume and mass change, the whole body's change, the distortion
+// histograms of the thesis' Figure 3.19 and the edge-length distortion of
+// the propagated (outside) TM vertices against the inside ones.
+
+#include "geometry/deform/adaptive_refinement.h"
+#include "geometry/deform/deformation_metrics.h"
+#include "geometry/deform/pipeline.h"
+#include "geometry/label_grid.h"
+#include "geometry/organ_table.h"
+#include "geometry/tet_mesh.h"
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace vox {
+
+// Organs under this many voxels are exempt from the mass bound (a voxel or
+// two of resampling is already a large fraction of them): listed apart.
+inline constexpr std::uint64_t kSmallOrganVoxels = 1000;
+
+struct LabelChange {
+  Label label = 0;
+  std::string name;                // organ name, or "" without a table
+  std::uint64_t before = 0, after = 0;
+  double volumeChangePercent = 0;  // also the mass change: one density per label
+  double massBeforeGrams = 0, massAfterGrams = 0;  // 0 without a table
+};
+
+struct WholeBodyChange {
+  std::uint64_t before = 0, after = 0;  // foreground voxels
+  double volumeChangePercent = 0;
+  double massBeforeGrams = 0, massAfterGrams = 0, massChangePercent = 0;  // with a table
+};
+
+// Per label present before or after (label 0 excluded). counts: indexed by
+// label (LabelStats::counts); the two may differ in length.
+std::vector<LabelChange> labelChanges(std::span<const std::uint64_t> before, std::span<const std::uint64_t> after,
+                                      double voxelVolumeMm3, const OrganTable* organs);
+WholeBodyChange wholeBodyChange(std::span<const LabelChange> labels);
+
+// Edge-length distortion |ln(|e'| / |e|)| of TM edges, split by whether an end
+// lies outside the cage (placed by the propagation) or both inside (Green
+// coordinates). The inside reference is restricted to the region the cage
+// deforms: inside edges within `neighbourhoodRings` edge rings of an outside
+// vertex, so that rigidly carried parts far away do not dilute it.
+struct EdgeDistortion {
+  std::size_t edges = 0;
+  double mean = 0, p95 = 0, max = 0;
+};
+struct OutlierDistortion {
+  EdgeDistortion outside;       // edges with an end outside the cage
+  EdgeDistortion insideNearby;  // edges with both ends inside, near an outside vertex
+  EdgeDistortion inside;        // every edge with both ends inside
+};
+OutlierDistortion outlierEdgeDistortion(const TetMesh& rest, std::span<const Eigen::Vector3d> deformed,
+                                        std::span<const std::uint8_t> inside, int neighbourhoodRings = 3);
+
+struct DeformationReport {
+  std::string input, output, pose, engine;
+  GridGeometry source, posed;    // input grid and G'
+  int workingFactor = 1;         // working grid = source downsampled by this
+  std::int64_t workingVoxels = 0;
+  std::int64_t maxMemoryBytes = 0;  // 0: in core
+  int samples = 1;
+  std::vector<StageTime> stages;
+
+  bool automaticCage = true;
+  std::size_t cageVertices = 0, cageFaces = 0;
+  CageReport cage;
+  std::int64_t foregroundOutsideCage = 0;  // working-grid voxels
+  std::size_t envelopeVertices = 0, envelopeFaces = 0, envelopeOutside = 0;
+  std::size_t tmVertices = 0, tmTets = 0, tmInside = 0, tmOutside = 0;
+  std::int64_t uncoveredVoxels = 0;  // working-grid foreground voxels in no tet
+  std::vector<CutReport> cuts;
+  RefinementResult refinement;
+  DistortionHistograms distortion;
+  OutlierDistortion outlierDistortion;
+
+  std::vector<LabelChange> labels;
+  WholeBodyChange wholeBody;
+  bool withMasses = false;
+};
+
+// Fills the mesh sizes, outliers, cuts and distortion from a deformed
+// pipeline.
+void describePipeline(DeformationReport& report, const DeformationPipeline& pipeline);
+
+// The report as JSON text (indented) and as a short human summary.
+std::string deformationReportJson(const DeformationReport& report);
+std::string deformationSummary(const DeformationReport& report);
+
+}  // namespace vox

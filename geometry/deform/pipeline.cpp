@@ -1,0 +1,202 @@
+#include "geometry/deform/pipeline.h"
+
+#include "geometry/deform/label_groups.h"
+#include "geometry/deform/out_of_core.h"
+#include "geometry/deform/surface_checks.h"
+#include "geometry/error.h"
+#include "geometry/label_stats.h"
+
+#include <algorithm>
+#include <set>
+#include <sys/resource.h>
+
+namespace vox {
+
+double processCpuSeconds() {
+  rusage u{};
+  ::getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
+StageTimer::StageTimer(std::string name)
+    : name_(std::move(name)), wall_(std::chrono::steady_clock::now()), cpu_(processCpuSeconds()) {}
+
+StageTime StageTimer::stop() const {
+  return {name_, std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_).count(), processCpuSeconds() - cpu_};
+}
+
+namespace {
+
+// Label of the groups that no separation names, in the TM's group grid: one
+// material, so the mesher does not resolve interfaces nobody cuts.
+constexpr Label kOtherGroups = Label(kBodyPartCount + 1);
+
+}  // namespace
+
+std::string cageFault(const SurfaceCheck& c) {
+  if (c.boundaryEdges) return std::to_string(c.boundaryEdges) + " boundary edges";
+  if (c.nonManifoldEdges) return std::to_string(c.nonManifoldEdges) + " non-manifold edges";
+  if (c.nonManifoldVertices) return std::to_string(c.nonManifoldVertices) + " non-manifold vertices";
+  if (c.misorientedEdges) return std::to_string(c.misorientedEdges) + " inconsistently oriented edges";
+  if (c.selfIntersections) return std::to_string(c.selfIntersections) + " self-intersecting face pairs";
+  if (c.degenerateFaces) return std::to_string(c.degenerateFaces) + " degenerate faces";
+  if (c.isolatedVertices) return std::to_string(c.isolatedVertices) + " unused vertices";
+  return "non-positive volume";
+}
+
+void LabelCountingRasterizer::rasterizeSlab(std::int64_t z0, std::int64_t z1, Label* out) {
+  engine_.rasterizeSlab(z0, z1, out);
+  const std::int64_t n = (z1 - z0) * outputGeometry().sliceVoxels();
+  for (std::int64_t v = 0; v < n; ++v) {
+    const Label l = out[v];
+    if (l >= counts_.size()) counts_.resize(std::size_t(l) + 1, 0);
+    ++counts_[l];
+  }
+}
+
+std::vector<std::uint64_t> writePosedGrid(SlabRasterizer& engine, const std::string& path, Label maxLabel) {
+  LabelCountingRasterizer counting(engine);
+  writeDeformedGrid(counting, path, maxLabel);
+  return counting.counts();
+}
+
+DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOptions& options) : options_(options) {
+  const std::vector<LimbSeparation>& separations = options_.cage.separations;
+  {
+    StageTimer timer("label groups");
+    if (separations.empty()) {
+      groups_ = binaryGroupGrid(grid);
+    } else {
+      if (!options_.organs)
+        throw InputError("separation", "limb separation needs the grid's organ table (--organs) to find the label groups");
+      groups_ = labelGroupGrid(grid, *options_.organs);
+      std::vector<std::int64_t> count(kBodyPartCount + 1, 0);
+      for (const Label l : groups_.labels()) ++count[l];
+      std::set<Label> named;
+      for (const LimbSeparation& s : separations)
+        for (const Label g : {s.groupA, s.groupB}) {
+          if (g < 1 || g > kBodyPartCount || count[g] == 0)
+            throw InputError("separation", std::string("label group '") +
+                                               (g >= 1 && g <= kBodyPartCount ? bodyPartName(BodyPart(g)) : "?") +
+                                               "' has no voxels in this grid");
+          named.insert(g);
+        }
+      meshGroups_ = groups_;
+      for (Label& l : meshGroups_.labels())
+        if (l != 0 && !named.count(l)) l = kOtherGroups;
+    }
+    stats_.stages.push_back(timer.stop());
+  }
+  {
+    StageTimer timer("cage");
+    if (options_.userCage) {
+      builtCage_ = *options_.userCage;
+      stats_.automaticCage = false;
+      stats_.cage.check = checkSurface(builtCage_);
+      stats_.cage.foregroundOutside = countForegroundOutside(builtCage_, groups_);
+    } else {
+      CageResult r = buildCage(groups_, options_.cage);
+      if (!r.report.check.validCage())
+        throw RuntimeFailure("the automatic cage is not a valid cage (" + cageFault(r.report.check) +
+                             "); try another --vertices or --dilation");
+      builtCage_ = std::move(r.cage);
+      stats_.cage = r.report;
+    }
+    stats_.foregroundOutsideCage = stats_.cage.foregroundOutside;
+    stats_.stages.push_back(timer.stop());
+  }
+  cage_ = builtCage_;
+  if (options_.pose) selectHandles(*options_.pose, builtCage_, options_.poseSource);
+  if (options_.envelope) {
+    StageTimer timer("envelope");
+    envelope_ = extractEnvelope(groups_, options_.envelopeOptions);
+    stats_.stages.push_back(timer.stop());
+  }
+  sizing_ = defaultSizingField(groups_.geometry(), options_.sizingFraction);
+  {
+    StageTimer timer("transfer mesh");
+    buildTransferMesh();
+    stats_.stages.push_back(timer.stop());
+  }
+  if (options_.pose) setPose(*options_.pose, options_.poseSource);
+}
+
+void DeformationPipeline::buildTransferMesh() {
+  const bool separated = !options_.cage.separations.empty();
+  transferMesh_ = vox::buildTransferMesh(separated ? meshGroups_ : groups_, sizing_, options_.transferMesh);
+  stats_.cuts.clear();
+  for (const LimbSeparation& s : options_.cuts ? *options_.cuts : options_.cage.separations)
+    stats_.cuts.push_back(cutTransferMesh(transferMesh_, s.groupA, s.groupB, s.region));
+  stats_.uncoveredVoxels = countUncoveredVoxels(transferMesh_, groups_);
+}
+
+void DeformationPipeline::recordStage(StageTime time) {
+  for (StageTime& s : stats_.stages)
+    if (s.name == time.name) {
+      s = std::move(time);
+      return;
+    }
+  stats_.stages.push_back(std::move(time));
+}
+
+void DeformationPipeline::precomputeFrame(bool withEnvelope) {
+  const std::span<const Eigen::Vector3d> envelope =
+      withEnvelope ? std::span<const Eigen::Vector3d>(envelope_.positions) : std::span<const Eigen::Vector3d>();
+  deformer_.precompute(cage_, envelope, transferMesh_, handles_.vertices, options_.frame);
+}
+
+void DeformationPipeline::setPose(const Pose& pose, const std::string& source) {
+  StageTimer timer("embedding");
+  PoseHandles handles = selectHandles(pose, builtCage_, source);
+  // Only the parts of the cage that hold a handle take part.
+  const std::vector<std::int32_t> parts = cageParts(builtCage_);
+  std::vector<std::uint8_t> held(builtCage_.vertexCount(), 0);
+  for (const std::int32_t v : handles.vertices) held[std::size_t(parts[std::size_t(v)])] = 1;
+  std::vector<std::int32_t> index(builtCage_.vertexCount(), -1);
+  cage_ = {};
+  for (std::size_t v = 0; v < builtCage_.vertexCount(); ++v)
+    if (held[std::size_t(parts[v])]) {
+      index[v] = std::int32_t(cage_.positions.size());
+      cage_.positions.push_back(builtCage_.positions[v]);
+    }
+  for (const Tri& t : builtCage_.triangles)
+    if (index[std::size_t(t[0])] >= 0) cage_.triangles.push_back({index[std::size_t(t[0])], index[std::size_t(t[1])], index[std::size_t(t[2])]});
+  for (std::int32_t& v : handles.vertices) v = index[std::size_t(v)];
+  handles_ = std::move(handles);
+  pose_ = pose;
+  precomputeFrame(options_.envelope);
+  fraction_ = 0.0;
+  deformedEnvelope_ = envelope_.positions;
+  recordStage(timer.stop());
+}
+
+void DeformationPipeline::deform(double fraction) {
+  if (handles_.vertices.empty()) throw RuntimeFailure("DeformationPipeline::deform: no pose set");
+  StageTimer timer("deformation");
+  fraction_ = fraction;
+  deformer_.update(handleTargets(pose_, handles_, cage_, fraction), pose_.arapIterations);
+  if (deformer_.envelopePositions().size() == envelope_.vertexCount()) deformedEnvelope_ = deformer_.envelopePositions();
+  recordStage(timer.stop());
+}
+
+RefinementResult DeformationPipeline::refine(const RefinementOptions& options, const VertexFieldInterpolation& interpolate) {
+  if (handles_.vertices.empty()) throw RuntimeFailure("DeformationPipeline::refine: no pose set");
+  StageTimer timer("refinement");
+  const RefinementSubject subject{
+      .restMesh = [this]() -> const TetMesh& { return transferMesh_; },
+      .deformedPositions = [this]() -> const std::vector<Eigen::Vector3d>& { return deformer_.transferMeshPositions(); },
+      .regenerate =
+          [this](const ScalarGrid&) {
+            // The envelope is display only: the regenerated frames leave it
+            // where the last full frame put it.
+            buildTransferMesh();
+            precomputeFrame(false);
+            deformer_.update(handleTargets(pose_, handles_, cage_, fraction_), pose_.arapIterations);
+          },
+  };
+  RefinementResult result = refineTransferMesh(subject, sizing_, interpolate, options);
+  recordStage(timer.stop());
+  return result;
+}
+
+}  // namespace vox

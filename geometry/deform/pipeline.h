@@ -1,0 +1,210 @@
+#pragma once
+// The VoxMorph pipeline (thesis 3.2 and 4.2) as library calls, shared by
+// `voxmorph deform`, `voxmorph render --pose` and the viewer:
+//
+//   DeformationPipeline pipeline(workingGrid, options);  // pre-process
+//   pipeline.setPose(pose, "pose.json");                  // handles, factorizations
+//   pipeline.deform();                                    // one frame
+//   pipeline.refine(refinementOptions, interpolation);    // post-process, eq. 4.5-4.7
+//   ... rasterize pipeline.transferMesh() / deformedTransferMesh() (rasterize.h,
+//       gpu/kernels/rasterize.h, out_of_core.h), or ray-cast them.
+//
+// Pre-processing, on the working grid G (the source, or its block-downsampled
+// copy for grids larger than the working budget, see kDefaultWorkingVoxels):
+//  - label groups: S from the organ names (label_groups.h) when separations
+//    are requested, else the binary grid B;
+//  - cage: automatic from S (inset where separations are requested), or the
+//    caller's (validated); foreground voxels outside it are counted;
+//  - envelope of B (optional: only the interactive display needs it);
+//  - sizing field F: a constant fraction of G's diagonal;
+//  - transfer mesh under F: from B, or, with separations, from S reduced to
+//    the separated groups (every other group merged into one) and cut
+//    between each separated pair inside its region;
+//  - the frame deformer's precomputation (Green coordinates, ARAP and
+//    propagation factorizations) once the pose gives the handles.
+//
+// An identity pose gives the rest positions bit for bit (FrameDeformer), so
+// rasterizing it reproduces the source voxel for voxel wherever the TM
+// covers it (countUncoveredVoxels is reported).
+
+#include "geometry/deform/adaptive_refinement.h"
+#include "geometry/deform/cage_builder.h"
+#include "geometry/deform/envelope.h"
+#include "geometry/deform/frame_deformer.h"
+#include "geometry/deform/pose.h"
+#include "geometry/deform/rasterize.h"
+#include "geometry/deform/transfer_mesh.h"
+#include "geometry/label_grid.h"
+#include "geometry/organ_table.h"
+#include "geometry/scalar_grid.h"
+#include "geometry/tet_mesh.h"
+#include "geometry/tri_mesh.h"
+
+#include <Eigen/Core>
+#include <chrono>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace vox {
+
+// Wall and process CPU time of one stage (CPU time counts every thread, so
+// on a loaded machine it is the steadier figure).
+struct StageTime {
+  std::string name;
+  double seconds = 0.0;
+  double cpuSeconds = 0.0;
+};
+
+// Times a stage from construction to stop().
+class StageTimer {
+public:
+  explicit StageTimer(std::string name);
+  StageTime stop() const;
+
+private:
+  std::string name_;
+  std::chrono::steady_clock::time_point wall_;
+  double cpu_ = 0.0;
+};
+double processCpuSeconds();
+
+struct PipelineOptions {
+  // Organ table of the grid: label groups for limb separation. Required when
+  // cage.separations is not empty.
+  std::optional<OrganTable> organs;
+  // Automatic cage; its separations (groups are BodyPart values) also cut
+  // the transfer mesh.
+  CageOptions cage;
+  // Where the transfer mesh is cut (cutTransferMesh); empty: the cage's
+  // separations. A joint that the cage separates into two components (so
+  // that each part's Green coordinates ignore the other part's motion) must
+  // stay connected in the TM, where the propagation blends the two motions.
+  std::optional<std::vector<LimbSeparation>> cuts;
+  // A cage to use instead of the automatic one (already validated, e.g. by
+  // readCage); it must enclose or meet the foreground as the caller intends.
+  std::optional<TriMesh> userCage;
+  bool envelope = true;
+  EnvelopeOptions envelopeOptions;
+  double sizingFraction = 0.05;  // initial F: this fraction of the working grid's diagonal
+  TransferMeshOptions transferMesh;
+  FrameDeformerOptions frame;
+  // A pose to set at the end of the pre-processing (setPose); its selections
+  // are checked against the cage as soon as the cage exists, so a pose that
+  // selects nothing fails before the transfer mesh is built.
+  std::optional<Pose> pose;
+  std::string poseSource = "pose";
+};
+
+// Sizes and checks of the pre-processing, for reports.
+struct PipelineStats {
+  bool automaticCage = true;
+  CageReport cage;                        // of the automatic cage (check only, for a user cage)
+  std::int64_t foregroundOutsideCage = 0;  // working-grid foreground voxels outside the cage
+  std::int64_t uncoveredVoxels = 0;        // working-grid foreground voxels in no TM tet
+  std::vector<CutReport> cuts;             // one per separation, of the current TM
+  // Pre-processing, then the latest "embedding" (setPose), "deformation"
+  // (deform) and "refinement" (refine).
+  std::vector<StageTime> stages;
+};
+
+class DeformationPipeline {
+public:
+  // Pre-processing of `grid` (copied). Throws InputError for a grid without
+  // foreground, separations without an organ table, a separation naming a
+  // group with no voxels; RuntimeFailure for an automatic cage that is not a
+  // valid cage (self-intersecting, non-manifold).
+  DeformationPipeline(const LabelGrid& grid, const PipelineOptions& options = {});
+
+  // The pose's handles on the cage (selectHandles: InputError(source, ...)
+  // for a selection that selects nothing) and the frame deformer's
+  // precomputation. A connected part of the cage that no selection touches
+  // (an inset cage can split off small pieces) is left out of the
+  // deformation: ARAP has nothing to place it by, and the TM vertices inside
+  // it are placed by the propagation like the other outliers. Positions are
+  // reset to the rest pose.
+  void setPose(const Pose& pose, const std::string& source);
+  // One frame: the pose applied by `fraction` in [0, 1].
+  void deform(double fraction = 1.0);
+  // Post-process: refines the TM under the current pose (eq. 4.5-4.7).
+  RefinementResult refine(const RefinementOptions& options, const VertexFieldInterpolation& interpolate);
+
+  const LabelGrid& groups() const { return groups_; }   // S (or B) on the working grid
+  // The cage as built (or given), and the cage the deformation uses: its
+  // parts that hold a handle (setPose). Handles index the latter.
+  const TriMesh& builtCage() const { return builtCage_; }
+  const TriMesh& cage() const { return cage_; }
+  const TriMesh& envelope() const { return envelope_; }
+  const ScalarGrid& sizingField() const { return sizing_; }
+  const TetMesh& transferMesh() const { return transferMesh_; }  // rest TM (cut)
+  const std::vector<Eigen::Vector3d>& deformedTransferMesh() const { return deformer_.transferMeshPositions(); }
+  const std::vector<Eigen::Vector3d>& deformedCage() const { return deformer_.cagePositions(); }
+  const std::vector<Eigen::Vector3d>& deformedEnvelope() const { return deformedEnvelope_; }
+  // #TM vertices: 1 inside the cage (Green coordinates), 0 outside (propagation).
+  const std::vector<std::uint8_t>& transferMeshInside() const { return deformer_.transferMeshInside(); }
+  const FrameDeformer& deformer() const { return deformer_; }
+  const Pose& pose() const { return pose_; }
+  const PoseHandles& handles() const { return handles_; }
+  // Vertices of the built cage left out because their part has no handle.
+  std::size_t droppedCageVertices() const { return builtCage_.vertexCount() - cage_.vertexCount(); }
+  const PipelineStats& stats() const { return stats_; }
+
+private:
+  void buildTransferMesh();
+  void precomputeFrame(bool withEnvelope);
+  void recordStage(StageTime time);
+
+  PipelineOptions options_;
+  LabelGrid groups_, meshGroups_;  // meshGroups_: S reduced to the separated groups (empty without separations)
+  TriMesh builtCage_, cage_, envelope_;
+  ScalarGrid sizing_;
+  TetMesh transferMesh_;
+  FrameDeformer deformer_;
+  Pose pose_;
+  PoseHandles handles_;
+  double fraction_ = 0.0;
+  bool posed_ = false;
+  std::vector<Eigen::Vector3d> deformedEnvelope_;
+  PipelineStats stats_;
+};
+
+// A description of the first fault of a surface that is not a valid cage
+// ("12 boundary edges", "3 self-intersecting face pairs"...).
+std::string cageFault(const SurfaceCheck& check);
+
+// A slab engine that counts the labels of the slabs it hands out (the posed
+// grid's per-label voxel counts, without holding the grid).
+class LabelCountingRasterizer : public SlabRasterizer {
+public:
+  explicit LabelCountingRasterizer(SlabRasterizer& engine) : engine_(engine) {}
+  const GridGeometry& outputGeometry() const override { return engine_.outputGeometry(); }
+  std::int64_t slabSlices() const override { return engine_.slabSlices(); }
+  void rasterizeSlab(std::int64_t z0, std::int64_t z1, Label* out) override;
+  // Voxels per label (index = label) over every slab so far.
+  const std::vector<std::uint64_t>& counts() const { return counts_; }
+
+private:
+  SlabRasterizer& engine_;
+  std::vector<std::uint64_t> counts_;
+};
+
+// Writes G' from `engine` slab by slab (writeDeformedGrid; the file appears
+// complete or not at all) and returns its per-label voxel counts.
+std::vector<std::uint64_t> writePosedGrid(SlabRasterizer& engine, const std::string& path, Label maxLabel);
+
+// Working grid. The pre-processing's memory and time grow with the voxels it
+// samples (distance transforms, the mesher's domain), not with the TM's
+// size, so a source above the working budget runs it on a block-downsampled
+// copy (out_of_core.h: downsampleLabels, downsampleFactor -- the smallest
+// factor that brings the copy under the budget). In core the budget is
+// kDefaultWorkingVoxels (the ICRP phantoms, 7 and 14 M voxels, run at full
+// resolution); under a memory limit it is the limit's share for the
+// pre-processing divided by kPreprocessBytesPerVoxel.
+inline constexpr std::int64_t kDefaultWorkingVoxels = std::int64_t(1) << 24;
+// Peak bytes the pre-processing holds per working-grid voxel (padded
+// distance transform with nearest-seed indices, label, sizing and error
+// grids), measured on the ICRP phantoms.
+inline constexpr std::int64_t kPreprocessBytesPerVoxel = 48;
+
+}  // namespace vox
