@@ -3,8 +3,6 @@
 #include "geometry/ascii_text.h"
 #include "geometry/error.h"
 
-#include <algorithm>
-#include <cctype>
 
 namespace vox {
 
