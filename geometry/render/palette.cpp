@@ -1,3 +1,4 @@
+#include "geometry/ascii_text.h"
 #include "geometry/render/palette.h"
 
 #include "geometry/error.h"
@@ -74,10 +75,6 @@ constexpr std::array kNamedColors = {
     NamedColor{"ovary", 0.78, 0.48, 0.60},      NamedColor{"uterus", 0.78, 0.48, 0.60},
 };
 
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return s;
-}
 
 }  // namespace
 
@@ -100,7 +97,7 @@ Palette Palette::fromOrgans(const OrganTable& organs, Label maxLabel) {
   Palette p(maxLabel);
   for (const auto& [id, organ] : organs.organs()) {
     if (id < 1 || id > int(maxLabel)) continue;
-    const std::string name = lower(organ.name);
+    const std::string name = toLowerAscii(organ.name);
     for (const NamedColor& c : kNamedColors) {
       if (name.find(c.word) == std::string::npos) continue;
       // Organs sharing a colour word differ slightly in brightness, so

@@ -1,12 +1,12 @@
 #include "geometry/render/raycast_reference.h"
 
+#include "geometry/parallel.h"
+
 #include <Eigen/Geometry>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <limits>
-#include <thread>
 
 namespace vox {
 
@@ -271,20 +271,15 @@ RgbImage raycastReference(const LabelGrid& source, const RaycastMesh& mesh, cons
   const std::vector<TetFactors> factors = computeTetFactors(mesh, frame);
   const int w = view.camera.width, h = view.camera.height;
   RgbImage image(w, h);
-  const unsigned threads = std::max(1u, std::min(std::thread::hardware_concurrency(), unsigned(h)));
-  std::vector<RaycastStats> perThread(threads);
-  std::atomic<int> nextRow{0};
-  auto work = [&](unsigned id) {
-    const Tracer tracer{source, mesh, frame, factors, view, palette, limits, perThread[id]};
-    for (int y = nextRow++; y < h; y = nextRow++)
-      for (int x = 0; x < w; ++x) image.at(x, y) = shadeRay(tracer.trace(view.eye, view.direction(x, y)), view, palette, shading);
-  };
-  std::vector<std::thread> pool;
-  for (unsigned i = 1; i < threads; ++i) pool.emplace_back(work, i);
-  work(0);
-  for (auto& t : pool) t.join();
+  // Rows are independent; each keeps its own statistics, summed at the end.
+  std::vector<RaycastStats> perRow(static_cast<std::size_t>(h));
+  parallelFor(h, 0, [&](std::int64_t y) {
+    const Tracer tracer{source, mesh, frame, factors, view, palette, limits, perRow[std::size_t(y)]};
+    for (int x = 0; x < w; ++x)
+      image.at(x, int(y)) = shadeRay(tracer.trace(view.eye, view.direction(x, int(y))), view, palette, shading);
+  });
   if (stats) {
-    for (const RaycastStats& s : perThread) {
+    for (const RaycastStats& s : perRow) {
       stats->rays += s.rays;
       stats->hits += s.hits;
       stats->cells += s.cells;
