@@ -19,6 +19,7 @@
 #include "geometry/error.h"
 #include "geometry/io/atomic_file.h"
 #include "geometry/io/grid_io.h"
+#include "geometry/io/mesh_io.h"
 #include "geometry/label_stats.h"
 #include "gpu/context.h"
 #include "gpu/kernels/field_interpolation.h"
@@ -34,7 +35,7 @@ namespace vox::app {
 namespace {
 
 struct DeformOptions {
-  std::string input, pose, output, report, organs, cage;
+  std::string input, pose, output, report, organs, cage, posedCage, posedMesh;
   std::vector<std::string> separations;
   double dilationMm = 20.0;
   int vertices = 300;
@@ -134,6 +135,10 @@ std::vector<std::uint64_t> countLabels(const LabelGrid& grid) {
 void deform(const DeformOptions& o) {
   installStderrProgress(o.quiet);
   if (!hasGridExtension(o.output)) throw InputError(o.output, "unknown grid format for the output");
+  if (!o.posedCage.empty() && !hasSurfaceExtension(o.posedCage))
+    throw InputError(o.posedCage, "unknown surface format for --posed-cage (use .obj, .off or .ply)");
+  if (!o.posedMesh.empty() && !hasTetMeshExtension(o.posedMesh))
+    throw InputError(o.posedMesh, "unknown tet mesh format for --posed-mesh (use .mesh, .meshb, .vtu or .msh)");
   // Everything the command can reject cheaply is checked before the work.
   const Pose pose = readPose(o.pose);
   PipelineOptions options;
@@ -196,6 +201,16 @@ void deform(const DeformOptions& o) {
   }
   report.refinement = pipeline->refine({.maxIterations = o.refineIterations, .maxTets = o.maxTets}, interpolate);
   describePipeline(report, *pipeline);
+  if (!o.posedCage.empty()) {
+    TriMesh posed = pipeline->cage();
+    posed.positions = pipeline->deformedCage();
+    writeSurface(o.posedCage, posed);
+  }
+  if (!o.posedMesh.empty()) {
+    TetMesh posed = pipeline->transferMesh();
+    posed.positions = pipeline->deformedTransferMesh();
+    writeTetMesh(o.posedMesh, posed);
+  }
   for (const StageTime& t : pipeline->stats().stages) report.stages.push_back(t);
 
   // The pipeline's grids and coordinates go before the rasterization buffers.
@@ -258,6 +273,8 @@ void addDeformCommand(CLI::App& app) {
                   "Out of core under this budget (MB): the pipeline runs on a downsampled grid, G' is rasterized from "
                   "streamed source slices and written slab by slab")
       ->check(CLI::Range(std::int64_t(256), std::int64_t(1) << 30));
+  cmd->add_option("--posed-cage", o->posedCage, "Also write the posed cage (.obj .off .ply), to check a pose's handles");
+  cmd->add_option("--posed-mesh", o->posedMesh, "Also write the posed transfer mesh (.mesh .vtu .msh)");
   cmd->add_flag("--cpu", o->cpu, "Rasterize and interpolate fields with the CPU reference instead of the GPU");
   cmd->add_option("--max-tets", o->maxTets, "Tet budget of the refined transfer mesh (default 250000)")
       ->check(CLI::Range(std::int64_t(1000), std::int64_t(1) << 30));

@@ -23,12 +23,13 @@ EdgeDistortion summarize(std::vector<double>& values) {
   for (const double v : values) sum += v;
   d.mean = sum / double(values.size());
   std::sort(values.begin(), values.end());
+  d.median = values[values.size() / 2];
   d.p95 = values[std::min(values.size() - 1, std::size_t(0.95 * double(values.size())))];
   d.max = values.back();
   return d;
 }
 
-json toJson(const EdgeDistortion& d) { return {{"edges", d.edges}, {"mean", d.mean}, {"p95", d.p95}, {"max", d.max}}; }
+json toJson(const EdgeDistortion& d) { return {{"edges", d.edges}, {"mean", d.mean}, {"median", d.median}, {"p95", d.p95}, {"max", d.max}}; }
 
 json toJson(const DistortionHistogram& h) {
   return {{"lo", h.lo},     {"hi", h.hi},   {"bins", h.fractions}, {"below", h.below},
@@ -124,6 +125,9 @@ OutlierDistortion outlierEdgeDistortion(const TetMesh& rest, std::span<const Eig
 void describePipeline(DeformationReport& report, const DeformationPipeline& pipeline) {
   const PipelineStats& s = pipeline.stats();
   report.automaticCage = s.automaticCage;
+  report.selections.clear();
+  for (const PoseSelection& sel : pipeline.pose().selections) report.selections.emplace_back(sel.name, 0);
+  for (const std::int32_t k : pipeline.handles().selection) ++report.selections[std::size_t(k)].second;
   report.cageVertices = pipeline.cage().vertexCount();
   report.cageFaces = pipeline.cage().faceCount();
   report.cage = s.cage;
@@ -175,10 +179,13 @@ std::string deformationReportJson(const DeformationReport& r) {
                   {"genus", r.cage.check.genus},
                   {"self_intersections", r.cage.check.selfIntersections},
                   {"volume_mm3", r.cage.check.volume}};
+  json selections = json::array();
+  for (const auto& [name, vertices] : r.selections) selections.push_back({{"name", name}, {"cage_vertices", vertices}});
+  root["selections"] = selections;
   root["envelope"] = {{"vertices", r.envelopeVertices}, {"faces", r.envelopeFaces}, {"vertices_outside_cage", r.envelopeOutside}};
   json cuts = json::array();
   for (const CutReport& c : r.cuts)
-    cuts.push_back({{"cut_faces", c.cutFaces}, {"duplicated_vertices", c.duplicatedVertices}, {"opened_rim_faces", c.openedRimFaces}});
+    cuts.push_back({{"cut_faces", c.cutFaces}, {"duplicated_vertices", c.duplicatedVertices}, {"opened_rim_faces", c.openedRimFaces}, {"contact_vertices", c.contactVertices}});
   root["transfer_mesh"] = {{"vertices", r.tmVertices},
                            {"tets", r.tmTets},
                            {"vertices_inside_cage", r.tmInside},
@@ -259,6 +266,8 @@ std::string deformationSummary(const DeformationReport& r) {
   s << "  cage " << r.cageVertices << " vertices (" << (r.automaticCage ? "automatic" : "from file") << "), envelope "
     << r.envelopeVertices << " vertices, transfer mesh " << r.tmVertices << " vertices / " << r.tmTets << " tets";
   if (r.workingFactor > 1) s << " (working grid downsampled by " << r.workingFactor << ")";
+  s << "\n  handles:";
+  for (const auto& [name, vertices] : r.selections) s << " " << name << " " << vertices << ";";
   s << "\n";
   s << "  outliers: " << r.tmOutside << " TM vertices and " << r.foregroundOutsideCage << " foreground voxels outside the cage\n";
   if (!r.refinement.steps.empty()) {

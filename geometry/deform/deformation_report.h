@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace vox {
@@ -52,7 +53,7 @@ WholeBodyChange wholeBodyChange(std::span<const LabelChange> labels);
 // vertex, so that rigidly carried parts far away do not dilute it.
 struct EdgeDistortion {
   std::size_t edges = 0;
-  double mean = 0, p95 = 0, max = 0;
+  double mean = 0, median = 0, p95 = 0, max = 0;
 };
 struct OutlierDistortion {
   EdgeDistortion outside;       // edges with an end outside the cage
@@ -71,6 +72,8 @@ struct DeformationReport {
   int samples = 1;
   std::vector<StageTime> stages;
 
+  // Handles per pose selection (name, cage vertices it holds).
+  std::vector<std::pair<std::string, std::size_t>> selections;
   bool automaticCage = true;
   std::size_t cageVertices = 0, cageFaces = 0;
   CageReport cage;

@@ -1,10 +1,13 @@
 #include "geometry/deform/label_groups.h"
 
 #include "geometry/error.h"
+#include "geometry/parallel.h"
 
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <cmath>
+#include <limits>
 #include <vector>
 
 namespace vox {
@@ -165,6 +168,49 @@ LabelGrid binaryGroupGrid(const LabelGrid& grid) {
   LabelGrid b(grid.geometry(), 0);
   std::transform(grid.labels().begin(), grid.labels().end(), b.labels().begin(), [](Label l) { return Label(l != 0); });
   return b;
+}
+
+std::vector<Label> nearestGroups(std::span<const Eigen::Vector3d> points, const LabelGrid& groups) {
+  // A point in a foreground voxel's cell takes its value. Otherwise the
+  // nearest foreground voxel has a background (or off-grid) 6-neighbour: a
+  // step towards the point along an axis where it lies more than half a
+  // voxel away would be nearer. So only those boundary voxels are searched.
+  const GridGeometry& g = groups.geometry();
+  std::vector<std::int64_t> boundary;
+  for (std::int64_t k = 0; k < g.dims[2]; ++k)
+    for (std::int64_t j = 0; j < g.dims[1]; ++j)
+      for (std::int64_t i = 0; i < g.dims[0]; ++i) {
+        if (groups.at(i, j, k) == 0) continue;
+        const std::int64_t n[6][3] = {{i - 1, j, k}, {i + 1, j, k}, {i, j - 1, k}, {i, j + 1, k}, {i, j, k - 1}, {i, j, k + 1}};
+        bool edge = false;
+        for (const auto& q : n) edge = edge || groups.atOr(q[0], q[1], q[2]) == 0;
+        if (edge) boundary.push_back(g.index(i, j, k));
+      }
+  std::vector<Label> out(points.size(), 0);
+  if (boundary.empty()) return out;
+  std::vector<Eigen::Vector3d> centres(boundary.size());
+  for (std::size_t b = 0; b < boundary.size(); ++b) {
+    const Index3 v = g.ijk(boundary[b]);
+    centres[b] = g.voxelCenter(v[0], v[1], v[2]);
+  }
+  parallelFor(std::int64_t(points.size()), 0, [&](std::int64_t p) {
+    const Eigen::Vector3d& x = points[std::size_t(p)];
+    const Eigen::Vector3d c = g.continuousIndex(x);
+    const std::int64_t i = std::lround(c.x()), j = std::lround(c.y()), k = std::lround(c.z());
+    if (const Label inside = groups.atOr(i, j, k); inside != 0) {
+      out[std::size_t(p)] = inside;
+      return;
+    }
+    double best = std::numeric_limits<double>::infinity();
+    std::size_t nearest = 0;
+    for (std::size_t b = 0; b < centres.size(); ++b)
+      if (const double d = (centres[b] - x).squaredNorm(); d < best) {
+        best = d;
+        nearest = b;
+      }
+    out[std::size_t(p)] = groups.labels()[std::size_t(boundary[nearest])];
+  });
+  return out;
 }
 
 }  // namespace vox

@@ -11,7 +11,10 @@
 #include "geometry/label_grid.h"
 #include "geometry/organ_table.h"
 
+#include <Eigen/Core>
+#include <span>
 #include <string>
+#include <vector>
 
 namespace vox {
 
@@ -67,5 +70,11 @@ LabelGrid labelGroupGrid(const LabelGrid& grid, const OrganTable& organs, const 
 
 // S without limb separation: the binary grid B, 1 on the foreground.
 LabelGrid binaryGroupGrid(const LabelGrid& grid);
+
+// Per point (grid frame, mm): the value of the nearest non-zero voxel of
+// `groups` (voxel centres, Euclidean distance in mm; ties to the lowest voxel
+// index), 0 when `groups` has no foreground. Pose selections by label group
+// use it to tell the cage vertices of a limb from those of the trunk beside it.
+std::vector<Label> nearestGroups(std::span<const Eigen::Vector3d> points, const LabelGrid& groups);
 
 }  // namespace vox

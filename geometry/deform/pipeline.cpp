@@ -62,10 +62,15 @@ std::vector<std::uint64_t> writePosedGrid(SlabRasterizer& engine, const std::str
 
 DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOptions& options) : options_(options) {
   const std::vector<LimbSeparation>& separations = options_.cage.separations;
+  const bool groupSelections = options_.pose && usesLabelGroups(*options_.pose);
+  LabelGrid bodyParts;  // S, for selections by label group
   {
     StageTimer timer("label groups");
+    if (groupSelections && !options_.organs)
+      throw InputError(options_.poseSource, "a selection by label group needs the grid's organ table (--organs)");
     if (separations.empty()) {
       groups_ = binaryGroupGrid(grid);
+      if (options_.organs) bodyParts = labelGroupGrid(grid, *options_.organs);
     } else {
       if (!options_.organs)
         throw InputError("separation", "limb separation needs the grid's organ table (--organs) to find the label groups");
@@ -106,7 +111,10 @@ DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOp
     stats_.stages.push_back(timer.stop());
   }
   cage_ = builtCage_;
-  if (options_.pose) selectHandles(*options_.pose, builtCage_, options_.poseSource);
+  // With an organ table every cage vertex knows its nearest label group, so
+  // any later pose may select by group.
+  if (options_.organs) cageGroups_ = nearestGroups(builtCage_.positions, separations.empty() ? bodyParts : groups_);
+  if (options_.pose) selectHandles(*options_.pose, builtCage_, options_.poseSource, cageGroups_);
   if (options_.envelope) {
     StageTimer timer("envelope");
     envelope_ = extractEnvelope(groups_, options_.envelopeOptions);
@@ -147,7 +155,9 @@ void DeformationPipeline::precomputeFrame(bool withEnvelope) {
 
 void DeformationPipeline::setPose(const Pose& pose, const std::string& source) {
   StageTimer timer("embedding");
-  PoseHandles handles = selectHandles(pose, builtCage_, source);
+  if (usesLabelGroups(pose) && !options_.organs)
+    throw InputError(source, "a selection by label group needs the grid's organ table (--organs)");
+  PoseHandles handles = selectHandles(pose, builtCage_, source, cageGroups_);
   // Only the parts of the cage that hold a handle take part.
   const std::vector<std::int32_t> parts = cageParts(builtCage_);
   std::vector<std::uint8_t> held(builtCage_.vertexCount(), 0);

@@ -5,6 +5,7 @@
 #include "geometry/io/atomic_file.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -91,7 +92,7 @@ private:
     PoseSelection s;
     s.name = j.contains("name") ? text(j["name"], fallback + " 'name'") : fallback;
     const std::string what = "selection '" + s.name + "'";
-    allowKeys(j, what, {"name", "box", "sphere", "part", "fixed", "transform"});
+    allowKeys(j, what, {"name", "box", "sphere", "part", "group", "fixed", "transform"});
     if (j.contains("box") == j.contains("sphere")) fail(what + " needs exactly one of 'box' and 'sphere'");
     if (j.contains("box")) {
       const json& box = j["box"];
@@ -111,6 +112,7 @@ private:
       if (!(s.radius > 0)) fail(what + " has a sphere radius <= 0");
     }
     if (j.contains("part")) s.part = vector3(j["part"], what + " 'part'");
+    if (j.contains("group")) s.group = Label(bodyPartFromName(text(j["group"], what + " 'group'"), source_));
     const bool fixedKey = j.contains("fixed");
     if (fixedKey == j.contains("transform")) fail(what + " needs exactly one of 'fixed' and 'transform'");
     if (fixedKey) {
@@ -213,6 +215,7 @@ std::string poseToJson(const Pose& pose) {
                         {"translation", toJson(s.transform.translation)}};
     }
     if (s.part) j["part"] = toJson(*s.part);
+    if (s.group) j["group"] = bodyPartName(BodyPart(*s.group));
     selections.push_back(std::move(j));
   }
   root["selections"] = std::move(selections);
@@ -245,7 +248,11 @@ std::vector<std::int32_t> cageParts(const TriMesh& cage) {
   return part;
 }
 
-PoseHandles selectHandles(const Pose& pose, const TriMesh& cage, const std::string& source) {
+bool usesLabelGroups(const Pose& pose) {
+  return std::any_of(pose.selections.begin(), pose.selections.end(), [](const PoseSelection& s) { return s.group.has_value(); });
+}
+
+PoseHandles selectHandles(const Pose& pose, const TriMesh& cage, const std::string& source, std::span<const Label> vertexGroups) {
   std::vector<std::int32_t> owner(cage.vertexCount(), -1);
   const std::vector<std::int32_t> parts = cageParts(cage);
   for (std::size_t k = 0; k < pose.selections.size(); ++k) {
@@ -259,9 +266,11 @@ PoseHandles selectHandles(const Pose& pose, const TriMesh& cage, const std::stri
           part = parts[v];
         }
     }
+    if (s.group && vertexGroups.size() != cage.vertexCount())
+      throw InputError(source, "selection '" + s.name + "' selects by label group, which needs the grid's organ table (--organs)");
     bool any = false;
     for (std::size_t v = 0; v < cage.vertexCount(); ++v)
-      if (s.contains(cage.positions[v]) && (part < 0 || parts[v] == part)) {
+      if (s.contains(cage.positions[v]) && (part < 0 || parts[v] == part) && (!s.group || vertexGroups[v] == *s.group)) {
         owner[v] = std::int32_t(k);
         any = true;
       }

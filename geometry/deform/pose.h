@@ -12,6 +12,7 @@
 //       { "name": "right arm",
 //         "sphere": {"center": [x, y, z], "radius": r},
 //         "part": [x, y, z],                               optional: only the cage part nearest this point
+//         "group": "right_arm",                            optional: only cage vertices nearest that label group
 //         "transform": {
 //           "rotation": {"axis": [x, y, z], "angle_deg": a, "center": [x, y, z]},   optional
 //           "translation": [x, y, z] } }                                              optional
@@ -46,6 +47,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -77,6 +79,11 @@ struct PoseSelection {
   // the cage vertex nearest this point (inset cages split limbs off into
   // parts whose boxes overlap other parts).
   std::optional<Eigen::Vector3d> part;
+  // Restricts the selection to the cage vertices whose nearest foreground
+  // voxel belongs to this label group (a BodyPart value, label_groups.h):
+  // a box around a hanging arm also holds cage vertices of the hip beside
+  // it. Needs the organ table that defines the groups.
+  std::optional<Label> group;
 
   bool contains(const Eigen::Vector3d& p) const;
 };
@@ -119,8 +126,13 @@ std::vector<std::int32_t> cageParts(const TriMesh& cage);
 
 // Throws InputError(source, "selection '<name>' selects no cage vertex") for
 // a selection whose box or sphere holds no cage vertex (before later
-// selections take any of them over).
-PoseHandles selectHandles(const Pose& pose, const TriMesh& cage, const std::string& source);
+// selections take any of them over). vertexGroups: per cage vertex, the
+// label group nearest it (nearestGroups), needed by selections with a
+// "group" (InputError(source, ...) without it).
+PoseHandles selectHandles(const Pose& pose, const TriMesh& cage, const std::string& source,
+                          std::span<const Label> vertexGroups = {});
+// True when a selection restricts itself to a label group.
+bool usesLabelGroups(const Pose& pose);
 
 // Targets of the handles (#handles by 3, rows in handles.vertices order) for
 // the pose applied by `fraction` in [0, 1]: fixed handles stay at their rest

@@ -198,7 +198,6 @@ CutReport cutTransferMesh(TetMesh& mesh, std::int32_t groupA, std::int32_t group
       for (const std::int32_t v : f) vertexOnCut[v] = 1;
     }
   }
-  if (report.cutFaces == 0) return report;
 
   // Tets around each vertex (CSR).
   std::vector<std::int32_t> start(mesh.vertexCount() + 1, 0), around;
@@ -211,6 +210,26 @@ CutReport cutTransferMesh(TetMesh& mesh, std::int32_t groupA, std::int32_t group
     for (std::size_t t = 0; t < nt; ++t)
       for (const std::int32_t v : mesh.tets[t]) around[std::size_t(fill[v]++)] = std::int32_t(t);
   }
+
+  // Contacts: vertices in the region where groupA and groupB tets meet
+  // without a cut face (through an edge or the vertex alone). Left shared,
+  // such a vertex ties the two groups together: moving one pulls a sliver
+  // of tets across the gap. Every groupB fan there gets its own copy.
+  std::vector<std::uint8_t> contact(mesh.vertexCount(), 0);
+  for (std::int32_t v = 0; v < std::int32_t(mesh.vertexCount()); ++v) {
+    if (vertexOnCut[v] || (region && !region->contains(mesh.positions[v]))) continue;
+    bool a = false, b = false;
+    for (std::int32_t s = start[v]; s < start[v + 1]; ++s) {
+      a = a || mesh.labels[around[s]] == groupA;
+      b = b || mesh.labels[around[s]] == groupB;
+    }
+    if (a && b) {
+      contact[v] = 1;
+      vertexOnCut[v] = 1;
+      ++report.contactVertices;
+    }
+  }
+  if (report.cutFaces == 0 && report.contactVertices == 0) return report;
 
   const std::vector<Tet> original = mesh.tets;
   std::vector<std::int32_t> fanOf;
@@ -233,7 +252,7 @@ CutReport cutTransferMesh(TetMesh& mesh, std::int32_t groupA, std::int32_t group
       if (fanOf[seed] >= 0) continue;
       fanOf[seed] = std::int32_t(seed);
       stack.assign(1, std::int32_t(seed));
-      bool touchesCut = false;
+      bool touchesCut = contact[v] != 0;
       std::vector<std::int32_t> members;
       while (!stack.empty()) {
         const std::int32_t b = stack.back();

@@ -49,6 +49,7 @@ struct CutReport {
   std::size_t cutFaces = 0;            // faces between a groupA and a groupB tet inside the region
   std::size_t duplicatedVertices = 0;  // vertices added
   std::size_t openedRimFaces = 0;      // other faces opened where the cut meets the region's rim
+  std::size_t contactVertices = 0;     // vertices where the groups meet without a shared face, split too
 };
 
 // Cuts `mesh` between tets of groupA and groupB (thesis 4.2.2): every face
@@ -60,6 +61,9 @@ struct CutReport {
 // volumes and orientations are unchanged. Where the cut meets the region's
 // rim, faces between the re-indexed groupB tets and other tets at those
 // vertices open too (reported): no tet stays face-connected across the cut.
+// Vertices in the region where groupA and groupB tets meet through an edge
+// or the vertex alone are split the same way (every groupB fan gets a copy),
+// so no tet stays vertex-connected across the cut either.
 CutReport cutTransferMesh(TetMesh& mesh, std::int32_t groupA, std::int32_t groupB,
                           const std::optional<Eigen::AlignedBox3d>& region = std::nullopt);
 
