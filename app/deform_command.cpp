@@ -141,24 +141,19 @@ void deform(const DeformOptions& o) {
     throw InputError(o.posedMesh, "unknown tet mesh format for --posed-mesh (use .mesh, .meshb, .vtu or .msh)");
   // Everything the command can reject cheaply is checked before the work.
   const Pose pose = readPose(o.pose);
-  PipelineOptions options;
+  std::optional<OrganTable> organTable;
+  if (!o.organs.empty()) organTable = OrganTable::read(o.organs);
+  PipelineOptions options = poseOptions(pose, o.pose, organTable);
   options.cage.dilationMm = o.dilationMm;
   options.cage.targetVertices = o.vertices;
-  std::vector<LimbSeparation> cuts;
-  for (const PoseSeparation& s : pose.separations) {
-    options.cage.separations.push_back(s.cage);
-    cuts.push_back(s.cut());
-  }
   for (const std::string& text : o.separations) {
     options.cage.separations.push_back(parseSeparation(text));
-    cuts.push_back(options.cage.separations.back());
+    options.cuts->push_back(options.cage.separations.back());
   }
-  options.cuts = cuts;
-  options.pose = pose;
-  options.poseSource = o.pose;
-  if (!o.organs.empty()) options.organs = OrganTable::read(o.organs);
   if (!options.cage.separations.empty() && !options.organs)
     throw InputError(o.pose, "limb separation needs the grid's organ table (--organs) to find the label groups");
+  if (usesLabelGroups(pose) && !options.organs)
+    throw InputError(o.pose, "a selection by label group needs the grid's organ table (--organs)");
   if (!o.cage.empty()) options.userCage = readCage(o.cage);
   const bool separated = !options.cage.separations.empty();
 

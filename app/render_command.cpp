@@ -1,10 +1,15 @@
 // voxmorph render: transfer-mesh-guided ray casting of a label grid to a PNG
-// (thesis chapter 5). Without a pose the grid is shown at rest through an
-// identity transfer mesh (six tets over the foreground's box). The GPU kernel
+// (thesis chapter 5). With --pose the deformation pipeline (voxmorph deform's
+// pre-processing and one frame, without refinement) gives the transfer mesh
+// and its posed positions, and the source grid is rendered through them
+// without rasterizing the posed grid. Without a pose the grid is shown at
+// rest through an identity transfer mesh (six tets over the foreground's box). The GPU kernel
 // renders by default; --cpu uses the CPU reference and --verify runs both and
 // fails when they disagree beyond the stated tolerance.
 
 #include "app/command_line.h"
+#include "geometry/deform/pipeline.h"
+#include "geometry/deform/pose.h"
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/io/png_io.h"
@@ -40,6 +45,7 @@ struct RenderOptions {
   std::vector<std::string> cuts;
   std::string hide;
   std::string organs;
+  std::string pose;
   bool cpu = false;
   bool verify = false;
   bool quiet = false;
@@ -62,9 +68,23 @@ void render(const RenderOptions& o) {
   Palette palette = organs ? Palette::fromOrgans(*organs, grid.maxLabel()) : Palette(grid.maxLabel());
   if (!o.hide.empty()) palette.hide(o.hide, organs ? &*organs : nullptr);
 
-  const TetMesh restMesh = boxTransferMesh(grid, o.input);
+  TetMesh restMesh;
+  std::vector<Eigen::Vector3d> posed;
+  if (o.pose.empty()) {
+    restMesh = boxTransferMesh(grid, o.input);
+    posed = restMesh.positions;
+  } else {
+    const Pose pose = readPose(o.pose);
+    PipelineOptions options = poseOptions(pose, o.pose, organs);
+    options.envelope = false;
+    DeformationPipeline pipeline(grid, options);
+    warnForegroundOutside(pipeline.stats().foregroundOutsideCage, !options.cage.separations.empty());
+    pipeline.deform();
+    restMesh = pipeline.transferMesh();
+    posed = pipeline.deformedTransferMesh();
+  }
   const RaycastMesh mesh = buildRaycastMesh(restMesh, grid.geometry(), o.input);
-  const RaycastFrame frame = prepareRaycastFrame(mesh, restMesh.positions);
+  const RaycastFrame frame = prepareRaycastFrame(mesh, posed);
   const Camera camera = parseCamera(o.camera, frame.toGrid(frame.cellsLo), frame.toGrid(frame.cellsHi), width, height);
   const RaycastView view = makeRaycastView(frame, camera, cuts);
 
@@ -123,6 +143,7 @@ void addRenderCommand(CLI::App& app) {
       ->allow_extra_args(false);
   cmd->add_option("--hide", o->hide, "Labels to hide: \"5,7,10-20\", or organ-name substrings with --organs (\"skin,adipose\")");
   cmd->add_option("--organs", o->organs, "Organ table (ID name tissue density): colours by organ name");
+  cmd->add_option("--pose", o->pose, "Pose file (JSON, docs/POSES.md): render the grid posed through its transfer mesh");
   cmd->add_flag("--cpu", o->cpu, "Render with the CPU reference instead of the GPU");
   cmd->add_flag("--verify", o->verify, "Render on both and fail if more than 0.1% of the pixels differ by more than 5/255");
   cmd->add_flag("-q,--quiet", o->quiet, "No progress or summary on stderr");

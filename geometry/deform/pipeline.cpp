@@ -33,6 +33,20 @@ constexpr Label kOtherGroups = Label(kBodyPartCount + 1);
 
 }  // namespace
 
+PipelineOptions poseOptions(const Pose& pose, const std::string& source, std::optional<OrganTable> organs) {
+  PipelineOptions options;
+  options.organs = std::move(organs);
+  std::vector<LimbSeparation> cuts;
+  for (const PoseSeparation& s : pose.separations) {
+    options.cage.separations.push_back(s.cage);
+    cuts.push_back(s.cut());
+  }
+  options.cuts = std::move(cuts);
+  options.pose = pose;
+  options.poseSource = source;
+  return options;
+}
+
 std::string cageFault(const SurfaceCheck& c) {
   if (c.boundaryEdges) return std::to_string(c.boundaryEdges) + " boundary edges";
   if (c.nonManifoldEdges) return std::to_string(c.nonManifoldEdges) + " non-manifold edges";

@@ -97,6 +97,13 @@ struct PipelineOptions {
   std::string poseSource = "pose";
 };
 
+// Options that apply `pose` as `voxmorph deform` does: its separations for
+// the cage and, within their cut regions, for the transfer mesh; its
+// selections set once the cage exists (source names the pose in errors).
+// `organs` names the label groups (required by separations and selections
+// by group).
+PipelineOptions poseOptions(const Pose& pose, const std::string& source, std::optional<OrganTable> organs);
+
 // Sizes and checks of the pre-processing, for reports.
 struct PipelineStats {
   bool automaticCage = true;

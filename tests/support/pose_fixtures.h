@@ -56,17 +56,8 @@ inline const PosedPhantom& posedPhantom(const std::string& pose) {
   p->organs = OrganTable::read(assetPath(p->phantom + "_organs.dat"));
   const std::string path = assetPath("poses/" + pose);
   const Pose parsed = readPose(path);
-  PipelineOptions options;
-  options.organs = p->organs;
+  PipelineOptions options = poseOptions(readPose(path), path, p->organs);
   options.envelope = false;
-  std::vector<LimbSeparation> cuts;
-  for (const PoseSeparation& s : parsed.separations) {
-    options.cage.separations.push_back(s.cage);
-    cuts.push_back(s.cut());
-  }
-  options.cuts = cuts;
-  options.pose = parsed;
-  options.poseSource = path;
   DeformationPipeline pipeline(p->source, options);
   pipeline.deform();
   p->rest = pipeline.transferMesh();

@@ -1,0 +1,164 @@
+// voxmorph deform and voxmorph cage end to end on the synthetic stick figure:
+// an identity pose reproduces the grid, a rotated arm writes a posed grid and
+// a complete report, and bad input (a pose that selects nothing, an open
+// cage, a selection by label group without the organ table, unknown
+// formats) is a one-line error with exit code 1 and no output file; a cage
+// that leaves foreground outside without limb separation is a warning.
+
+#include "geometry/io/grid_io.h"
+#include "tests/support/test_environment.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+
+namespace vox {
+namespace {
+
+std::string voxmorph(const std::string& args) { return test::quote(test::voxmorphBinary()) + " " + args; }
+
+struct Stick {
+  std::string dir, grid, organs;
+};
+
+Stick stick() {
+  Stick s;
+  s.dir = test::tempDir();
+  s.grid = s.dir + "/stick.mha";
+  s.organs = s.dir + "/stick.dat";
+  const auto r = test::runCommand(voxmorph("synth stick --size 48 -o " + test::quote(s.grid) + " --organs " + test::quote(s.organs)));
+  EXPECT_EQ(r.exitCode, 0) << r.err;
+  return s;
+}
+
+std::string writeFile(const std::string& path, const std::string& text) {
+  std::ofstream(path) << text;
+  return path;
+}
+
+const char* kIdentityPose = R"({"selections": [{"box": {"min": [-1000, -1000, -1000], "max": [1000, 1000, 1000]}, "fixed": true}]})";
+
+// The stick figure (28 x 14 x 48 voxels of 2 mm): its right arm (low x)
+// swung 30 degrees about the y axis at the shoulder, the rest fixed.
+const char* kArmPose = R"({
+  "name": "right arm out",
+  "selections": [
+    {"name": "body", "box": {"min": [-1000, -1000, -1000], "max": [1000, 1000, 1000]}, "fixed": true},
+    {"name": "right arm", "box": {"min": [-1000, -1000, 40], "max": [10, 1000, 80]}, "group": "right_arm",
+     "transform": {"rotation": {"axis": [0, 1, 0], "angle_deg": 30, "center": [12, 14, 80]}}}
+  ],
+  "separations": [{"groups": ["right_arm", "trunk"]}]
+})";
+
+void expectOneLineError(const test::CommandResult& r, const std::string& fault) {
+  EXPECT_EQ(r.exitCode, 1) << r.err;
+  EXPECT_NE(r.err.find(fault), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << r.err;
+}
+
+TEST(DeformCommand, IdentityPoseReproducesTheGrid) {
+  VOX_REQUIRE_VOXMORPH();
+  const Stick s = stick();
+  const std::string pose = writeFile(s.dir + "/identity.json", kIdentityPose);
+  const std::string out = s.dir + "/posed.nii.gz";
+  const auto r = test::runCommand(voxmorph("deform " + test::quote(s.grid) + " --pose " + test::quote(pose) + " -o " + test::quote(out) + " -q"));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const LabelGrid in = readGrid(s.grid), posed = readGrid(out);
+  const Eigen::Vector3d offset = in.geometry().continuousIndex(posed.geometry().origin);
+  std::int64_t differing = 0;
+  for (std::int64_t k = 0; k < posed.dims()[2]; ++k)
+    for (std::int64_t j = 0; j < posed.dims()[1]; ++j)
+      for (std::int64_t i = 0; i < posed.dims()[0]; ++i)
+        differing += posed.at(i, j, k) != in.atOr(i + std::lround(offset.x()), j + std::lround(offset.y()), k + std::lround(offset.z()));
+  EXPECT_EQ(differing, 0);
+}
+
+TEST(DeformCommand, PosesTheArmAndWritesTheReport) {
+  VOX_REQUIRE_VOXMORPH();
+  const Stick s = stick();
+  const std::string pose = writeFile(s.dir + "/arm.json", kArmPose);
+  const std::string out = s.dir + "/posed.mha", report = s.dir + "/report.json", cage = s.dir + "/cage.obj";
+  const auto r = test::runCommand(voxmorph("deform " + test::quote(s.grid) + " --pose " + test::quote(pose) + " --organs " +
+                                           test::quote(s.organs) + " -o " + test::quote(out) + " --report " + test::quote(report) +
+                                           " --samples 3 --posed-cage " + test::quote(cage)));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NE(r.out.find("whole body"), std::string::npos) << r.out;
+  EXPECT_TRUE(std::filesystem::exists(cage));
+  const LabelGrid in = readGrid(s.grid), posed = readGrid(out);
+  // The arm reaches out beyond the foreground's x extent at rest.
+  std::int64_t xmin = in.dims()[0], xmax = -1;
+  for (std::int64_t v = 0; v < in.voxelCount(); ++v)
+    if (in.labels()[std::size_t(v)] != 0) {
+      xmin = std::min(xmin, in.geometry().ijk(v)[0]);
+      xmax = std::max(xmax, in.geometry().ijk(v)[0]);
+    }
+  EXPECT_GT(posed.dims()[0], xmax - xmin + 1);
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(report));
+  for (const char* key : {"stages", "cage", "envelope", "transfer_mesh", "outliers", "labels", "whole_body", "distortion", "refinement",
+                          "selections", "small_labels"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["samples"], 3);
+  EXPECT_EQ(j["cage"]["valid"], true);
+  EXPECT_GT(j["selections"][1]["cage_vertices"].get<int>(), 0);
+  EXPECT_EQ(j["transfer_mesh"]["cuts"].size(), 1u);
+  EXPECT_LT(std::abs(j["whole_body"]["volume_change_pct"].get<double>()), 10.0);
+}
+
+TEST(DeformCommand, BadInputIsAOneLineErrorWithoutOutput) {
+  VOX_REQUIRE_VOXMORPH();
+  const Stick s = stick();
+  const std::string out = s.dir + "/posed.nii.gz";
+  const std::string base = "deform " + test::quote(s.grid) + " -o " + test::quote(out) + " --pose ";
+  const std::string nothing = writeFile(
+      s.dir + "/nothing.json", R"({"selections": [{"name": "far away", "box": {"min": [5000, 5000, 5000], "max": [6000, 6000, 6000]}, "fixed": true}]})");
+  expectOneLineError(test::runCommand(voxmorph(base + test::quote(nothing))), "selection 'far away' selects no cage vertex");
+  const std::string identity = writeFile(s.dir + "/identity.json", kIdentityPose);
+  const std::string open = writeFile(s.dir + "/open.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 1 1 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 5\n");
+  expectOneLineError(test::runCommand(voxmorph(base + test::quote(identity) + " --cage " + test::quote(open))), "not closed");
+  const std::string arm = writeFile(s.dir + "/arm.json", kArmPose);
+  expectOneLineError(test::runCommand(voxmorph(base + test::quote(arm))), "organ table");
+  expectOneLineError(test::runCommand(voxmorph(base + test::quote(s.dir + "/missing.json"))), "missing.json");
+  expectOneLineError(test::runCommand(voxmorph("deform " + test::quote(s.grid) + " -o " + test::quote(s.dir + "/posed.xyz") +
+                                               " --pose " + test::quote(identity))),
+                     "posed.xyz");
+  EXPECT_FALSE(std::filesystem::exists(out));
+  EXPECT_EQ(test::listFiles(s.dir).find("posed"), std::string::npos) << test::listFiles(s.dir);
+}
+
+TEST(DeformCommand, WarnsWhenTheCageLeavesForegroundOutside) {
+  VOX_REQUIRE_VOXMORPH();
+  const Stick s = stick();
+  const std::string identity = writeFile(s.dir + "/identity.json", kIdentityPose);
+  const auto r = test::runCommand(voxmorph("deform " + test::quote(s.grid) + " --pose " + test::quote(identity) + " -o " +
+                                           test::quote(s.dir + "/posed.nii.gz") + " --vertices 12 --dilation 1 -q"));
+  EXPECT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("foreground voxels lie outside the cage"), std::string::npos) << r.err;
+}
+
+TEST(CageCommand, WritesAValidCageAndItsReport) {
+  VOX_REQUIRE_VOXMORPH();
+  const Stick s = stick();
+  const std::string cage = s.dir + "/cage.obj", report = s.dir + "/cage.json";
+  auto r = test::runCommand(voxmorph("cage " + test::quote(s.grid) + " -o " + test::quote(cage) + " --vertices 60 --report " + test::quote(report)));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(report));
+  EXPECT_EQ(j["valid"], true);
+  EXPECT_EQ(j["vertices"], 60);
+  EXPECT_EQ(j["foreground_voxels_outside"], 0);
+  // An inset cage between the arms and the trunk.
+  r = test::runCommand(voxmorph("cage " + test::quote(s.grid) + " -o " + test::quote(s.dir + "/inset.obj") + " --organs " +
+                                test::quote(s.organs) + " --separate right_arm:trunk --separate left_arm:trunk -q --report -"));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_GT(nlohmann::json::parse(r.out)["eroded_voxels"].get<int>(), 0);
+  expectOneLineError(test::runCommand(voxmorph("cage " + test::quote(s.grid) + " -o " + test::quote(s.dir + "/x.obj") + " --separate right_arm:trunk")),
+                     "organ table");
+  expectOneLineError(test::runCommand(voxmorph("cage " + test::quote(s.grid) + " -o " + test::quote(s.dir + "/x.stl"))), "x.stl");
+  EXPECT_FALSE(std::filesystem::exists(s.dir + "/x.obj"));
+}
+
+}  // namespace
+}  // namespace vox
