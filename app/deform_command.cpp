@@ -274,7 +274,7 @@ void addDeformCommand(CLI::App& app) {
   cmd->add_option("--max-tets", o->maxTets, "Tet budget of the refined transfer mesh (default 250000)")
       ->check(CLI::Range(std::int64_t(1000), std::int64_t(1) << 30));
   cmd->add_option("--refine-iterations", o->refineIterations,
-                  "Transfer-mesh regenerations of the deformation-adaptive refinement at most (default 2; 0: none)")
+                  "Transfer-mesh regenerations of the deformation-adaptive refinement at most (default 1; 0: none)")
       ->check(CLI::Range(0, 100));
   cmd->add_flag("-q,--quiet", o->quiet, "No progress or summary (warnings still go to stderr)");
   cmd->callback([o] { deform(*o); });
