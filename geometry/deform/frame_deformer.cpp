@@ -78,6 +78,8 @@ void FrameDeformer::precompute(const TriMesh& cage, std::span<const Eigen::Vecto
   auto start = Clock::now();
   envelopeInside_ = insideCage(cage, envelope);
   tmInside_ = insideCage(cage, transferMesh.positions);
+  if (options.propagateAnyway.size() == tmInside_.size())
+    for (std::size_t v = 0; v < tmInside_.size(); ++v) tmInside_[v] = tmInside_[v] && !options.propagateAnyway[v];
   stats_.classifyMs = millisecondsSince(start);
 
   envelopeInsideIds_.clear();

@@ -36,6 +36,10 @@ struct FrameDeformerOptions {
   // rest pose is reproduced exactly in every precision. Half is meant for
   // the interactive viewer, Float or Double for results that are written out.
   GreenPrecision precision = GreenPrecision::Float;
+  // Per TM vertex (empty: none): 1 to place the vertex by the propagation
+  // even when it lies inside the cage (a limb's vertex in the part of an
+  // inset cage that belongs to the body beside it).
+  std::vector<std::uint8_t> propagateAnyway;
 };
 
 // Milliseconds spent in each stage of the last update().

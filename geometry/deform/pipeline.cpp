@@ -5,8 +5,10 @@
 #include "geometry/deform/surface_checks.h"
 #include "geometry/error.h"
 #include "geometry/label_stats.h"
+#include "geometry/parallel.h"
 
 #include <algorithm>
+#include <limits>
 #include <set>
 #include <sys/resource.h>
 
@@ -164,7 +166,61 @@ void DeformationPipeline::recordStage(StageTime time) {
 void DeformationPipeline::precomputeFrame(bool withEnvelope) {
   const std::span<const Eigen::Vector3d> envelope =
       withEnvelope ? std::span<const Eigen::Vector3d>(envelope_.positions) : std::span<const Eigen::Vector3d>();
-  deformer_.precompute(cage_, envelope, transferMesh_, handles_.vertices, options_.frame);
+  FrameDeformerOptions frame = options_.frame;
+  frame.propagateAnyway = acrossSeparation();
+  deformer_.precompute(cage_, envelope, transferMesh_, handles_.vertices, frame);
+}
+
+std::vector<std::uint8_t> DeformationPipeline::acrossSeparation() const {
+  // With separations the inset cage follows the groups' interface only as
+  // closely as its few hundred vertices allow: a hand vertex may lie in the
+  // part of the cage around the thigh it touches, and Green coordinates
+  // would move it with the thigh while its tets move with the hand. A TM
+  // vertex whose tets all belong to one separated group, and whose nearest
+  // cage vertex lies nearest the group it is separated from, is placed by
+  // the propagation instead, from its own group's tets.
+  const std::vector<LimbSeparation>& cuts = options_.cuts ? *options_.cuts : options_.cage.separations;
+  std::vector<std::uint8_t> out;
+  if (cuts.empty() || cageGroups_.size() != builtCage_.vertexCount() || cage_.vertexCount() == 0) return out;
+  // Groups of the cage the deformation uses (setPose keeps the parts with handles, in order).
+  std::vector<Label> groups;
+  {
+    std::size_t k = 0;
+    for (std::size_t v = 0; v < builtCage_.vertexCount() && groups.size() < cage_.vertexCount(); ++v)
+      if (builtCage_.positions[v] == cage_.positions[k]) {
+        groups.push_back(cageGroups_[v]);
+        ++k;
+      }
+    if (groups.size() != cage_.vertexCount()) return out;
+  }
+  const std::size_t nv = transferMesh_.vertexCount();
+  constexpr Label kMixed = Label(0xffff);
+  std::vector<Label> vertexGroup(nv, 0);
+  for (std::size_t t = 0; t < transferMesh_.tetCount(); ++t)
+    for (const std::int32_t v : transferMesh_.tets[t]) {
+      Label& g = vertexGroup[std::size_t(v)];
+      const Label l = Label(transferMesh_.labels[t]);
+      g = g == 0 ? l : (g == l ? g : kMixed);
+    }
+  out.assign(nv, 0);
+  parallelFor(std::int64_t(nv), 0, [&](std::int64_t v) {
+    const Label g = vertexGroup[std::size_t(v)];
+    if (g == 0 || g == kMixed) return;
+    const Eigen::Vector3d& p = transferMesh_.positions[std::size_t(v)];
+    double best = std::numeric_limits<double>::infinity();
+    Label nearest = 0;
+    for (std::size_t c = 0; c < cage_.vertexCount(); ++c)
+      if (const double d = (cage_.positions[c] - p).squaredNorm(); d < best) {
+        best = d;
+        nearest = groups[c];
+      }
+    for (const LimbSeparation& s : cuts)
+      if ((g == s.groupA && nearest == s.groupB) || (g == s.groupB && nearest == s.groupA)) {
+        if (s.region && !s.region->contains(p)) continue;
+        out[std::size_t(v)] = 1;
+      }
+  });
+  return out;
 }
 
 void DeformationPipeline::setPose(const Pose& pose, const std::string& source) {

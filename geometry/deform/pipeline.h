@@ -160,6 +160,7 @@ public:
 private:
   void buildTransferMesh();
   void precomputeFrame(bool withEnvelope);
+  std::vector<std::uint8_t> acrossSeparation() const;
   void recordStage(StageTime time);
 
   PipelineOptions options_;
