@@ -1,0 +1,245 @@
+#include "geometry/remesh/collapse_short_edges.h"
+
+#include "geometry/remesh/mesh_edges.h"
+#include "geometry/remesh/tet_shape.h"
+
+#include <algorithm>
+#include <queue>
+#include <tuple>
+
+namespace vox::remesh {
+
+EdgeCollapser::EdgeCollapser(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull)
+    : complex_(complex), bounds_(bounds), hull_(hull) {}
+
+const LabelSet& EdgeCollapser::edgeLabels(const VertexNeighborhood& n, std::int32_t w) const {
+  return n.edgeLabels[std::size_t(n.find(w))];
+}
+
+std::int32_t EdgeCollapser::tryCollapse(std::int32_t u, std::int32_t v) {
+  const std::int32_t dummy = complex_.dummyVertex();
+  if (u == v || u == dummy || v == dummy || !complex_.vertexAlive(u) || !complex_.vertexAlive(v)) return -1;
+  const std::int32_t t = complex_.findEdgeTet(u, v);
+  if (t < 0) return -1;
+  gatherNeighborhood(complex_, u, nu_);
+  gatherNeighborhood(complex_, v, nv_);
+  const LabelSet& suv = edgeLabels(nu_, v);
+  const EdgeRule rule = edgeRule(nu_, nv_, suv, dummy);
+  if (rule.condition == EdgeCondition::Exclusion) return -1;
+  complex_.edgeRing(u, v, t, ring_);
+  if (!topologyTests(suv) || !linkCondition()) return -1;
+
+  const Eigen::Vector3d pu = complex_.position(u), pv = complex_.position(v);
+  struct Option {
+    const VertexNeighborhood* removed;
+    const VertexNeighborhood* kept;
+    Eigen::Vector3d p;
+  };
+  Option options[3];
+  int count = 0;
+  if (rule.condition == EdgeCondition::Similarity) {
+    options[count++] = {&nu_, &nv_, 0.5 * (pu + pv)};
+    options[count++] = {&nu_, &nv_, pv};
+    options[count++] = {&nv_, &nu_, pu};
+  } else if (rule.moving == u) {
+    options[count++] = {&nu_, &nv_, pv};
+  } else {
+    options[count++] = {&nv_, &nu_, pu};
+  }
+  const HullConstraint::Planes planes[2] = {hull_.planes(complex_, nu_), hull_.planes(complex_, nv_)};
+  for (int i = 0; i < count; ++i) {
+    const Option& o = options[i];
+    const VertexNeighborhood& r = *o.removed;
+    const VertexNeighborhood& k = *o.kept;
+    const bool keptMoves = o.p != complex_.position(k.vertex);
+    if (r.onHull() && !hull_.allows(planes[&r == &nu_ ? 0 : 1], o.p)) continue;
+    if (keptMoves && k.onHull() && !hull_.allows(planes[&k == &nu_ ? 0 : 1], o.p)) continue;
+    if (!test1PositiveVolumes(r, k, o.p) || !test2NoLongEdges(r, k, o.p)) continue;
+    collapse(r, k, o.p);
+    return k.vertex;
+  }
+  return -1;
+}
+
+bool EdgeCollapser::topologyTests(const LabelSet& suv) const {
+  // Tests 3 and 4 (Figure 2.16), on the facets (u, v, c) around the edge.
+  const bool boundaryEdge = suv.size() >= 2, featureEdge = suv.size() >= 3;
+  if (!boundaryEdge) return true;
+  const std::size_t n = ring_.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::int32_t c = ring_.ring[i];
+    const std::int32_t l0 = complex_.label(ring_.tets[(i + n - 1) % n]), l1 = complex_.label(ring_.tets[i]);
+    const int uc = edgeLabels(nu_, c).size(), vc = edgeLabels(nv_, c).size();
+    if (l0 == l1 && uc >= 2 && vc >= 2) return false;                   // 3: pinched boundary
+    if (featureEdge && l0 != l1 && uc >= 3 && vc >= 3) return false;  // 4: 1-junction shortcut
+  }
+  return true;
+}
+
+bool EdgeCollapser::linkCondition() const {
+  // Lk(u) and Lk(v) may only share Lk(uv) -- in the whole complex and in the
+  // closure of every set of labels (each K_X and their intersections) -- and
+  // the simplices merged by the contraction must carry nested label sets, so
+  // that every such subcomplex after the collapse is the contraction of the
+  // one before (Dey et al. 1999; Attali et al. 2012: homotopy preserved).
+  const std::size_t n = ring_.size();
+  const std::int32_t u = nu_.vertex, v = nv_.vertex;
+  auto ringIndex = [&](std::int32_t w) {
+    for (std::size_t i = 0; i < n; ++i)
+      if (ring_.ring[i] == w) return int(i);
+    return -1;
+  };
+  // Vertices: the common neighbours of u and v are exactly the ring.
+  std::size_t common = 0;
+  for (std::int32_t w : nu_.neighbors)
+    if (w != v && nv_.find(w) >= 0) {
+      if (ringIndex(w) < 0) return false;
+      ++common;
+    }
+  if (common != n) return false;
+  // Label sets of the edges (u, c) and (v, c) that merge into one.
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::int32_t c = ring_.ring[i];
+    LabelSet suvc;
+    suvc.insert(complex_.label(ring_.tets[(i + n - 1) % n]));
+    suvc.insert(complex_.label(ring_.tets[i]));
+    const LabelSet& suc = edgeLabels(nu_, c);
+    const LabelSet& svc = edgeLabels(nv_, c);
+    if (!suc.intersection(svc).subsetOf(suvc)) return false;
+    if (!suc.subsetOf(svc) && !svc.subsetOf(suc)) return false;
+  }
+  // Facets (u, c, d) and (v, c, d) merge: one of the two tets beyond them
+  // must carry the label of the removed tet (u, v, c, d), or that label
+  // would vanish from the merged facet and from the edge (c, d).
+  for (std::int32_t q : ring_.tets) {
+    const std::int32_t l = complex_.label(q);
+    const std::int32_t beyondU = complex_.neighbor(q, complex_.localIndex(q, v));
+    const std::int32_t beyondV = complex_.neighbor(q, complex_.localIndex(q, u));
+    if (complex_.label(beyondU) != l && complex_.label(beyondV) != l) return false;
+  }
+  // Edges: an edge (c, d) between ring vertices lying in both links must be
+  // a ring edge.
+  thread_local std::vector<char> inLinkU;
+  inLinkU.assign(n * n, 0);
+  auto visitLinkEdges = [&](const VertexNeighborhood& nb, std::int32_t other, bool mark) {
+    for (std::int32_t q : nb.tets) {
+      if (complex_.localIndex(q, other) >= 0) continue;
+      int idx[3], m = 0;
+      for (std::int32_t w : complex_.tet(q))
+        if (w != nb.vertex) idx[m++] = ringIndex(w);
+      for (int x = 0; x < 3; ++x)
+        for (int y = x + 1; y < 3; ++y) {
+          if (idx[x] < 0 || idx[y] < 0) continue;
+          const std::size_t i = std::size_t(std::min(idx[x], idx[y])), j = std::size_t(std::max(idx[x], idx[y]));
+          if (mark) {
+            inLinkU[i * n + j] = 1;
+          } else if (inLinkU[i * n + j] && j != i + 1 && !(i == 0 && j == n - 1)) {
+            return false;
+          }
+        }
+    }
+    return true;
+  };
+  visitLinkEdges(nu_, v, true);
+  return visitLinkEdges(nv_, u, false);
+}
+
+bool EdgeCollapser::test1PositiveVolumes(const VertexNeighborhood& r, const VertexNeighborhood& k,
+                                         const Eigen::Vector3d& p) const {
+  const auto& P = complex_.positions();
+  const bool keptMoves = p != P[std::size_t(k.vertex)];
+  auto check = [&](const VertexNeighborhood& nb, std::int32_t other) {
+    for (std::int32_t q : nb.tets) {
+      if (complex_.localIndex(q, other) >= 0 || complex_.isDummyTet(q)) continue;  // removed, or no geometry
+      const Tet& t = complex_.tet(q);
+      Eigen::Vector3d x[4];
+      for (int i = 0; i < 4; ++i) x[i] = t[std::size_t(i)] == nb.vertex ? p : P[std::size_t(t[std::size_t(i)])];
+      const double before = volumeLengthQuality(P[std::size_t(t[0])], P[std::size_t(t[1])], P[std::size_t(t[2])],
+                                                P[std::size_t(t[3])]);
+      const double after = volumeLengthQuality(x[0], x[1], x[2], x[3]);
+      if (!(after > 0.0) || after < std::min(kQualityFloor, before)) return false;
+      if (signedVolume(x[0], x[1], x[2], x[3]) <= 0.0) return false;
+    }
+    return true;
+  };
+  return check(r, k.vertex) && (!keptMoves || check(k, r.vertex));
+}
+
+bool EdgeCollapser::test2NoLongEdges(const VertexNeighborhood& r, const VertexNeighborhood& k,
+                                     const Eigen::Vector3d& p) const {
+  const double emax2 = bounds_.emax * bounds_.emax;
+  const std::int32_t dummy = complex_.dummyVertex();
+  const bool keptMoves = p != complex_.position(k.vertex);
+  for (std::int32_t w : r.neighbors) {
+    if (w == dummy || w == k.vertex) continue;
+    if (!keptMoves && k.find(w) >= 0) continue;  // an existing, unchanged edge of k
+    if ((complex_.position(w) - p).squaredNorm() >= emax2) return false;
+  }
+  if (keptMoves)
+    for (std::int32_t w : k.neighbors) {
+      if (w == dummy || w == r.vertex) continue;
+      if ((complex_.position(w) - p).squaredNorm() >= emax2) return false;
+    }
+  return true;
+}
+
+void EdgeCollapser::collapse(const VertexNeighborhood& r, const VertexNeighborhood& k, const Eigen::Vector3d& p) {
+  const std::int32_t rv = r.vertex, kv = k.vertex;
+  for (std::int32_t q : r.tets)
+    if (complex_.localIndex(q, kv) < 0) complex_.setTetVertex(q, complex_.localIndex(q, rv), kv);
+  std::int32_t survivor = -1;
+  for (std::int32_t q : ring_.tets) {
+    const int ir = complex_.localIndex(q, rv), ik = complex_.localIndex(q, kv);
+    const std::int32_t beyondR = complex_.encodedNeighbor(q, ik);  // holds r's side facet
+    const std::int32_t beyondK = complex_.encodedNeighbor(q, ir);
+    complex_.setEncodedNeighbor(beyondR >> 2, beyondR & 3, beyondK);
+    complex_.setEncodedNeighbor(beyondK >> 2, beyondK & 3, beyondR);
+    for (std::int32_t w : complex_.tet(q))
+      if (w != rv && w != kv) complex_.setAnyTet(w, beyondK >> 2);
+    survivor = beyondK >> 2;
+    complex_.removeTet(q);
+  }
+  complex_.setPosition(kv, p);
+  complex_.setAnyTet(kv, survivor);
+  complex_.removeVertex(rv);
+}
+
+std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull) {
+  const double emin2 = bounds.emin * bounds.emin;
+  std::vector<WeightedEdge> edges;
+  collectEdges(complex, [&](std::int32_t, std::int32_t, double l2) { return l2 < emin2; }, edges);
+  auto later = [](const WeightedEdge& x, const WeightedEdge& y) {
+    return std::tie(x.length2, x.a, x.b) > std::tie(y.length2, y.a, y.b);
+  };
+  std::priority_queue<WeightedEdge, std::vector<WeightedEdge>, decltype(later)> queue(later, std::move(edges));
+
+  EdgeCollapser collapser(complex, bounds, hull);
+  std::vector<std::int32_t> star, ring;
+  std::size_t collapses = 0;
+  const std::int32_t dummy = complex.dummyVertex();
+  while (!queue.empty()) {
+    const WeightedEdge e = queue.top();
+    queue.pop();
+    if (!complex.vertexAlive(e.a) || !complex.vertexAlive(e.b)) continue;
+    if ((complex.position(e.a) - complex.position(e.b)).squaredNorm() >= emin2) continue;
+    const std::int32_t kept = collapser.tryCollapse(e.a, e.b);
+    if (kept < 0) continue;
+    ++collapses;
+    // Cascade: the remaining vertex's short edges are candidates again.
+    complex.incidentTets(kept, star);
+    ring.clear();
+    for (std::int32_t q : star)
+      for (std::int32_t w : complex.tet(q))
+        if (w != kept && w != dummy) ring.push_back(w);
+    std::sort(ring.begin(), ring.end());
+    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+    const Eigen::Vector3d pk = complex.position(kept);
+    for (std::int32_t w : ring) {
+      const double l2 = (complex.position(w) - pk).squaredNorm();
+      if (l2 < emin2) queue.push({std::min(kept, w), std::max(kept, w), l2});
+    }
+  }
+  return collapses;
+}
+
+}  // namespace vox::remesh
