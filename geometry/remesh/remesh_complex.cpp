@@ -220,6 +220,62 @@ void RemeshComplex::removeTet(std::int32_t t) {
   freeTets_.push_back(t);
 }
 
+void RemeshComplex::replaceTets(const std::vector<std::int32_t>& removed, const std::vector<Tet>& added,
+                                const std::vector<std::int32_t>& addedLabels, std::vector<std::int32_t>& out) {
+  struct OpenFace {
+    std::array<std::int32_t, 3> key;
+    std::int32_t code;  // the face it must be glued to (outside the cavity), or an added face
+    bool matched = false;
+  };
+  auto sortedFace = [](const Tet& q, int k) {
+    std::array<std::int32_t, 3> f{};
+    int n = 0;
+    for (int i = 0; i < 4; ++i)
+      if (i != k) f[std::size_t(n++)] = q[std::size_t(i)];
+    std::sort(f.begin(), f.end());
+    return f;
+  };
+  thread_local std::vector<OpenFace> boundary;
+  boundary.clear();
+  for (std::int32_t t : removed)
+    for (int k = 0; k < 4; ++k) {
+      const std::int32_t n = neighbor(t, k);
+      if (std::find(removed.begin(), removed.end(), n) == removed.end())
+        boundary.push_back({sortedFace(tets_[std::size_t(t)], k), encodedNeighbor(t, k)});
+    }
+  for (std::int32_t t : removed) removeTet(t);
+  out.clear();
+  for (std::size_t i = 0; i < added.size(); ++i) out.push_back(addTet(added[i], addedLabels[i]));
+  thread_local std::vector<OpenFace> inner;
+  inner.clear();
+  for (std::int32_t t : out)
+    for (int k = 0; k < 4; ++k) {
+      const auto key = sortedFace(tets_[std::size_t(t)], k);
+      bool glued = false;
+      for (OpenFace& b : boundary)
+        if (!b.matched && b.key == key) {
+          b.matched = true;
+          setEncodedNeighbor(t, k, b.code);
+          setEncodedNeighbor(b.code >> 2, b.code & 3, 4 * t + k);
+          glued = true;
+          break;
+        }
+      for (std::size_t j = 0; !glued && j < inner.size(); ++j)
+        if (!inner[j].matched && inner[j].key == key) {
+          inner[j].matched = true;
+          glue(t, k, inner[j].code >> 2, inner[j].code & 3);
+          glued = true;
+        }
+      if (!glued) inner.push_back({key, 4 * t + k});
+    }
+  for (const OpenFace& f : inner)
+    if (!f.matched) throw RuntimeFailure("remesh: new tets do not fill the cavity they replace");
+  for (const OpenFace& f : boundary)
+    if (!f.matched) throw RuntimeFailure("remesh: new tets leave a face of the cavity open");
+  for (std::int32_t t : out)
+    for (std::int32_t v : tets_[std::size_t(t)]) vertexTet_[std::size_t(v)] = t;
+}
+
 std::string RemeshComplex::checkConsistency(bool geometry) const {
   auto sortedFace = [&](std::int32_t t, int k) {
     std::array<std::int32_t, 3> f{};

@@ -105,6 +105,11 @@ public:
     neighbors_[std::size_t(t0)][std::size_t(k0)] = 4 * t1 + k1;
     neighbors_[std::size_t(t1)][std::size_t(k1)] = 4 * t0 + k0;
   }
+  // Replaces the tets `removed` by `added` (with `addedLabels`), which must
+  // fill the same cavity: every face of an added tet matches another added
+  // tet or a face of the cavity's boundary. Returns the new tets' slots.
+  void replaceTets(const std::vector<std::int32_t>& removed, const std::vector<Tet>& added,
+                   const std::vector<std::int32_t>& addedLabels, std::vector<std::int32_t>& out);
   std::int32_t encodedNeighbor(std::int32_t t, int k) const { return neighbors_[std::size_t(t)][std::size_t(k)]; }
   void setEncodedNeighbor(std::int32_t t, int k, std::int32_t code) { neighbors_[std::size_t(t)][std::size_t(k)] = code; }
 

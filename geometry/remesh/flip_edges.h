@@ -1,0 +1,65 @@
+#pragma once
+// Flip (edge removal; thesis 2.3.4, Figures 2.19-2.20). The n tets around an
+// edge are replaced by a fan towards one link vertex: 3-2 for n = 3, 4-4 for
+// n = 4 (two choices), n-m with m = 2n - 4 for n > 4 (n choices). A flip
+// never inverts a tet nor creates an edge that already exists.
+//  - Inner edges (all tets around them carry one label) take the choice that
+//    maximizes the worst dihedral angle, if it beats the current one.
+//  - Surface edges (two labels, exactly two boundary facets) are flipped
+//    towards one of the two boundary facets' apexes, so the interface stays
+//    a surface, when it lowers the deviation of the boundary valences from 6
+//    (surface vertices) and 4 (feature vertices); no 3-2 boundary flip.
+//  - Feature edges are never flipped.
+
+#include "geometry/remesh/remesh_complex.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+namespace vox::remesh {
+
+struct FlipOptions {
+  // Inner edges of tets whose smallest dihedral angle is under this are
+  // candidates (degrees); better tets have nothing to gain.
+  double innerFlipAngle = 40.0;
+  // Largest ring considered for an n-m flip.
+  int maxRing = 10;
+  // A surface flip may not bend the interface more than this (degrees,
+  // angle between the normals of the two facets replaced).
+  double surfaceFlipMaxBend = 20.0;
+};
+
+struct FlipCounts {
+  std::size_t surface = 0;
+  std::size_t inner = 0;
+};
+
+class EdgeFlipper {
+public:
+  EdgeFlipper(RemeshComplex& complex, const FlipOptions& options);
+  bool tryFlipInnerEdge(std::int32_t a, std::int32_t b);
+  bool tryFlipSurfaceEdge(std::int32_t a, std::int32_t b);
+
+private:
+  // Tets of the fan towards ring[apex], with their labels.
+  void fanTowards(std::size_t apex);
+  // Worst dihedral cosine of the fan, or +inf when a tet is invalid.
+  double fanWorstCosine() const;
+  bool fanCreatesExistingEdge(std::size_t apex);
+  // Edges of v on the x|y interface, and |S(v)|.
+  std::pair<int, int> boundaryValence(std::int32_t v, std::int32_t x, std::int32_t y);
+
+  RemeshComplex& complex_;
+  FlipOptions options_;
+  EdgeRing ring_;
+  std::vector<Tet> fan_;
+  std::vector<std::int32_t> fanLabels_;
+  std::vector<std::int32_t> star_, scratch_;
+};
+
+// Surface flips first (valence), then inner flips (dihedral angle).
+FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options = {});
+
+}  // namespace vox::remesh

@@ -1,0 +1,28 @@
+#pragma once
+// Static partition of [0, n) over a few threads. Each index is handled by
+// exactly one call and results go to per-index slots, so the outcome does
+// not depend on scheduling.
+
+#include <algorithm>
+#include <cstdint>
+#include <thread>
+#include <vector>
+
+namespace vox::remesh {
+
+template <typename Body>
+void parallelFor(std::int64_t n, int threads, const Body& body) {
+  threads = std::max(1, std::min<int>(threads, int(std::max<std::int64_t>(1, n / 4096))));
+  if (threads == 1) {
+    body(std::int64_t(0), n);
+    return;
+  }
+  std::vector<std::thread> pool;
+  for (int i = 0; i < threads; ++i) {
+    const std::int64_t b = n * i / threads, e = n * (i + 1) / threads;
+    pool.emplace_back([&body, b, e] { body(b, e); });
+  }
+  for (auto& t : pool) t.join();
+}
+
+}  // namespace vox::remesh
