@@ -12,6 +12,8 @@ namespace vox::app {
 // Each subcommand adds itself to the application (one file per command).
 void addInfoCommand(CLI::App& app);
 void addSynthCommand(CLI::App& app);
+void addMeshCommand(CLI::App& app);
+void addRemeshCommand(CLI::App& app);
 
 // Prints progress of long operations on stderr ("stage: 42%"), rewriting the
 // line on a terminal and printing every 10% otherwise.

@@ -206,20 +206,30 @@ void EdgeCollapser::collapse(const VertexNeighborhood& r, const VertexNeighborho
 
 std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull) {
   const double emin2 = bounds.emin * bounds.emin;
+  // Shortest first: the initial candidates sorted once, the edges made
+  // short by a collapse in a small heap, always taking the shorter head.
   std::vector<WeightedEdge> edges;
   collectEdges(complex, [&](std::int32_t, std::int32_t, double l2) { return l2 < emin2; }, edges);
-  auto later = [](const WeightedEdge& x, const WeightedEdge& y) {
-    return std::tie(x.length2, x.a, x.b) > std::tie(y.length2, y.a, y.b);
+  auto shorter = [](const WeightedEdge& x, const WeightedEdge& y) {
+    return std::tie(x.length2, x.a, x.b) < std::tie(y.length2, y.a, y.b);
   };
-  std::priority_queue<WeightedEdge, std::vector<WeightedEdge>, decltype(later)> queue(later, std::move(edges));
+  std::sort(edges.begin(), edges.end(), shorter);
+  auto later = [&](const WeightedEdge& x, const WeightedEdge& y) { return shorter(y, x); };
+  std::priority_queue<WeightedEdge, std::vector<WeightedEdge>, decltype(later)> queue(later);
+  std::size_t next = 0;
 
   EdgeCollapser collapser(complex, bounds, hull);
   std::vector<std::int32_t> star, ring;
   std::size_t collapses = 0;
   const std::int32_t dummy = complex.dummyVertex();
-  while (!queue.empty()) {
-    const WeightedEdge e = queue.top();
-    queue.pop();
+  while (next < edges.size() || !queue.empty()) {
+    WeightedEdge e;
+    if (queue.empty() || (next < edges.size() && shorter(edges[next], queue.top()))) {
+      e = edges[next++];
+    } else {
+      e = queue.top();
+      queue.pop();
+    }
     if (!complex.vertexAlive(e.a) || !complex.vertexAlive(e.b)) continue;
     if ((complex.position(e.a) - complex.position(e.b)).squaredNorm() >= emin2) continue;
     const std::int32_t kept = collapser.tryCollapse(e.a, e.b);

@@ -1,5 +1,7 @@
 #include "geometry/remesh/element_classification.h"
 
+#include <algorithm>
+
 namespace vox::remesh {
 
 VertexKind classifyVertex(int labelCount, int featureEdgeCount) {
@@ -14,18 +16,27 @@ void classifyNeighborhood(const RemeshComplex& complex, std::int32_t v, VertexNe
   out.labels = LabelSet();
   out.neighbors.clear();
   out.edgeLabels.clear();
+  if (out.slotStamp.size() < std::size_t(complex.vertexSlots())) {
+    out.slotStamp.resize(std::size_t(complex.vertexSlots()) + std::size_t(complex.vertexSlots()) / 4, 0);
+    out.slotOf.resize(out.slotStamp.size(), -1);
+  }
+  if (++out.stamp == 0) {
+    std::fill(out.slotStamp.begin(), out.slotStamp.end(), 0);
+    out.stamp = 1;
+  }
   for (std::int32_t t : out.tets) {
     const std::int32_t l = complex.label(t);
     out.labels.insert(l);
     for (std::int32_t u : complex.tet(t)) {
       if (u == v) continue;
-      int i = out.find(u);
-      if (i < 0) {
-        i = int(out.neighbors.size());
+      std::int32_t& slot = out.slotOf[std::size_t(u)];
+      if (out.slotStamp[std::size_t(u)] != out.stamp) {
+        out.slotStamp[std::size_t(u)] = out.stamp;
+        slot = std::int32_t(out.neighbors.size());
         out.neighbors.push_back(u);
         out.edgeLabels.emplace_back();
       }
-      out.edgeLabels[std::size_t(i)].insert(l);
+      out.edgeLabels[std::size_t(slot)].insert(l);
     }
   }
   out.featureEdges = 0;

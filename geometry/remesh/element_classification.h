@@ -41,11 +41,15 @@ struct VertexNeighborhood {
 
   // Index of u in `neighbors`, or -1.
   int find(std::int32_t u) const {
-    for (std::size_t i = 0; i < neighbors.size(); ++i)
-      if (neighbors[i] == u) return int(i);
-    return -1;
+    return std::size_t(u) < slotStamp.size() && slotStamp[std::size_t(u)] == stamp ? slotOf[std::size_t(u)] : -1;
   }
   bool onHull() const { return labels.contains(-1); }
+
+  // Vertex-indexed slots of the current one-ring (valid where slotStamp
+  // equals stamp): constant-time find without clearing between vertices.
+  std::vector<std::uint32_t> slotStamp;
+  std::vector<std::int32_t> slotOf;
+  std::uint32_t stamp = 0;
 };
 
 // Fills `out` from the tets around v (walks the complex: single-threaded).

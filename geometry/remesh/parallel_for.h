@@ -1,7 +1,7 @@
 #pragma once
 // Static partition of [0, n) over a few threads. Each index is handled by
 // exactly one call and results go to per-index slots, so the outcome does
-// not depend on scheduling.
+// not depend on scheduling. `grain`: fewest indices worth a thread.
 
 #include <algorithm>
 #include <cstdint>
@@ -11,8 +11,9 @@
 namespace vox::remesh {
 
 template <typename Body>
-void parallelFor(std::int64_t n, int threads, const Body& body) {
-  threads = std::max(1, std::min<int>(threads, int(std::max<std::int64_t>(1, n / 4096))));
+void parallelFor(std::int64_t n, int threads, const Body& body, std::int64_t grain = 4096) {
+  const std::int64_t useful = (n + grain - 1) / std::max<std::int64_t>(1, grain);
+  threads = int(std::max<std::int64_t>(1, std::min<std::int64_t>(threads, useful)));
   if (threads == 1) {
     body(std::int64_t(0), n);
     return;

@@ -3,6 +3,8 @@
 #include "geometry/remesh/mesh_edges.h"
 
 #include <algorithm>
+#include <queue>
+#include <tuple>
 
 namespace vox::remesh {
 
@@ -44,21 +46,40 @@ std::int32_t splitEdge(RemeshComplex& complex, std::int32_t a, std::int32_t b, s
 
 std::size_t splitLongEdges(RemeshComplex& complex, const EdgeLengthBounds& bounds) {
   const double emax2 = bounds.emax * bounds.emax;
-  std::size_t splits = 0;
-  std::vector<WeightedEdge> candidates;
-  for (int pass = 0; pass < 64; ++pass) {
-    collectEdges(complex, [&](std::int32_t a, std::int32_t b, double length2) { return length2 > emax2; }, candidates);
-    if (candidates.empty()) break;
-    // Longest first; ties broken by vertex ids (deterministic).
-    std::sort(candidates.begin(), candidates.end(), [](const WeightedEdge& x, const WeightedEdge& y) {
-      return x.length2 > y.length2 || (x.length2 == y.length2 && std::tie(x.a, x.b) < std::tie(y.a, y.b));
-    });
-    for (const WeightedEdge& e : candidates) {
-      const std::int32_t t = complex.findEdgeTet(e.a, e.b);
-      if (t < 0) continue;
-      splitEdge(complex, e.a, e.b, t);
-      ++splits;
+  // Longest first: the initial candidates sorted once (ties by vertex ids),
+  // the edges of new vertices that are still too long in a heap.
+  std::vector<WeightedEdge> edges;
+  collectEdges(complex, [&](std::int32_t, std::int32_t, double length2) { return length2 > emax2; }, edges);
+  auto longer = [](const WeightedEdge& x, const WeightedEdge& y) {
+    return x.length2 > y.length2 || (x.length2 == y.length2 && std::tie(x.a, x.b) < std::tie(y.a, y.b));
+  };
+  std::sort(edges.begin(), edges.end(), longer);
+  auto later = [&](const WeightedEdge& x, const WeightedEdge& y) { return longer(y, x); };
+  std::priority_queue<WeightedEdge, std::vector<WeightedEdge>, decltype(later)> queue(later);
+  std::size_t next = 0, splits = 0;
+  std::vector<std::int32_t> star;
+  const std::int32_t dummy = complex.dummyVertex();
+  while (next < edges.size() || !queue.empty()) {
+    WeightedEdge e;
+    if (queue.empty() || (next < edges.size() && longer(edges[next], queue.top()))) {
+      e = edges[next++];
+    } else {
+      e = queue.top();
+      queue.pop();
     }
+    const std::int32_t t = complex.findEdgeTet(e.a, e.b);
+    if (t < 0) continue;
+    const std::int32_t m = splitEdge(complex, e.a, e.b, t);
+    ++splits;
+    // The halves and the new edges at m may still be too long.
+    complex.incidentTets(m, star);
+    const Eigen::Vector3d pm = complex.position(m);
+    for (std::int32_t q : star)
+      for (std::int32_t w : complex.tet(q)) {
+        if (w == m || w == dummy) continue;
+        const double l2 = (complex.position(w) - pm).squaredNorm();
+        if (l2 > emax2) queue.push({std::min(m, w), std::max(m, w), l2});
+      }
   }
   return splits;
 }
