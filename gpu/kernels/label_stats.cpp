@@ -10,6 +10,7 @@ namespace vox::gpu {
 namespace {
 using shader::LabelStatsPush;
 constexpr std::uint64_t kVoxelsPerGroup = VOX_LABEL_STATS_GROUP_SIZE * VOX_LABEL_STATS_VOXELS_PER_THREAD;
+constexpr std::uint64_t kVoxelsPerBlock = 8;  // one uvec4 of uint16 labels
 }  // namespace
 
 LabelStatsKernel::LabelStatsKernel(Context& context, LabelStatsOptions options)
@@ -18,12 +19,13 @@ LabelStatsKernel::LabelStatsKernel(Context& context, LabelStatsOptions options)
       pipeline_(context, {"label_stats.comp",
                           {BindingKind::StorageBuffer, BindingKind::StorageBuffer, BindingKind::StorageBuffer},
                           sizeof(LabelStatsPush)}) {
-  // Chunks hold an even number of voxels (two labels per 32-bit word) and are
-  // limited by the binding size and the work-group count limit.
+  // The shader reads labels eight at a time (one uvec4), so chunks start on
+  // multiples of 8 voxels; they are limited by the binding size and the
+  // work-group count limit.
   std::uint64_t cap = context.maxBindingBytes() / sizeof(Label);
   cap = std::min<std::uint64_t>(cap, std::uint64_t(context.info().maxWorkGroupCount[0]) * kVoxelsPerGroup);
   chunkVoxels_ = options.chunkVoxels ? std::min(options.chunkVoxels, cap) : cap;
-  chunkVoxels_ = std::max<std::uint64_t>(2, chunkVoxels_ & ~std::uint64_t(1));
+  chunkVoxels_ = std::max<std::uint64_t>(kVoxelsPerBlock, chunkVoxels_ / kVoxelsPerBlock * kVoxelsPerBlock);
 }
 
 LabelStats LabelStatsKernel::run(const LabelGrid& grid) {
@@ -39,8 +41,8 @@ void LabelStatsKernel::accumulate(const GridGeometry& g, std::int64_t k0, std::i
   const std::uint64_t total = std::uint64_t(count) * std::uint64_t(g.sliceVoxels());
   if (total == 0) return;
   const std::uint32_t labelCount = std::uint32_t(stats.counts.size());
-  const std::uint64_t chunk = std::min(chunkVoxels_, total + (total & 1));
-  const std::uint64_t labelBytes = (chunk + 1) / 2 * sizeof(std::uint32_t);
+  const std::uint64_t chunk = std::min(chunkVoxels_, (total + kVoxelsPerBlock - 1) / kVoxelsPerBlock * kVoxelsPerBlock);
+  const std::uint64_t labelBytes = chunk * sizeof(Label);
   if (!labels_.valid() || labels_.size() < labelBytes) labels_ = Buffer(context_, labelBytes, MemoryIntent::Upload);
 
   Buffer counts(context_, std::uint64_t(labelCount) * 4, MemoryIntent::Readback);
@@ -52,9 +54,10 @@ void LabelStatsKernel::accumulate(const GridGeometry& g, std::int64_t k0, std::i
   for (std::uint64_t first = 0; first < total; first += chunk) {
     const std::uint64_t n = std::min(chunk, total - first);
     // Host data goes in through a mapped upload buffer (or a staging copy).
+    // The last chunk's final block is padded; the shader stops at voxelCount.
+    const std::uint64_t paddedBytes = (n + kVoxelsPerBlock - 1) / kVoxelsPerBlock * kVoxelsPerBlock * sizeof(Label);
     if (labels_.mapped()) {
       std::memcpy(labels_.mapped(), slices + first, n * sizeof(Label));
-      if (n & 1) static_cast<Label*>(labels_.mapped())[n] = 0;
     } else {
       labels_.upload(slices + first, n * sizeof(Label));
     }
@@ -78,7 +81,7 @@ void LabelStatsKernel::accumulate(const GridGeometry& g, std::int64_t k0, std::i
     batch.timestamp("start");
     const std::uint32_t groups = std::uint32_t((n + kVoxelsPerGroup - 1) / kVoxelsPerGroup);
     batch.dispatch(pipeline_,
-                   {Binding::storage(labels_, 0, (n + 1) / 2 * 4), Binding::storage(counts), Binding::storage(boxes)}, push,
+                   {Binding::storage(labels_, 0, paddedBytes), Binding::storage(counts), Binding::storage(boxes)}, push,
                    groups);
     batch.barrier();
     batch.timestamp("end");

@@ -1,6 +1,7 @@
 #pragma once
 // Paths and process helpers for the test suites.
 
+#include <filesystem>
 #include <string>
 
 namespace vox::test {
@@ -11,6 +12,12 @@ std::string assetPath(const std::string& name);
 std::string tempDir();
 // The built `voxmorph` executable.
 std::string voxmorphBinary();
+// GTEST_SKIP()s the calling test when the executable was not built (the asan
+// preset builds the io tests alone).
+#define VOX_REQUIRE_VOXMORPH()                                                              \
+  do {                                                                                      \
+    if (!std::filesystem::exists(::vox::test::voxmorphBinary())) GTEST_SKIP() << "voxmorph not built"; \
+  } while (0)
 // Debian's python3 (with nibabel and meshio), or "" when missing.
 std::string python();
 
