@@ -21,12 +21,23 @@ std::int32_t EdgeCollapser::tryCollapse(std::int32_t u, std::int32_t v) {
   if (u == v || u == dummy || v == dummy || !complex_.vertexAlive(u) || !complex_.vertexAlive(v)) return -1;
   const std::int32_t t = complex_.findEdgeTet(u, v);
   if (t < 0) return -1;
-  gatherNeighborhood(complex_, u, nu_);
-  gatherNeighborhood(complex_, v, nv_);
-  const LabelSet& suv = edgeLabels(nu_, v);
+  // Label sets first: most short edges near interfaces meet the exclusion
+  // condition, which needs no one-ring.
+  complex_.edgeRing(u, v, t, ring_);
+  LabelSet suv;
+  for (std::int32_t q : ring_.tets) suv.insert(complex_.label(q));
+  complex_.incidentTets(u, nu_.tets);
+  complex_.incidentTets(v, nv_.tets);
+  auto labelsOf = [&](const std::vector<std::int32_t>& tets) {
+    LabelSet s;
+    for (std::int32_t q : tets) s.insert(complex_.label(q));
+    return s;
+  };
+  if (suv.overflow() || (!(labelsOf(nu_.tets) == suv) && !(labelsOf(nv_.tets) == suv))) return -1;
+  classifyNeighborhood(complex_, u, nu_);
+  classifyNeighborhood(complex_, v, nv_);
   const EdgeRule rule = edgeRule(nu_, nv_, suv, dummy);
   if (rule.condition == EdgeCondition::Exclusion) return -1;
-  complex_.edgeRing(u, v, t, ring_);
   if (!topologyTests(suv) || !linkCondition()) return -1;
 
   const Eigen::Vector3d pu = complex_.position(u), pv = complex_.position(v);
@@ -54,7 +65,7 @@ std::int32_t EdgeCollapser::tryCollapse(std::int32_t u, std::int32_t v) {
     const bool keptMoves = o.p != complex_.position(k.vertex);
     if (r.onHull() && !hull_.allows(planes[&r == &nu_ ? 0 : 1], o.p)) continue;
     if (keptMoves && k.onHull() && !hull_.allows(planes[&k == &nu_ ? 0 : 1], o.p)) continue;
-    if (!test1PositiveVolumes(r, k, o.p) || !test2NoLongEdges(r, k, o.p)) continue;
+    if (!test2NoLongEdges(r, k, o.p) || !test1PositiveVolumes(r, k, o.p)) continue;
     collapse(r, k, o.p);
     return k.vertex;
   }
@@ -84,18 +95,28 @@ bool EdgeCollapser::linkCondition() const {
   // one before (Dey et al. 1999; Attali et al. 2012: homotopy preserved).
   const std::size_t n = ring_.size();
   const std::int32_t u = nu_.vertex, v = nv_.vertex;
-  auto ringIndex = [&](std::int32_t w) {
-    for (std::size_t i = 0; i < n; ++i)
-      if (ring_.ring[i] == w) return int(i);
-    return -1;
+  // Position in the ring of each one-ring vertex of u and of v, by slot.
+  thread_local std::vector<int> ringOfU, ringOfV;
+  ringOfU.assign(nu_.neighbors.size(), -1);
+  ringOfV.assign(nv_.neighbors.size(), -1);
+  for (std::size_t i = 0; i < n; ++i) {
+    ringOfU[std::size_t(nu_.find(ring_.ring[i]))] = int(i);
+    ringOfV[std::size_t(nv_.find(ring_.ring[i]))] = int(i);
+  }
+  auto ringIndex = [&](const VertexNeighborhood& nb, std::int32_t w) {
+    const int slot = nb.find(w);
+    if (slot < 0) return -1;
+    return (&nb == &nu_ ? ringOfU : ringOfV)[std::size_t(slot)];
   };
   // Vertices: the common neighbours of u and v are exactly the ring.
   std::size_t common = 0;
-  for (std::int32_t w : nu_.neighbors)
+  for (std::size_t i = 0; i < nu_.neighbors.size(); ++i) {
+    const std::int32_t w = nu_.neighbors[i];
     if (w != v && nv_.find(w) >= 0) {
-      if (ringIndex(w) < 0) return false;
+      if (ringOfU[i] < 0) return false;
       ++common;
     }
+  }
   if (common != n) return false;
   // Label sets of the edges (u, c) and (v, c) that merge into one.
   for (std::size_t i = 0; i < n; ++i) {
@@ -126,7 +147,7 @@ bool EdgeCollapser::linkCondition() const {
       if (complex_.localIndex(q, other) >= 0) continue;
       int idx[3], m = 0;
       for (std::int32_t w : complex_.tet(q))
-        if (w != nb.vertex) idx[m++] = ringIndex(w);
+        if (w != nb.vertex) idx[m++] = ringIndex(nb, w);
       for (int x = 0; x < 3; ++x)
         for (int y = x + 1; y < 3; ++y) {
           if (idx[x] < 0 || idx[y] < 0) continue;
@@ -154,11 +175,11 @@ bool EdgeCollapser::test1PositiveVolumes(const VertexNeighborhood& r, const Vert
       const Tet& t = complex_.tet(q);
       Eigen::Vector3d x[4];
       for (int i = 0; i < 4; ++i) x[i] = t[std::size_t(i)] == nb.vertex ? p : P[std::size_t(t[std::size_t(i)])];
-      const double before = volumeLengthQuality(P[std::size_t(t[0])], P[std::size_t(t[1])], P[std::size_t(t[2])],
-                                                P[std::size_t(t[3])]);
       const double after = volumeLengthQuality(x[0], x[1], x[2], x[3]);
-      if (!(after > 0.0) || after < std::min(kQualityFloor, before)) return false;
-      if (signedVolume(x[0], x[1], x[2], x[3]) <= 0.0) return false;
+      if (!(after > 0.0) || signedVolume(x[0], x[1], x[2], x[3]) <= 0.0) return false;
+      if (after < kQualityFloor && after < volumeLengthQuality(P[std::size_t(t[0])], P[std::size_t(t[1])],
+                                                               P[std::size_t(t[2])], P[std::size_t(t[3])]))
+        return false;
     }
     return true;
   };

@@ -151,18 +151,6 @@ bool EdgeFlipper::tryFlipSurfaceEdge(std::int32_t a, std::int32_t b) {
   const std::int32_t x = complex_.label(ring_.tets[change[0]]), y = complex_.label(ring_.tets[change[1]]);
   const std::int32_t c = ring_.ring[change[0]], d = ring_.ring[change[1]];
 
-  // Valence of each vertex on this interface against 6 (surface) or 4.
-  std::int32_t vertices[4] = {a, b, c, d};
-  const int delta[4] = {-1, -1, +1, +1};
-  int before = 0, after = 0;
-  for (int i = 0; i < 4; ++i) {
-    const auto [valence, labels] = boundaryValence(vertices[i], x, y);
-    const int target = labels == 2 ? 6 : 4;
-    before += (valence - target) * (valence - target);
-    after += (valence + delta[i] - target) * (valence + delta[i] - target);
-  }
-  if (after >= before) return false;
-
   // The interface must be nearly flat across the edge, before and after.
   const auto& P = complex_.positions();
   auto facetNormal = [&](std::int32_t p, std::int32_t q, std::int32_t r, std::int32_t xSide) {
@@ -180,6 +168,18 @@ bool EdgeFlipper::tryFlipSurfaceEdge(std::int32_t a, std::int32_t b) {
     if (m.dot(mean) < 0.0) m = -m;
     if (!(m.dot(mean) >= bend)) return false;
   }
+
+  // Valence of each vertex on this interface against 6 (surface) or 4.
+  std::int32_t vertices[4] = {a, b, c, d};
+  const int delta[4] = {-1, -1, +1, +1};
+  int before = 0, after = 0;
+  for (int i = 0; i < 4; ++i) {
+    const auto [valence, labels] = boundaryValence(vertices[i], x, y);
+    const int target = labels == 2 ? 6 : 4;
+    before += (valence - target) * (valence - target);
+    after += (valence + delta[i] - target) * (valence + delta[i] - target);
+  }
+  if (after >= before) return false;
 
   double current = -1.0;
   for (std::int32_t q : ring_.tets) {
