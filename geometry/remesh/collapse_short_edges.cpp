@@ -4,6 +4,7 @@
 #include "geometry/remesh/tet_shape.h"
 
 #include <algorithm>
+#include <cmath>
 #include <queue>
 #include <tuple>
 
@@ -169,21 +170,30 @@ bool EdgeCollapser::test1PositiveVolumes(const VertexNeighborhood& r, const Vert
                                          const Eigen::Vector3d& p) const {
   const auto& P = complex_.positions();
   const bool keptMoves = p != P[std::size_t(k.vertex)];
+  static const double guard = std::cos(kCollapseMinDihedral * M_PI / 180.0);
+  double worstBefore = -1.0, worstAfter = -1.0;
   auto check = [&](const VertexNeighborhood& nb, std::int32_t other) {
     for (std::int32_t q : nb.tets) {
-      if (complex_.localIndex(q, other) >= 0 || complex_.isDummyTet(q)) continue;  // removed, or no geometry
+      if (complex_.isDummyTet(q)) continue;  // no geometry
       const Tet& t = complex_.tet(q);
+      const Eigen::Vector3d& a = P[std::size_t(t[0])];
+      const Eigen::Vector3d& b = P[std::size_t(t[1])];
+      const Eigen::Vector3d& c = P[std::size_t(t[2])];
+      const Eigen::Vector3d& d = P[std::size_t(t[3])];
+      worstBefore = std::max(worstBefore, minDihedralCosine(a, b, c, d));
+      if (complex_.localIndex(q, other) >= 0) continue;  // removed
       Eigen::Vector3d x[4];
       for (int i = 0; i < 4; ++i) x[i] = t[std::size_t(i)] == nb.vertex ? p : P[std::size_t(t[std::size_t(i)])];
       const double after = volumeLengthQuality(x[0], x[1], x[2], x[3]);
       if (!(after > 0.0) || signedVolume(x[0], x[1], x[2], x[3]) <= 0.0) return false;
-      if (after < kQualityFloor && after < volumeLengthQuality(P[std::size_t(t[0])], P[std::size_t(t[1])],
-                                                               P[std::size_t(t[2])], P[std::size_t(t[3])]))
-        return false;
+      if (after < kQualityFloor && after < volumeLengthQuality(a, b, c, d)) return false;
+      worstAfter = std::max(worstAfter, minDihedralCosine(x[0], x[1], x[2], x[3]));
     }
     return true;
   };
-  return check(r, k.vertex) && (!keptMoves || check(k, r.vertex));
+  if (!check(r, k.vertex)) return false;
+  if (keptMoves && !check(k, r.vertex)) return false;
+  return worstAfter <= std::max(worstBefore, guard);
 }
 
 bool EdgeCollapser::test2NoLongEdges(const VertexNeighborhood& r, const VertexNeighborhood& k,

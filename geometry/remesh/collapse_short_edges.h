@@ -25,6 +25,8 @@
 
 namespace vox::remesh {
 
+inline constexpr double kCollapseMinDihedral = 10.0;  // degrees
+
 class EdgeCollapser {
 public:
   EdgeCollapser(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull);

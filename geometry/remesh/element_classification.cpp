@@ -7,7 +7,7 @@ namespace vox::remesh {
 VertexKind classifyVertex(int labelCount, int featureEdgeCount) {
   if (labelCount <= 1) return VertexKind::Inside;
   if (labelCount == 2) return VertexKind::Surface;
-  if (featureEdgeCount == 1 || featureEdgeCount == 2) return VertexKind::Feature;
+  if (featureEdgeCount == 2) return VertexKind::Feature;
   return VertexKind::Corner;
 }
 

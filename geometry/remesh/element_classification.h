@@ -14,15 +14,17 @@ namespace vox::remesh {
 
 // A vertex's dimension in the feature complex (Table 2.1).
 enum class VertexKind : std::uint8_t {
-  Corner = 0,   // 0-junction: |S| > 3 and more than two feature edges
-  Feature = 1,  // on a 1-junction: |S| > 2 and one or two feature edges
+  Corner = 0,   // 0-junction: |S| > 2 and not two feature edges
+  Feature = 1,  // inside a 1-junction: |S| > 2 and two feature edges
   Surface = 2,  // on a 2-junction: |S| = 2
   Inside = 3,   // |S| = 1
 };
 
-// Table 2.1. Vertices the table leaves out (|S| >= 3 with no feature edge, or
-// |S| = 3 with three or more) are junction points as well: they are corners,
-// which no operation moves.
+// Table 2.1, where a vertex with three or more labels is a feature vertex
+// only inside a 1-junction (exactly two feature edges). The free end of a
+// 1-junction (one feature edge), a branching point (three or more, also
+// with |S| = 3) and a point where labels meet without a feature edge are
+// junction points too: corners, which no operation moves or removes.
 VertexKind classifyVertex(int labelCount, int featureEdgeCount);
 
 // Feature edges are boundary edges between three or more labels (2.2.4).

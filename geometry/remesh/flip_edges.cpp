@@ -13,6 +13,8 @@ namespace vox::remesh {
 
 namespace {
 double cosDegrees(double deg) { return std::cos(deg * M_PI / 180.0); }
+// Worst dihedral angles under 30 degrees are worth a flip of their own.
+constexpr double kPoorAngleCosine = 0.8660254037844387;
 }  // namespace
 
 EdgeFlipper::EdgeFlipper(RemeshComplex& complex, const FlipOptions& options) : complex_(complex), options_(options) {}
@@ -169,39 +171,77 @@ bool EdgeFlipper::tryFlipSurfaceEdge(std::int32_t a, std::int32_t b) {
     if (!(m.dot(mean) >= bend)) return false;
   }
 
-  // Valence of each vertex on this interface against 6 (surface) or 4.
-  std::int32_t vertices[4] = {a, b, c, d};
-  const int delta[4] = {-1, -1, +1, +1};
-  int before = 0, after = 0;
-  for (int i = 0; i < 4; ++i) {
-    const auto [valence, labels] = boundaryValence(vertices[i], x, y);
-    const int target = labels == 2 ? 6 : 4;
-    before += (valence - target) * (valence - target);
-    after += (valence + delta[i] - target) * (valence + delta[i] - target);
-  }
-  if (after >= before) return false;
-
   double current = -1.0;
   for (std::int32_t q : ring_.tets) {
     const Tet& v = complex_.tet(q);
     current = std::max(current, minDihedralCosine(P[std::size_t(v[0])], P[std::size_t(v[1])], P[std::size_t(v[2])],
                                                   P[std::size_t(v[3])]));
   }
-  const double allowed = std::max(current, cosDegrees(20.0));
+  // The better of the (one or two) fans towards the boundary facets' apexes.
   double best = std::numeric_limits<double>::infinity();
   std::size_t bestApex = n;
   for (std::size_t apex : {change[0], change[1]}) {
     if (n == 4 && apex == change[1]) break;  // the same fan
     fanTowards(apex);
     const double worst = fanWorstCosine();
-    if (worst <= allowed && worst < best && !fanCreatesExistingEdge(apex)) {
+    if (worst < best) {
       best = worst;
       bestApex = apex;
     }
   }
   if (bestApex == n) return false;
+
+  // Flip when it evens the valences of this interface (against 6 for
+  // surface vertices, 4 for feature vertices) without making the worst
+  // angle worse than 20 degrees, or when it lifts a worst angle under 30.
+  const bool removesSliver = current > kPoorAngleCosine && best < current - 1e-3;
+  if (!removesSliver) {
+    if (best > std::max(current, cosDegrees(20.0))) return false;
+    const std::int32_t vertices[4] = {a, b, c, d};
+    const int delta[4] = {-1, -1, +1, +1};
+    int before = 0, after = 0;
+    for (int i = 0; i < 4; ++i) {
+      const auto [valence, labels] = boundaryValence(vertices[i], x, y);
+      const int target = labels == 2 ? 6 : 4;
+      before += (valence - target) * (valence - target);
+      after += (valence + delta[i] - target) * (valence + delta[i] - target);
+    }
+    if (after >= before) return false;
+  }
+  if (fanCreatesExistingEdge(bestApex)) return false;
+  if (bestApex == n) return false;
   fanTowards(bestApex);
   complex_.replaceTets(ring_.tets, fan_, fanLabels_, scratch_);
+  return true;
+}
+
+bool EdgeFlipper::tryFlipFace(std::int32_t t, int k) {
+  // 2-3 flip: the two tets on either side of a facet that is no interface
+  // become three around the edge joining their apexes.
+  if (!complex_.tetAlive(t) || complex_.isDummyTet(t)) return false;
+  const std::int32_t n = complex_.neighbor(t, k);
+  if (complex_.isDummyTet(n) || complex_.label(n) != complex_.label(t)) return false;
+  const std::int32_t apexT = complex_.tet(t)[std::size_t(k)];
+  const std::int32_t apexN = complex_.tet(n)[std::size_t(complex_.neighborFace(t, k))];
+  const auto& P = complex_.positions();
+  auto worstOf = [&](const Tet& q) {
+    return minDihedralCosine(P[std::size_t(q[0])], P[std::size_t(q[1])], P[std::size_t(q[2])], P[std::size_t(q[3])]);
+  };
+  const double current = std::max(worstOf(complex_.tet(t)), worstOf(complex_.tet(n)));
+  fan_.clear();
+  fanLabels_.clear();
+  for (int i = 0; i < 4; ++i) {
+    if (i == k) continue;
+    Tet q = complex_.tet(t);
+    q[std::size_t(i)] = apexN;  // t with one facet vertex replaced by the other apex
+    fan_.push_back(q);
+    fanLabels_.push_back(complex_.label(t));
+  }
+  if (!(fanWorstCosine() < current - 1e-3)) return false;
+  complex_.incidentTets(apexT, star_);
+  for (std::int32_t q : star_)
+    if (complex_.localIndex(q, apexN) >= 0) return false;  // the new edge exists already
+  complex_.replaceTets({t, n}, fan_, fanLabels_, scratch_);
   return true;
 }
 
@@ -260,6 +300,23 @@ FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
     edges.swap(ordered);
   }
   for (const auto& [a, b] : edges) counts.inner += flipper.tryFlipInnerEdge(a, b);
+
+  // Face flips for the slivers and caps that are left.
+  std::vector<std::pair<double, std::int32_t>> poor;
+  for (std::int32_t t = 0; t < complex.tetSlots(); ++t) {
+    if (!complex.tetAlive(t) || complex.isDummyTet(t)) continue;
+    const Tet& q = complex.tet(t);
+    const double worst = minDihedralCosine(P[std::size_t(q[0])], P[std::size_t(q[1])], P[std::size_t(q[2])],
+                                           P[std::size_t(q[3])]);
+    if (worst > threshold) poor.push_back({-worst, t});
+  }
+  std::sort(poor.begin(), poor.end());
+  for (const auto& [w, t] : poor)
+    for (int k = 0; k < 4; ++k)
+      if (flipper.tryFlipFace(t, k)) {
+        ++counts.face;
+        break;
+      }
   return counts;
 }
 

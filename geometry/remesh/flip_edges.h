@@ -8,8 +8,11 @@
 //  - Surface edges (two labels, exactly two boundary facets) are flipped
 //    towards one of the two boundary facets' apexes, so the interface stays
 //    a surface, when it lowers the deviation of the boundary valences from 6
-//    (surface vertices) and 4 (feature vertices); no 3-2 boundary flip.
+//    (surface vertices) and 4 (feature vertices), or when it lifts a worst
+//    dihedral angle under 30 degrees; no 3-2 boundary flip.
 //  - Feature edges are never flipped.
+// Then the faces of the tets still under `innerFlipAngle` get 2-3 flips
+// (the face flip of the thesis' sliver removal, 2.3.6) when that helps.
 
 #include "geometry/remesh/remesh_complex.h"
 
@@ -34,6 +37,7 @@ struct FlipOptions {
 struct FlipCounts {
   std::size_t surface = 0;
   std::size_t inner = 0;
+  std::size_t face = 0;
 };
 
 class EdgeFlipper {
@@ -41,6 +45,8 @@ public:
   EdgeFlipper(RemeshComplex& complex, const FlipOptions& options);
   bool tryFlipInnerEdge(std::int32_t a, std::int32_t b);
   bool tryFlipSurfaceEdge(std::int32_t a, std::int32_t b);
+  // 2-3 flip of face k of tet t (sliver removal, thesis 2.3.6).
+  bool tryFlipFace(std::int32_t t, int k);
 
 private:
   // Tets of the fan towards ring[apex], with their labels.
@@ -59,7 +65,8 @@ private:
   std::vector<std::int32_t> star_, scratch_;
 };
 
-// Surface flips first (valence), then inner flips (dihedral angle).
+// Surface flips first (valence), then inner flips (dihedral angle), then
+// face flips.
 FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options = {});
 
 }  // namespace vox::remesh

@@ -60,14 +60,25 @@ void remeshComplex(RemeshComplex& complex, const RemeshOptions& options, RemeshS
     const bool refine = round < options.iterations;
     step.name = refine ? "iteration " + std::to_string(round + 1)
                        : "flip-smooth " + std::to_string(round - options.iterations + 1);
+    auto lap = [clock = std::chrono::steady_clock::now()]() mutable {
+      const auto now = std::chrono::steady_clock::now();
+      const double s = std::chrono::duration<double>(now - clock).count();
+      clock = now;
+      return s;
+    };
     if (refine) {
       step.splits = splitLongEdges(complex, bounds);
+      step.splitSeconds = lap();
       step.collapses = collapseShortEdges(complex, bounds, hull);
+      step.collapseSeconds = lap();
     }
     const FlipCounts flips = flipEdges(complex, options.flip);
     step.surfaceFlips = flips.surface;
     step.innerFlips = flips.inner;
+    step.faceFlips = flips.face;
+    step.flipSeconds = lap();
     const SmoothCounts smoothed = smoothVertices(complex, surfaces.get(), hull, options.threads);
+    step.smoothSeconds = lap();
     step.smoothedFeature = smoothed.feature;
     step.smoothedSurface = smoothed.surface;
     step.smoothedInside = smoothed.inside;

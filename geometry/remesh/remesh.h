@@ -36,9 +36,10 @@ struct RemeshOptions {
 
 struct RemeshStep {
   std::string name;  // "iteration 3", "flip-smooth 1"
-  std::size_t splits = 0, collapses = 0, surfaceFlips = 0, innerFlips = 0;
+  std::size_t splits = 0, collapses = 0, surfaceFlips = 0, innerFlips = 0, faceFlips = 0;
   std::size_t smoothedFeature = 0, smoothedSurface = 0, smoothedInside = 0;
   std::size_t tets = 0;  // live tets of the extended complex afterwards
+  double splitSeconds = 0.0, collapseSeconds = 0.0, flipSeconds = 0.0, smoothSeconds = 0.0;
   double seconds = 0.0;
 };
 

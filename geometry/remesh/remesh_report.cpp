@@ -145,9 +145,11 @@ std::string reportJson(const RemeshReport& r) {
                      {"collapses", s.collapses},
                      {"surface_flips", s.surfaceFlips},
                      {"inner_flips", s.innerFlips},
+                     {"face_flips", s.faceFlips},
                      {"smoothed", {{"feature", s.smoothedFeature}, {"surface", s.smoothedSurface}, {"inside", s.smoothedInside}}},
                      {"tets", s.tets},
-                     {"seconds", s.seconds}});
+                     {"seconds", {{"split", s.splitSeconds}, {"collapse", s.collapseSeconds}, {"flip", s.flipSeconds},
+                                  {"smooth", s.smoothSeconds}, {"total", s.seconds}}}});
   j["steps"] = steps;
   j["remesh_seconds"] = r.stats.seconds;
   j["setup_seconds"] = r.setupSeconds;
