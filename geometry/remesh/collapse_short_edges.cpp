@@ -41,6 +41,20 @@ std::int32_t EdgeCollapser::tryCollapse(std::int32_t u, std::int32_t v) {
   if (rule.condition == EdgeCondition::Exclusion) return -1;
   if (!topologyTests(suv) || !linkCondition()) return -1;
 
+  // The worst angle around each end point now: no tet the collapse updates
+  // may be worse than the worst it replaces, unless it stays above
+  // kCollapseMinDihedral.
+  const auto& P = complex_.positions();
+  double worst[2] = {-1.0, -1.0};
+  for (int i = 0; i < 2; ++i)
+    for (std::int32_t q : (i ? nv_ : nu_).tets) {
+      if (complex_.isDummyTet(q)) continue;
+      const Tet& c = complex_.tet(q);
+      worst[i] = std::max(worst[i], minDihedralCosine(P[std::size_t(c[0])], P[std::size_t(c[1])],
+                                                      P[std::size_t(c[2])], P[std::size_t(c[3])]));
+    }
+  static const double guard = std::cos(kCollapseMinDihedral * M_PI / 180.0);
+
   const Eigen::Vector3d pu = complex_.position(u), pv = complex_.position(v);
   struct Option {
     const VertexNeighborhood* removed;
@@ -66,6 +80,8 @@ std::int32_t EdgeCollapser::tryCollapse(std::int32_t u, std::int32_t v) {
     const bool keptMoves = o.p != complex_.position(k.vertex);
     if (r.onHull() && !hull_.allows(planes[&r == &nu_ ? 0 : 1], o.p)) continue;
     if (keptMoves && k.onHull() && !hull_.allows(planes[&k == &nu_ ? 0 : 1], o.p)) continue;
+    allowedCosine_ = std::max(guard, worst[&r == &nu_ ? 0 : 1]);
+    if (keptMoves) allowedCosine_ = std::max(allowedCosine_, worst[&k == &nu_ ? 0 : 1]);
     if (!test2NoLongEdges(r, k, o.p) || !test1PositiveVolumes(r, k, o.p)) continue;
     collapse(r, k, o.p);
     return k.vertex;
@@ -170,30 +186,22 @@ bool EdgeCollapser::test1PositiveVolumes(const VertexNeighborhood& r, const Vert
                                          const Eigen::Vector3d& p) const {
   const auto& P = complex_.positions();
   const bool keptMoves = p != P[std::size_t(k.vertex)];
-  static const double guard = std::cos(kCollapseMinDihedral * M_PI / 180.0);
-  double worstBefore = -1.0, worstAfter = -1.0;
   auto check = [&](const VertexNeighborhood& nb, std::int32_t other) {
     for (std::int32_t q : nb.tets) {
-      if (complex_.isDummyTet(q)) continue;  // no geometry
+      if (complex_.isDummyTet(q) || complex_.localIndex(q, other) >= 0) continue;  // no geometry, or removed
       const Tet& t = complex_.tet(q);
-      const Eigen::Vector3d& a = P[std::size_t(t[0])];
-      const Eigen::Vector3d& b = P[std::size_t(t[1])];
-      const Eigen::Vector3d& c = P[std::size_t(t[2])];
-      const Eigen::Vector3d& d = P[std::size_t(t[3])];
-      worstBefore = std::max(worstBefore, minDihedralCosine(a, b, c, d));
-      if (complex_.localIndex(q, other) >= 0) continue;  // removed
       Eigen::Vector3d x[4];
       for (int i = 0; i < 4; ++i) x[i] = t[std::size_t(i)] == nb.vertex ? p : P[std::size_t(t[std::size_t(i)])];
       const double after = volumeLengthQuality(x[0], x[1], x[2], x[3]);
       if (!(after > 0.0) || signedVolume(x[0], x[1], x[2], x[3]) <= 0.0) return false;
-      if (after < kQualityFloor && after < volumeLengthQuality(a, b, c, d)) return false;
-      worstAfter = std::max(worstAfter, minDihedralCosine(x[0], x[1], x[2], x[3]));
+      if (after < kQualityFloor && after < volumeLengthQuality(P[std::size_t(t[0])], P[std::size_t(t[1])],
+                                                               P[std::size_t(t[2])], P[std::size_t(t[3])]))
+        return false;
+      if (minDihedralCosine(x[0], x[1], x[2], x[3]) > allowedCosine_) return false;
     }
     return true;
   };
-  if (!check(r, k.vertex)) return false;
-  if (keptMoves && !check(k, r.vertex)) return false;
-  return worstAfter <= std::max(worstBefore, guard);
+  return check(r, k.vertex) && (!keptMoves || check(k, r.vertex));
 }
 
 bool EdgeCollapser::test2NoLongEdges(const VertexNeighborhood& r, const VertexNeighborhood& k,

@@ -50,6 +50,7 @@ private:
   const HullConstraint& hull_;
   VertexNeighborhood nu_, nv_;
   EdgeRing ring_;
+  double allowedCosine_ = 1.0;  // worst dihedral cosine a collapse may leave
 };
 
 // Collapses edges shorter than e_min, shortest first; after each collapse

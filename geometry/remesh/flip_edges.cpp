@@ -1,6 +1,7 @@
 #include "geometry/remesh/flip_edges.h"
 
 #include "geometry/remesh/label_set.h"
+#include "geometry/remesh/parallel_for.h"
 #include "geometry/remesh/tet_shape.h"
 
 #include <Eigen/Geometry>
@@ -37,7 +38,7 @@ void EdgeFlipper::fanTowards(std::size_t apex) {
   }
 }
 
-double EdgeFlipper::fanWorstCosine() const {
+double EdgeFlipper::fanWorstCosine(double bound) const {
   const auto& P = complex_.positions();
   double worst = -1.0;
   for (const Tet& q : fan_) {
@@ -48,6 +49,7 @@ double EdgeFlipper::fanWorstCosine() const {
     if (!(signedVolume(a, b, c, d) > 0.0) || !(volumeLengthQuality(a, b, c, d) > kQualityFloor))
       return std::numeric_limits<double>::infinity();
     worst = std::max(worst, minDihedralCosine(a, b, c, d));
+    if (worst >= bound) return worst;  // cannot win any more
   }
   return worst;
 }
@@ -95,7 +97,7 @@ bool EdgeFlipper::tryFlipInnerEdge(std::int32_t a, std::int32_t b) {
   const std::size_t configurations = n == 3 ? 1 : n == 4 ? 2 : n;
   for (std::size_t k = 0; k < configurations; ++k) {
     fanTowards(k);
-    const double worst = fanWorstCosine();
+    const double worst = fanWorstCosine(current - 1e-9);
     if (worst < current - 1e-9) choices.push_back({worst, k});
   }
   std::sort(choices.begin(), choices.end());
@@ -183,7 +185,7 @@ bool EdgeFlipper::tryFlipSurfaceEdge(std::int32_t a, std::int32_t b) {
   for (std::size_t apex : {change[0], change[1]}) {
     if (n == 4 && apex == change[1]) break;  // the same fan
     fanTowards(apex);
-    const double worst = fanWorstCosine();
+    const double worst = fanWorstCosine(best);
     if (worst < best) {
       best = worst;
       bestApex = apex;
@@ -237,7 +239,7 @@ bool EdgeFlipper::tryFlipFace(std::int32_t t, int k) {
     fan_.push_back(q);
     fanLabels_.push_back(complex_.label(t));
   }
-  if (!(fanWorstCosine() < current - 1e-3)) return false;
+  if (!(fanWorstCosine(current - 1e-3) < current - 1e-3)) return false;
   complex_.incidentTets(apexT, star_);
   for (std::int32_t q : star_)
     if (complex_.localIndex(q, apexN) >= 0) return false;  // the new edge exists already
@@ -245,10 +247,26 @@ bool EdgeFlipper::tryFlipFace(std::int32_t t, int k) {
   return true;
 }
 
+namespace {
+// Worst dihedral cosine of every geometric tet (2 elsewhere), in parallel.
+void worstCosines(const RemeshComplex& complex, int threads, std::vector<double>& out) {
+  out.assign(std::size_t(complex.tetSlots()), 2.0);
+  const auto& P = complex.positions();
+  parallelFor(complex.tetSlots(), threads, [&](std::int64_t b, std::int64_t e) {
+    for (std::int32_t t = std::int32_t(b); t < std::int32_t(e); ++t) {
+      if (!complex.tetAlive(t) || complex.isDummyTet(t)) continue;
+      const Tet& q = complex.tet(t);
+      out[std::size_t(t)] = minDihedralCosine(P[std::size_t(q[0])], P[std::size_t(q[1])], P[std::size_t(q[2])],
+                                              P[std::size_t(q[3])]);
+    }
+  });
+}
+}  // namespace
+
 FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
   FlipCounts counts;
   EdgeFlipper flipper(complex, options);
-  const auto& P = complex.positions();
+  std::vector<double> worst;
 
   // Surface edges: sides of boundary facets between two geometric tets.
   std::vector<std::pair<std::int32_t, std::int32_t>> edges;
@@ -270,16 +288,14 @@ FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
   // Inner edges of poor tets, worst tets first.
   const double threshold = cosDegrees(options.innerFlipAngle);
   std::vector<std::tuple<double, std::int32_t, std::int32_t>> candidates;
+  worstCosines(complex, options.threads, worst);
   for (std::int32_t t = 0; t < complex.tetSlots(); ++t) {
-    if (!complex.tetAlive(t) || complex.isDummyTet(t)) continue;
+    const double w = worst[std::size_t(t)];
+    if (w <= threshold || w > 1.5) continue;
     const Tet& q = complex.tet(t);
-    const double worst = minDihedralCosine(P[std::size_t(q[0])], P[std::size_t(q[1])], P[std::size_t(q[2])],
-                                           P[std::size_t(q[3])]);
-    if (worst <= threshold) continue;
     for (int i = 0; i < 4; ++i)
       for (int j = i + 1; j < 4; ++j)
-        candidates.push_back({-worst, std::min(q[std::size_t(i)], q[std::size_t(j)]),
-                              std::max(q[std::size_t(i)], q[std::size_t(j)])});
+        candidates.push_back({-w, std::min(q[std::size_t(i)], q[std::size_t(j)]), std::max(q[std::size_t(i)], q[std::size_t(j)])});
   }
   std::sort(candidates.begin(), candidates.end());
   edges.clear();
@@ -303,13 +319,9 @@ FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
 
   // Face flips for the slivers and caps that are left.
   std::vector<std::pair<double, std::int32_t>> poor;
-  for (std::int32_t t = 0; t < complex.tetSlots(); ++t) {
-    if (!complex.tetAlive(t) || complex.isDummyTet(t)) continue;
-    const Tet& q = complex.tet(t);
-    const double worst = minDihedralCosine(P[std::size_t(q[0])], P[std::size_t(q[1])], P[std::size_t(q[2])],
-                                           P[std::size_t(q[3])]);
-    if (worst > threshold) poor.push_back({-worst, t});
-  }
+  worstCosines(complex, options.threads, worst);
+  for (std::int32_t t = 0; t < complex.tetSlots(); ++t)
+    if (worst[std::size_t(t)] > threshold && worst[std::size_t(t)] < 1.5) poor.push_back({-worst[std::size_t(t)], t});
   std::sort(poor.begin(), poor.end());
   for (const auto& [w, t] : poor)
     for (int k = 0; k < 4; ++k)

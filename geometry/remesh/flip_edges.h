@@ -32,6 +32,7 @@ struct FlipOptions {
   // A surface flip may not bend the interface more than this (degrees,
   // angle between the normals of the two facets replaced).
   double surfaceFlipMaxBend = 20.0;
+  int threads = 2;  // for the quality scans
 };
 
 struct FlipCounts {
@@ -51,8 +52,9 @@ public:
 private:
   // Tets of the fan towards ring[apex], with their labels.
   void fanTowards(std::size_t apex);
-  // Worst dihedral cosine of the fan, or +inf when a tet is invalid.
-  double fanWorstCosine() const;
+  // Worst dihedral cosine of the fan, or +inf when a tet is invalid; stops
+  // early once it reaches `bound`.
+  double fanWorstCosine(double bound) const;
   bool fanCreatesExistingEdge(std::size_t apex);
   // Edges of v on the x|y interface, and |S(v)|.
   std::pair<int, int> boundaryValence(std::int32_t v, std::int32_t x, std::int32_t y);

@@ -72,7 +72,9 @@ void remeshComplex(RemeshComplex& complex, const RemeshOptions& options, RemeshS
       step.collapses = collapseShortEdges(complex, bounds, hull);
       step.collapseSeconds = lap();
     }
-    const FlipCounts flips = flipEdges(complex, options.flip);
+    FlipOptions flipOptions = options.flip;
+    flipOptions.threads = options.threads;
+    const FlipCounts flips = flipEdges(complex, flipOptions);
     step.surfaceFlips = flips.surface;
     step.innerFlips = flips.inner;
     step.faceFlips = flips.face;

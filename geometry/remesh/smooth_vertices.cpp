@@ -97,9 +97,18 @@ public:
   bool moveTowards(std::int32_t v, const Eigen::Vector3d& to, std::vector<std::int32_t>& tets) const {
     vt_.of(v, tets);
     const Eigen::Vector3d from = complex_.position(v);
+    const auto& P = complex_.positions();
+    double worstBefore = -1.0;
+    for (std::int32_t q : tets) {
+      if (complex_.isDummyTet(q)) continue;
+      const Tet& t = complex_.tet(q);
+      worstBefore = std::max(worstBefore, minDihedralCosine(P[std::size_t(t[0])], P[std::size_t(t[1])],
+                                                            P[std::size_t(t[2])], P[std::size_t(t[3])]));
+    }
+    const double allowed = std::max(worstBefore, kGoodAngleCosine);
     for (double f : {1.0, 0.5, 0.25, 0.125}) {
       const Eigen::Vector3d p = from + f * (to - from);
-      if (valid(v, p, tets)) {
+      if (valid(v, p, tets, allowed)) {
         complex_.setPosition(v, p);
         return true;
       }
@@ -128,12 +137,10 @@ private:
     return len > 0.0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d::Zero();
   }
 
-  // No incident tet inverts or falls under the quality floor, and the
-  // worst dihedral angle around v does not get worse than it was, unless it
-  // stays above kGoodAngle.
-  bool valid(std::int32_t v, const Eigen::Vector3d& p, const std::vector<std::int32_t>& tets) const {
+  // No incident tet inverts or falls under the quality floor, and none has
+  // a worst dihedral cosine above `allowed`.
+  bool valid(std::int32_t v, const Eigen::Vector3d& p, const std::vector<std::int32_t>& tets, double allowed) const {
     const auto& P = complex_.positions();
-    double worstBefore = -1.0, worstAfter = -1.0;
     for (std::int32_t q : tets) {
       if (complex_.isDummyTet(q)) continue;
       const Tet& t = complex_.tet(q);
@@ -141,15 +148,12 @@ private:
       for (int i = 0; i < 4; ++i) x[i] = t[std::size_t(i)] == v ? p : P[std::size_t(t[std::size_t(i)])];
       const double after = volumeLengthQuality(x[0], x[1], x[2], x[3]);
       if (!(after > 0.0) || signedVolume(x[0], x[1], x[2], x[3]) <= 0.0) return false;
-      const Eigen::Vector3d& a = P[std::size_t(t[0])];
-      const Eigen::Vector3d& b = P[std::size_t(t[1])];
-      const Eigen::Vector3d& c = P[std::size_t(t[2])];
-      const Eigen::Vector3d& d = P[std::size_t(t[3])];
-      if (after < kQualityFloor && after < volumeLengthQuality(a, b, c, d)) return false;
-      worstBefore = std::max(worstBefore, minDihedralCosine(a, b, c, d));
-      worstAfter = std::max(worstAfter, minDihedralCosine(x[0], x[1], x[2], x[3]));
+      if (after < kQualityFloor && after < volumeLengthQuality(P[std::size_t(t[0])], P[std::size_t(t[1])],
+                                                               P[std::size_t(t[2])], P[std::size_t(t[3])]))
+        return false;
+      if (minDihedralCosine(x[0], x[1], x[2], x[3]) > allowed) return false;
     }
-    return worstAfter <= std::max(worstBefore, kGoodAngleCosine);
+    return true;
   }
 
   static constexpr double kGoodAngleCosine = 0.8660254037844387;  // cos 30 degrees
