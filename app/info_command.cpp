@@ -134,7 +134,7 @@ void gridInfo(const InfoOptions& o) {
     std::printf("\n\n");
     std::printf("%6s  %-44s %12s %12s %8s %12s\n", "label", "name", "voxels", "volume cm3", "density", "mass g");
     for (const auto& e : labels) {
-      const std::string name = e.contains("name") && e["name"].is_string() ? e["name"].get<std::string>() : (e["label"] == 0 ? "(background)" : "");
+      const std::string name = e.contains("name") && e["name"].is_string() ? e["name"].get<std::string>() : (e["label"] == 0 ? "(background)" : organs ? "(not in organ table)" : "");
       std::printf("%6d  %-44.44s %12s %12.3f", e["label"].get<int>(), name.c_str(),
                   withThousands(e["voxels"].get<std::uint64_t>()).c_str(), e["volume_mm3"].get<double>() * 1e-3);
       if (e.contains("mass_g")) std::printf(" %8.3f %12.3f", e["density_g_cm3"].get<double>(), e["mass_g"].get<double>());

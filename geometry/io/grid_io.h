@@ -44,7 +44,8 @@ public:
   // Reads `count` slices starting at slice k0 into out (count * nx * ny labels).
   virtual void readSlices(std::int64_t k0, std::int64_t count, Label* out) = 0;
 };
-// Supported for NIfTI (.nii, .nii.gz) and MetaImage with raw data.
+// Supported for every grid format; compressed files read backwards restart
+// from the beginning (slow), so read them forwards.
 std::unique_ptr<GridSliceReader> openGridSlices(const std::string& path);
 
 // Writes a grid slice by slice to a temporary file; commit() renames it into
@@ -56,8 +57,8 @@ public:
   virtual void writeSlices(const Label* in, std::int64_t count) = 0;
   virtual void commit() = 0;
 };
-// Supported for NIfTI (.nii, .nii.gz, gzip streamed) and MetaImage (.mha/.mhd
-// + .raw). `maxLabel` decides the stored type (uint8 when <= 255).
+// Supported for every grid format (.mha stores its data uncompressed when
+// streamed). `maxLabel` decides the stored type (uint8 when <= 255).
 std::unique_ptr<GridSliceWriter> createGridSlices(const std::string& path, const GridGeometry& geometry, Label maxLabel);
 
 }  // namespace vox

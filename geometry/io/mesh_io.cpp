@@ -19,15 +19,15 @@ std::string lowerExtension(const std::string& path) {
 
 bool hasTetMeshExtension(const std::string& path) {
   const std::string e = lowerExtension(path);
-  return e == ".mesh" || e == ".vtu" || e == ".msh";
+  return e == ".mesh" || e == ".meshb" || e == ".vtu" || e == ".msh";
 }
 
 MeshFormat meshFormatFromPath(const std::string& path) {
   const std::string e = lowerExtension(path);
-  if (e == ".mesh") return MeshFormat::Medit;
+  if (e == ".mesh" || e == ".meshb") return MeshFormat::Medit;
   if (e == ".vtu") return MeshFormat::Vtu;
   if (e == ".msh") return MeshFormat::Gmsh;
-  throw InputError(path, "unknown mesh format (expected .mesh, .vtu or .msh)");
+  throw InputError(path, "unknown mesh format (expected .mesh, .meshb, .vtu or .msh)");
 }
 
 TetMesh readTetMesh(const std::string& path) {
@@ -49,7 +49,7 @@ void writeTetMesh(const std::string& path, const TetMesh& mesh) {
 
 bool hasSurfaceExtension(const std::string& path) {
   const std::string e = lowerExtension(path);
-  return e == ".obj" || e == ".off";
+  return e == ".obj" || e == ".off" || e == ".ply";
 }
 
 }  // namespace vox

@@ -1,7 +1,8 @@
 #pragma once
-// Tetrahedral mesh formats: Medit .mesh (ASCII), VTK .vtu (XML; ascii, binary
-// base64 and zlib-compressed appended data as written by meshio/ParaView),
-// Gmsh .msh 4.1 (ASCII and binary). Surface formats: OBJ, OFF.
+// Tetrahedral mesh formats: Medit .mesh (ASCII) and .meshb (binary), VTK
+// .vtu (XML; ascii, binary base64 and zlib-compressed appended data as written
+// by meshio/ParaView), Gmsh .msh 4.1 (ASCII and binary). Surface formats: OBJ,
+// OFF, PLY.
 //
 // Labels: Medit tetrahedron reference, VTU cell data array "label" (or
 // "medit:ref", "gmsh:physical" on read), Gmsh physical tag of the element's
@@ -32,7 +33,7 @@ TetMesh readGmsh(const std::string& path);
 void writeGmsh(const std::string& path, const TetMesh& mesh);
 
 bool hasSurfaceExtension(const std::string& path);
-TriMesh readSurface(const std::string& path);   // .obj, .off
+TriMesh readSurface(const std::string& path);   // .obj, .off, .ply
 void writeSurface(const std::string& path, const TriMesh& mesh);
 
 }  // namespace vox

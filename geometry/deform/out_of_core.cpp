@@ -1,0 +1,198 @@
+#include "geometry/deform/out_of_core.h"
+
+#include "geometry/error.h"
+#include "geometry/progress.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <fcntl.h>
+#include <filesystem>
+#include <unistd.h>
+
+namespace vox {
+
+namespace {
+
+std::string errnoText() { return std::strerror(errno); }
+
+bool endsWith(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+// Full-resolution slices copied to an unlinked raw temporary (native uint16),
+// read back in any order.
+class SpooledSlices final : public GridSliceReader {
+public:
+  SpooledSlices(const GridGeometry& geometry, const std::string& directory, const std::string& source)
+      : geometry_(geometry), source_(source) {
+    std::string name = (std::filesystem::path(directory.empty() ? "." : directory) / "voxmorph-source-XXXXXX").string();
+    fd_ = ::mkstemp(name.data());
+    if (fd_ < 0) throw RuntimeFailure(name + ": cannot create a temporary copy of " + source + " (" + errnoText() + ")");
+    ::unlink(name.c_str());
+  }
+  ~SpooledSlices() override {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  const GridGeometry& geometry() const override { return geometry_; }
+
+  void append(const Label* slices, std::int64_t count) {
+    const char* p = reinterpret_cast<const char*>(slices);
+    std::size_t left = std::size_t(count * geometry_.sliceVoxels()) * sizeof(Label);
+    while (left > 0) {
+      const ssize_t n = ::write(fd_, p, left);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) throw RuntimeFailure("temporary copy of " + source_ + ": write failed (" + errnoText() + ")");
+      p += n;
+      left -= std::size_t(n);
+    }
+  }
+
+  void readSlices(std::int64_t k0, std::int64_t count, Label* out) override {
+    const std::int64_t slice = geometry_.sliceVoxels() * std::int64_t(sizeof(Label));
+    char* p = reinterpret_cast<char*>(out);
+    std::size_t left = std::size_t(count * slice);
+    off_t offset = off_t(k0 * slice);
+    while (left > 0) {
+      const ssize_t n = ::pread(fd_, p, left, offset);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) throw RuntimeFailure("temporary copy of " + source_ + ": read failed (" + errnoText() + ")");
+      p += n;
+      offset += n;
+      left -= std::size_t(n);
+    }
+  }
+
+private:
+  GridGeometry geometry_;
+  std::string source_;
+  int fd_ = -1;
+};
+
+GridGeometry downsampledGeometry(const GridGeometry& g, int factor) {
+  GridGeometry d = g;
+  for (int a = 0; a < 3; ++a) d.dims[std::size_t(a)] = (g.dims[std::size_t(a)] + factor - 1) / factor;
+  d.spacing = g.spacing * double(factor);
+  d.origin = g.origin + g.spacing * (double(factor - 1) / 2.0);
+  return d;
+}
+
+// Downsampled slice K from the `count` (<= factor) source slices of its blocks.
+void downsampleSlice(const GridGeometry& g, int factor, const Label* slices, std::int64_t count, Label* out) {
+  const std::int64_t nx = g.dims[0], ny = g.dims[1];
+  const std::int64_t dx = (nx + factor - 1) / factor, dy = (ny + factor - 1) / factor;
+  std::vector<Label> block;
+  for (std::int64_t J = 0; J < dy; ++J)
+    for (std::int64_t I = 0; I < dx; ++I) {
+      block.clear();
+      for (std::int64_t k = 0; k < count; ++k)
+        for (std::int64_t j = J * factor; j < std::min((J + 1) * factor, ny); ++j) {
+          const Label* row = slices + (k * ny + j) * nx;
+          for (std::int64_t i = I * factor; i < std::min((I + 1) * factor, nx); ++i)
+            if (row[i] != 0) block.push_back(row[i]);
+        }
+      Label best = 0;
+      if (!block.empty()) {
+        std::sort(block.begin(), block.end());
+        std::size_t bestCount = 0;
+        for (std::size_t s = 0; s < block.size();) {
+          std::size_t e = s;
+          while (e < block.size() && block[e] == block[s]) ++e;
+          if (e - s > bestCount) best = block[s], bestCount = e - s;
+          s = e;
+        }
+      }
+      out[J * dx + I] = best;
+    }
+}
+
+// One pass over the source in slice order: the downsampled grid, the largest
+// label, and every group of slices handed to `visit` (for spooling).
+template <class Visit>
+LabelGrid streamDownsample(GridSliceReader& source, int factor, Label& maxLabel, Visit&& visit) {
+  const GridGeometry& g = source.geometry();
+  LabelGrid out(downsampledGeometry(g, factor));
+  std::vector<Label> slices(std::size_t(factor * g.sliceVoxels()));
+  maxLabel = 0;
+  ProgressCounter progress("read source", double(g.dims[2]));
+  for (std::int64_t K = 0; K < out.dims()[2]; ++K) {
+    const std::int64_t k0 = K * factor, count = std::min<std::int64_t>(factor, g.dims[2] - k0);
+    source.readSlices(k0, count, slices.data());
+    const std::int64_t n = count * g.sliceVoxels();
+    maxLabel = std::max(maxLabel, *std::max_element(slices.begin(), slices.begin() + n));
+    visit(slices.data(), count);
+    downsampleSlice(g, factor, slices.data(), count, out.data() + K * out.geometry().sliceVoxels());
+    progress.advance(double(count));
+  }
+  progress.finish();
+  return out;
+}
+
+}  // namespace
+
+LabelGrid downsampleLabels(GridSliceReader& source, int factor) {
+  if (factor < 1) throw InputError("downsampling", "factor must be at least 1");
+  Label maxLabel;
+  return streamDownsample(source, factor, maxLabel, [](const Label*, std::int64_t) {});
+}
+
+int downsampleFactor(const GridGeometry& source, std::int64_t maxVoxels) {
+  int f = 1;
+  while (downsampledGeometry(source, f).voxelCount() > std::max<std::int64_t>(1, maxVoxels)) ++f;
+  return f;
+}
+
+OutOfCoreSource::OutOfCoreSource(const std::string& path, std::int64_t maxDownsampledVoxels, const std::string& tempDirectory)
+    : path_(path) {
+  std::unique_ptr<GridSliceReader> reader = openGridSlices(path);
+  factor_ = vox::downsampleFactor(reader->geometry(), maxDownsampledVoxels);
+  // Only an uncompressed NIfTI is sure to seek cheaply; other files are
+  // copied to raw as they stream by.
+  if (endsWith(path, ".nii")) {
+    downsampled_ = streamDownsample(*reader, factor_, maxLabel_, [](const Label*, std::int64_t) {});
+    slices_ = std::move(reader);
+  } else {
+    auto spool = std::make_unique<SpooledSlices>(reader->geometry(), tempDirectory, path);
+    downsampled_ = streamDownsample(*reader, factor_, maxLabel_, [&](const Label* s, std::int64_t n) { spool->append(s, n); });
+    slices_ = std::move(spool);
+  }
+}
+
+OutOfCoreSource::~OutOfCoreSource() = default;
+
+RasterMemoryLimits rasterMemoryLimits(std::int64_t budgetBytes, int samples) {
+  const double k3 = double(samples) * samples * samples;
+  RasterMemoryLimits l;
+  // Half for the source window; a third for the slab: 4 bytes per sample
+  // state and, per voxel, 2 bytes in the engine plus 2 in the writer's slab.
+  l.windowVoxels = std::max<std::int64_t>(1, budgetBytes / 2 / std::int64_t(sizeof(Label)));
+  l.slabSamples = std::max<std::int64_t>(1, std::int64_t(double(budgetBytes) / 3.0 / (4.0 + 4.0 / k3)));
+  return l;
+}
+
+void writeDeformedGrid(SlabRasterizer& engine, const std::string& outputPath, Label maxLabel) {
+  const GridGeometry& g = engine.outputGeometry();
+  auto writer = createGridSlices(outputPath, g, maxLabel);
+  const std::int64_t nz = g.dims[2], step = std::min(nz, engine.slabSlices());
+  std::vector<Label> slab(std::size_t(step * g.sliceVoxels()));
+  ProgressCounter progress("rasterize", double(nz));
+  for (std::int64_t z0 = 0; z0 < nz; z0 += step) {
+    const std::int64_t z1 = std::min(nz, z0 + step);
+    engine.rasterizeSlab(z0, z1, slab.data());
+    writer->writeSlices(slab.data(), z1 - z0);
+    progress.advance(double(z1 - z0));
+  }
+  writer->commit();
+  progress.finish();
+}
+
+void rasterizeOutOfCore(OutOfCoreSource& source, const TetMesh& rest, const std::vector<Eigen::Vector3d>& deformed,
+                        const std::string& outputPath, const OutOfCoreOptions& options) {
+  const RasterizationPlan plan(source.geometry(), rest, deformed, options.samples);
+  const RasterMemoryLimits limits = rasterMemoryLimits(options.maxMemoryBytes, options.samples);
+  CpuSlabRasterizer engine(plan, source.slices(), {.slabSamples = limits.slabSamples, .windowVoxels = limits.windowVoxels},
+                           options.threads);
+  writeDeformedGrid(engine, outputPath, source.maxLabel());
+}
+
+}  // namespace vox

@@ -1,0 +1,292 @@
+#include "geometry/deform/transfer_mesh.h"
+
+#include "geometry/deform/distance_transform.h"
+#include "geometry/deform/restricted_delaunay.h"
+#include "geometry/error.h"
+#include "geometry/progress.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <unordered_map>
+
+namespace vox {
+
+ScalarGrid defaultSizingField(const GridGeometry& geometry, double fraction) {
+  return ScalarGrid(geometry, float(fraction * geometry.diagonal()));
+}
+
+namespace {
+
+// Label of the domain at p: outside when the interpolated distance to the
+// foreground's voxel centres exceeds the offset; otherwise the group whose
+// trilinear weights over the 8 surrounding voxel centres sum highest (ties
+// to the smaller group), so group interfaces pass between voxel centres.
+class TransferMeshDomain {
+public:
+  TransferMeshDomain(const ScalarGrid& distance, const LabelGrid& nearestGroup, double offsetMm)
+      : distance_(distance), groups_(nearestGroup), offset_(offsetMm) {}
+
+  int operator()(const Eigen::Vector3d& p) const {
+    if (double(distance_.sample(p)) > offset_) return 0;
+    const GridGeometry& g = groups_.geometry();
+    const Eigen::Vector3d c = g.continuousIndex(p);
+    std::int64_t i0[3];
+    double f[3];
+    for (int a = 0; a < 3; ++a) {
+      const double x = std::clamp(c[a], 0.0, double(g.dims[a] - 1));
+      i0[a] = std::min<std::int64_t>(std::int64_t(std::floor(x)), g.dims[a] - 2);
+      f[a] = x - double(i0[a]);
+    }
+    Label labels[8];
+    double weights[8];
+    int n = 0;
+    for (int corner = 0; corner < 8; ++corner) {
+      const int dx = corner & 1, dy = (corner >> 1) & 1, dz = corner >> 2;
+      const double w = (dx ? f[0] : 1 - f[0]) * (dy ? f[1] : 1 - f[1]) * (dz ? f[2] : 1 - f[2]);
+      const Label l = groups_.at(i0[0] + dx, i0[1] + dy, i0[2] + dz);
+      int slot = 0;
+      while (slot < n && labels[slot] != l) ++slot;
+      if (slot == n) labels[n] = l, weights[n++] = 0.0;
+      weights[slot] += w;
+    }
+    int best = 0;
+    for (int s = 1; s < n; ++s)
+      if (weights[s] > weights[best] || (weights[s] == weights[best] && labels[s] < labels[best])) best = s;
+    return int(labels[best]);
+  }
+
+private:
+  const ScalarGrid& distance_;
+  const LabelGrid& groups_;
+  double offset_;
+};
+
+// Foreground voxels of `grid` (linear indices) whose centres lie in no tet.
+std::vector<std::int64_t> uncoveredVoxels(const TetMesh& mesh, const LabelGrid& grid) {
+  const GridGeometry& g = grid.geometry();
+  std::vector<std::uint8_t> covered(std::size_t(g.voxelCount()), 0);
+  for (const Tet& t : mesh.tets) {
+    const Eigen::Vector3d& a = mesh.positions[t[0]];
+    Eigen::Matrix3d m;
+    m << mesh.positions[t[1]] - a, mesh.positions[t[2]] - a, mesh.positions[t[3]] - a;
+    const Eigen::Matrix3d inv = m.inverse();
+    if (!inv.allFinite()) continue;
+    Eigen::Vector3d lo = a, hi = a;
+    for (int k = 1; k < 4; ++k) {
+      lo = lo.cwiseMin(mesh.positions[t[k]]);
+      hi = hi.cwiseMax(mesh.positions[t[k]]);
+    }
+    const Eigen::Vector3d clo = g.continuousIndex(lo), chi = g.continuousIndex(hi);
+    std::int64_t i0[3], i1[3];
+    for (int d = 0; d < 3; ++d) {
+      i0[d] = std::max<std::int64_t>(0, std::int64_t(std::ceil(clo[d])));
+      i1[d] = std::min<std::int64_t>(g.dims[d] - 1, std::int64_t(std::floor(chi[d])));
+    }
+    // Barycentric inclusion with a tolerance: a centre on a shared face
+    // counts for both tets.
+    constexpr double kTolerance = 1e-9;
+    for (std::int64_t k = i0[2]; k <= i1[2]; ++k)
+      for (std::int64_t j = i0[1]; j <= i1[1]; ++j)
+        for (std::int64_t i = i0[0]; i <= i1[0]; ++i) {
+          const Eigen::Vector3d l = inv * (g.voxelCenter(i, j, k) - a);
+          if (l.minCoeff() >= -kTolerance && l.sum() <= 1.0 + kTolerance) covered[std::size_t(g.index(i, j, k))] = 1;
+        }
+  }
+  std::vector<std::int64_t> uncovered;
+  for (std::size_t v = 0; v < covered.size(); ++v)
+    if (grid.labels()[v] != 0 && !covered[v]) uncovered.push_back(std::int64_t(v));
+  return uncovered;
+}
+
+// Coverage repair: at most this many extra meshing passes, each pushing the
+// boundary out by half the offset around the voxels still uncovered, within
+// a radius of four of the coarsest voxel spacing (chords of Delaunay facets
+// cut inside at sharp convex features: finger tips, a body cut flat by the
+// grid's border).
+constexpr int kCoveragePasses = 3;
+
+}  // namespace
+
+TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, const TransferMeshOptions& options) {
+  if (sizing.values.empty() || *std::min_element(sizing.values.begin(), sizing.values.end()) <= 0.0f)
+    throw InputError("sizing field", "must be positive everywhere");
+  reportProgress("transfer mesh", 0.0);
+  const GridGeometry& g = groups.geometry();
+  const double offset = options.boundaryOffsetVoxels * g.spacing.minCoeff();
+  const double maxOffset = offset * (1.0 + 0.5 * kCoveragePasses);
+  // Pad by the largest offset plus two voxels: the domain ends inside the grid.
+  const GridGeometry padded = padGeometry(g, padForDistance(g, maxOffset, 2));
+  const LabelGrid labels = padLabels(groups, padded);
+  std::vector<std::uint8_t> foreground(labels.labels().size());
+  std::transform(labels.labels().begin(), labels.labels().end(), foreground.begin(), [](Label l) { return std::uint8_t(l != 0); });
+  if (std::find(foreground.begin(), foreground.end(), 1) == foreground.end())
+    throw InputError("grid", "has no foreground voxels to mesh");
+
+  // Distance to the foreground, and each voxel's nearest group: the groups
+  // extended into the background so the offset boundary has labels.
+  DistanceTransform dt = euclideanDistanceTransform(padded, foreground, true);
+  LabelGrid nearestGroup(padded, 0);
+  for (std::size_t v = 0; v < foreground.size(); ++v) nearestGroup.labels()[v] = labels.labels()[std::size_t(dt.nearest[v])];
+  const TransferMeshDomain label(dt.distance, nearestGroup, offset);
+  LabelGrid atCentres(padded, 0);
+  SampledDomain domain;
+  domain.labels = &atCentres;
+  domain.labelAt = [&label](const Eigen::Vector3d& p) { return label(p); };
+  VolumeCriteria criteria;
+  criteria.facetAngleDeg = options.facetAngleDeg;
+  criteria.facetDistanceMm = options.facetDistanceVoxels * g.spacing.minCoeff();
+  criteria.radiusEdgeRatio = options.radiusEdgeRatio;
+  criteria.sizing = &sizing;
+
+  const double radius = 4.0 * g.spacing.maxCoeff();
+  for (int pass = 0;; ++pass) {
+    for (std::int64_t k = 0; k < padded.dims[2]; ++k)
+      for (std::int64_t j = 0; j < padded.dims[1]; ++j)
+        for (std::int64_t i = 0; i < padded.dims[0]; ++i) atCentres.at(i, j, k) = Label(label(padded.voxelCenter(i, j, k)));
+    reportProgress("transfer mesh", 0.1);
+    TetMesh mesh = restrictedDelaunayVolume(domain, criteria);
+    orientPositively(mesh);
+    const std::vector<std::int64_t> uncovered = uncoveredVoxels(mesh, groups);
+    if (uncovered.empty() || pass == kCoveragePasses) {
+      reportProgress("transfer mesh", 1.0);
+      return mesh;
+    }
+    // Lower the distance field by a bump of height offset/2 around each
+    // uncovered centre (the largest bump where they overlap).
+    ScalarGrid bump(padded, 0.0f);
+    const Index3 reach = padForDistance(padded, radius, 0);
+    for (const std::int64_t u : uncovered) {
+      const Index3 c = g.ijk(u);
+      const Eigen::Vector3d centre = g.voxelCenter(c[0], c[1], c[2]);
+      Index3 pc;
+      padded.voxelAt(centre, pc);
+      for (std::int64_t k = std::max<std::int64_t>(0, pc[2] - reach[2]); k <= std::min(padded.dims[2] - 1, pc[2] + reach[2]); ++k)
+        for (std::int64_t j = std::max<std::int64_t>(0, pc[1] - reach[1]); j <= std::min(padded.dims[1] - 1, pc[1] + reach[1]); ++j)
+          for (std::int64_t i = std::max<std::int64_t>(0, pc[0] - reach[0]); i <= std::min(padded.dims[0] - 1, pc[0] + reach[0]); ++i) {
+            const double d = (padded.voxelCenter(i, j, k) - centre).norm();
+            if (d < radius) bump.at(i, j, k) = std::max(bump.at(i, j, k), float(0.5 * offset * (1.0 - d / radius)));
+          }
+    }
+    for (std::size_t v = 0; v < bump.values.size(); ++v) dt.distance.values[v] -= bump.values[v];
+  }
+}
+
+std::int64_t countUncoveredVoxels(const TetMesh& mesh, const LabelGrid& grid) {
+  return std::int64_t(uncoveredVoxels(mesh, grid).size());
+}
+
+CutReport cutTransferMesh(TetMesh& mesh, std::int32_t groupA, std::int32_t groupB, const std::optional<Eigen::AlignedBox3d>& region) {
+  CutReport report;
+  const auto neighbors = faceNeighbors(mesh, "transfer mesh");
+  const std::size_t nt = mesh.tetCount();
+
+  // Cut faces: groupB tet against groupA tet, centroid in the region.
+  std::vector<std::uint8_t> tetHasCutFace(nt, 0);
+  std::vector<std::uint8_t> vertexOnCut(mesh.vertexCount(), 0);
+  for (std::size_t t = 0; t < nt; ++t) {
+    if (mesh.labels[t] != groupB) continue;
+    for (int k = 0; k < 4; ++k) {
+      const std::int32_t n = neighbors[t][k];
+      if (n < 0 || mesh.labels[n] != groupA) continue;
+      const Tri f = tetFace(mesh.tets[t], k);
+      const Eigen::Vector3d centroid = (mesh.positions[f[0]] + mesh.positions[f[1]] + mesh.positions[f[2]]) / 3.0;
+      if (region && !region->contains(centroid)) continue;
+      ++report.cutFaces;
+      tetHasCutFace[t] = 1;
+      for (const std::int32_t v : f) vertexOnCut[v] = 1;
+    }
+  }
+  if (report.cutFaces == 0) return report;
+
+  // Tets around each vertex (CSR).
+  std::vector<std::int32_t> start(mesh.vertexCount() + 1, 0), around;
+  for (const Tet& t : mesh.tets)
+    for (const std::int32_t v : t) ++start[v + 1];
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  around.resize(std::size_t(start.back()));
+  {
+    std::vector<std::int32_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t t = 0; t < nt; ++t)
+      for (const std::int32_t v : mesh.tets[t]) around[std::size_t(fill[v]++)] = std::int32_t(t);
+  }
+
+  const std::vector<Tet> original = mesh.tets;
+  std::vector<std::int32_t> fanOf;
+  std::unordered_map<std::int32_t, std::int32_t> local;
+  const auto originalVertices = std::int32_t(vertexOnCut.size());
+  for (std::int32_t v = 0; v < originalVertices; ++v) {
+    if (!vertexOnCut[v]) continue;
+    // Fans of groupB tets around v: joined through groupB-groupB faces
+    // containing v (the faces opposite the tets' other vertices).
+    local.clear();
+    std::vector<std::int32_t> btets;
+    for (std::int32_t s = start[v]; s < start[v + 1]; ++s)
+      if (mesh.labels[around[s]] == groupB) {
+        local[around[s]] = std::int32_t(btets.size());
+        btets.push_back(around[s]);
+      }
+    fanOf.assign(btets.size(), -1);
+    std::vector<std::int32_t> stack;
+    for (std::size_t seed = 0; seed < btets.size(); ++seed) {
+      if (fanOf[seed] >= 0) continue;
+      fanOf[seed] = std::int32_t(seed);
+      stack.assign(1, std::int32_t(seed));
+      bool touchesCut = false;
+      std::vector<std::int32_t> members;
+      while (!stack.empty()) {
+        const std::int32_t b = stack.back();
+        stack.pop_back();
+        members.push_back(b);
+        const std::int32_t t = btets[b];
+        // Faces of t containing v: grow the fan through groupB neighbours,
+        // and note whether one of them is a cut face.
+        for (int k = 0; k < 4; ++k) {
+          if (original[t][k] == v) continue;
+          const std::int32_t n = neighbors[t][k];
+          if (n < 0) continue;
+          if (mesh.labels[n] == groupB) {
+            const auto it = local.find(n);
+            if (it != local.end() && fanOf[it->second] < 0) {
+              fanOf[it->second] = std::int32_t(seed);
+              stack.push_back(it->second);
+            }
+          } else if (mesh.labels[n] == groupA && tetHasCutFace[t]) {
+            const Tri f = tetFace(original[t], k);
+            const Eigen::Vector3d centroid = (mesh.positions[f[0]] + mesh.positions[f[1]] + mesh.positions[f[2]]) / 3.0;
+            if (!region || region->contains(centroid)) touchesCut = true;
+          }
+        }
+      }
+      if (!touchesCut) continue;
+      const std::int32_t copy = std::int32_t(mesh.positions.size());
+      mesh.positions.push_back(mesh.positions[v]);
+      ++report.duplicatedVertices;
+      for (const std::int32_t b : members)
+        for (std::int32_t& x : mesh.tets[btets[b]])
+          if (x == v) x = copy;
+    }
+  }
+
+  // Faces opened besides the cut faces: originally shared, now not.
+  std::size_t opened = 0;
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 4; ++k) {
+      const std::int32_t n = neighbors[t][k];
+      if (n < std::int32_t(t)) continue;
+      Tri a = tetFace(mesh.tets[t], k);
+      std::sort(a.begin(), a.end());
+      bool shared = false;
+      for (int m = 0; m < 4 && !shared; ++m) {
+        Tri b = tetFace(mesh.tets[n], m);
+        std::sort(b.begin(), b.end());
+        shared = a == b;
+      }
+      opened += !shared;
+    }
+  report.openedRimFaces = opened - report.cutFaces;
+  return report;
+}
+
+}  // namespace vox

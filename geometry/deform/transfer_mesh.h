@@ -1,0 +1,66 @@
+#pragma once
+// Transfer mesh (thesis 3.2.4 and 4.2.2): an adaptive Delaunay tetrahedral
+// mesh of the foreground (CGAL Mesh_3) whose tet size follows a sizing-field
+// grid F, multi-material from the label-group grid S so that each tet
+// carries its body-part group; and the cutting that separates two groups
+// inside a region by duplicating the vertices of their shared faces
+// (Figure 4.3).
+
+#include "geometry/label_grid.h"
+#include "geometry/scalar_grid.h"
+#include "geometry/tet_mesh.h"
+
+#include <Eigen/Geometry>
+#include <optional>
+
+namespace vox {
+
+// Lengths tied to voxel coverage are in units of the grid's finest spacing
+// (2.137 mm on the ICRP adult male).
+struct TransferMeshOptions {
+  // The mesh's boundary is the level set at this distance from the
+  // foreground's voxel centres, so every foreground voxel centre lies in a
+  // tet (the rasterizer needs that) while the volume stays within a few %
+  // of the voxels' volume on a body. Where Delaunay facets still cut a
+  // centre off (sharp convex features), the offset is raised locally and
+  // the mesh rebuilt, at most three times.
+  double boundaryOffsetVoxels = 1.4;
+  double facetDistanceVoxels = 0.5;  // upper bound on boundary/interface facet to surface distance
+  double facetAngleDeg = 25.0;   // lower bound on boundary/interface facet angles
+  double radiusEdgeRatio = 3.0;  // upper bound on tet circumradius / shortest edge
+};
+
+// The thesis' initial F: constant, `fraction` of the grid's diagonal, on
+// the grid's own geometry.
+ScalarGrid defaultSizingField(const GridGeometry& geometry, double fraction = 0.05);
+
+// Transfer mesh of S (`groups`: 0 background, > 0 group; B for a single
+// material, see binaryGroupGrid). Tet and boundary facet sizes follow
+// `sizing` (mm, sampled at each point; any geometry covering the grid).
+// Tets carry their group (> 0), are positively oriented, grid frame mm;
+// the result is the same on every run. Throws InputError("grid", ...) for a
+// grid without foreground or a sizing field with non-positive values.
+TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, const TransferMeshOptions& options = {});
+
+// Foreground voxels (label != 0) of `grid` whose centres lie in no tet.
+std::int64_t countUncoveredVoxels(const TetMesh& mesh, const LabelGrid& grid);
+
+struct CutReport {
+  std::size_t cutFaces = 0;            // faces between a groupA and a groupB tet inside the region
+  std::size_t duplicatedVertices = 0;  // vertices added
+  std::size_t openedRimFaces = 0;      // other faces opened where the cut meets the region's rim
+};
+
+// Cuts `mesh` between tets of groupA and groupB (thesis 4.2.2): every face
+// they share whose centroid lies in `region` (all of them when empty) is
+// opened. Each vertex of such faces gets one duplicate per fan of groupB
+// tets around it (groupB tets joined through groupB-groupB faces at that
+// vertex) that touches a cut face, and those groupB tets are re-indexed on
+// it; groupA and other tets keep the original. Positions are copied, so
+// volumes and orientations are unchanged. Where the cut meets the region's
+// rim, faces between the re-indexed groupB tets and other tets at those
+// vertices open too (reported): no tet stays face-connected across the cut.
+CutReport cutTransferMesh(TetMesh& mesh, std::int32_t groupA, std::int32_t groupB,
+                          const std::optional<Eigen::AlignedBox3d>& region = std::nullopt);
+
+}  // namespace vox

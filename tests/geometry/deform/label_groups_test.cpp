@@ -1,0 +1,133 @@
+#include "geometry/deform/label_groups.h"
+
+#include "geometry/error.h"
+#include "geometry/io/grid_io.h"
+#include "geometry/synth.h"
+#include "tests/support/test_environment.h"
+
+#include <gtest/gtest.h>
+
+#include <map>
+
+namespace vox {
+namespace {
+
+TEST(LabelGroups, ClassifiesIcrpOrganNames) {
+  const struct {
+    const char* name;
+    OrganBodyPart part;
+  } cases[] = {
+      {"Muscle, arms", {Limb::Arm, BodySide::Unknown}},
+      {"Humeri, upper half, cortical", {Limb::Arm, BodySide::Unknown}},
+      {"Ulnae and radii, medullary cavity", {Limb::Arm, BodySide::Unknown}},
+      {"Wrists and hand bones, spongiosa", {Limb::Arm, BodySide::Unknown}},
+      {"Skin, legs", {Limb::Leg, BodySide::Unknown}},
+      {"Femora, lower half, spongiosa", {Limb::Leg, BodySide::Unknown}},
+      {"Tibiae, fibulae and patellae, cortical", {Limb::Leg, BodySide::Unknown}},
+      {"Ankles and foot bones, cortical", {Limb::Leg, BodySide::Unknown}},
+      {"Brain", {Limb::Head, BodySide::Unknown}},
+      {"Cranium, spongiosa", {Limb::Head, BodySide::Unknown}},
+      {"Eye lense, left", {Limb::Head, BodySide::Left}},
+      {"Teeth", {Limb::Head, BodySide::Unknown}},
+      {"Salivary glands, right", {Limb::Head, BodySide::Right}},
+      {"Liver", {Limb::Trunk, BodySide::Unknown}},
+      {"Clavicles, cortical", {Limb::Trunk, BodySide::Unknown}},
+      {"Breast, left, adipose tissue", {Limb::Trunk, BodySide::Left}},
+      {"Cervical spine, cortical", {Limb::Trunk, BodySide::Unknown}},
+      {"Muscle, arms, right", {Limb::Arm, BodySide::Right}},
+      {"Humerus, left", {Limb::Arm, BodySide::Left}},
+  };
+  for (const auto& c : cases) EXPECT_EQ(classifyOrganName(c.name), c.part) << c.name;
+}
+
+TEST(LabelGroups, EveryIcrpLimbOrganFound) {
+  // Counted from the organ tables: 17 arm and 17 leg structures (bones,
+  // muscle, skin, vessels, nodes, cartilage, residual tissue), 25 of the head.
+  for (const char* table : {"icrp110_am_organs.dat", "icrp110_af_organs.dat"}) {
+    const OrganTable organs = OrganTable::read(test::assetPath(table));
+    std::map<Limb, int> count;
+    for (const auto& [id, o] : organs.organs()) ++count[classifyOrganName(o.name).limb];
+    EXPECT_EQ(count[Limb::Arm], 17) << table;
+    EXPECT_EQ(count[Limb::Leg], 17) << table;
+    EXPECT_EQ(count[Limb::Head], 25) << table;
+  }
+}
+
+TEST(LabelGroups, BodyPartNames) {
+  for (int i = 1; i <= kBodyPartCount; ++i) EXPECT_EQ(bodyPartFromName(bodyPartName(BodyPart(i))), BodyPart(i));
+  EXPECT_EQ(bodyPartFromName("arm_right"), BodyPart::RightArm);
+  EXPECT_EQ(bodyPartFromName("Left-Leg"), BodyPart::LeftLeg);
+  try {
+    bodyPartFromName("tail", "pose.json");
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("pose.json: unknown body part 'tail'"), std::string::npos) << e.what();
+  }
+}
+
+TEST(LabelGroups, StickFigureFromNames) {
+  const LabelGrid grid = synthesize(SynthKind::StickFigure, 64);
+  const LabelGrid groups = labelGroupGrid(grid, synthOrganTable(SynthKind::StickFigure));
+  const std::map<Label, BodyPart> expected = {{1, BodyPart::Trunk},    {2, BodyPart::Head},     {3, BodyPart::RightArm},
+                                              {4, BodyPart::LeftArm},  {5, BodyPart::RightLeg}, {6, BodyPart::LeftLeg},
+                                              {7, BodyPart::Trunk},    {8, BodyPart::RightArm}, {9, BodyPart::LeftArm}};
+  for (std::size_t v = 0; v < grid.labels().size(); ++v) {
+    const Label l = grid.labels()[v];
+    ASSERT_EQ(groups.labels()[v], l == 0 ? Label(0) : Label(expected.at(l))) << v;
+  }
+  EXPECT_EQ(binaryGroupGrid(grid).maxLabel(), 1);
+}
+
+// Organ names without a side ("Muscle, arms"): the side comes from the
+// midline, and matches what the sided names say.
+TEST(LabelGroups, SidesFromGeometry) {
+  const LabelGrid grid = synthesize(SynthKind::StickFigure, 64);
+  const OrganTable sided = synthOrganTable(SynthKind::StickFigure);
+  OrganTable unsided;
+  for (const auto& [id, o] : sided.organs()) {
+    Organ copy = o;
+    for (const char* side : {", right", ", left"})
+      if (const auto at = copy.name.find(side); at != std::string::npos) copy.name.erase(at);
+    unsided.add(copy);
+  }
+  EXPECT_EQ(unsided.find(3)->name, "Muscle, arms");
+  const LabelGrid fromNames = labelGroupGrid(grid, sided);
+  const LabelGrid fromGeometry = labelGroupGrid(grid, unsided);
+  EXPECT_EQ(fromGeometry.labels(), fromNames.labels());
+  // Mirrored convention: the sides swap.
+  const LabelGrid mirrored = labelGroupGrid(grid, unsided, {.rightSideAtLowX = false});
+  for (std::size_t v = 0; v < grid.labels().size(); ++v) {
+    if (fromNames.labels()[v] == Label(BodyPart::RightArm)) {
+      ASSERT_EQ(mirrored.labels()[v], Label(BodyPart::LeftArm));
+    }
+  }
+}
+
+TEST(LabelGroups, AdultMalePhantom) {
+  const LabelGrid grid = readGrid(test::assetPath("icrp110_am.nii.gz"));
+  const LabelGrid groups = labelGroupGrid(grid, OrganTable::read(test::assetPath("icrp110_am_organs.dat")));
+  const GridGeometry& g = grid.geometry();
+  std::map<Label, std::int64_t> count;
+  std::map<Label, double> meanX;
+  for (std::int64_t v = 0; v < g.voxelCount(); ++v) {
+    const Label s = groups.labels()[v];
+    ASSERT_EQ(s == 0, grid.labels()[v] == 0);
+    ++count[s];
+    meanX[s] += g.voxelCenter(g.ijk(v)[0], 0, 0).x();
+  }
+  for (int part = 1; part <= kBodyPartCount; ++part) {
+    EXPECT_GT(count[Label(part)], 50000) << bodyPartName(BodyPart(part));
+    meanX[Label(part)] /= double(count[Label(part)]);
+  }
+  // The phantom's i runs from the body's right to its left.
+  EXPECT_LT(meanX[Label(BodyPart::RightArm)], meanX[Label(BodyPart::Trunk)] - 150.0);
+  EXPECT_GT(meanX[Label(BodyPart::LeftArm)], meanX[Label(BodyPart::Trunk)] + 150.0);
+  EXPECT_LT(meanX[Label(BodyPart::RightLeg)], meanX[Label(BodyPart::Trunk)]);
+  EXPECT_GT(meanX[Label(BodyPart::LeftLeg)], meanX[Label(BodyPart::Trunk)]);
+  // Arms and legs hold about the same number of voxels on both sides.
+  EXPECT_NEAR(double(count[Label(BodyPart::RightArm)]) / double(count[Label(BodyPart::LeftArm)]), 1.0, 0.1);
+  EXPECT_NEAR(double(count[Label(BodyPart::RightLeg)]) / double(count[Label(BodyPart::LeftLeg)]), 1.0, 0.1);
+}
+
+}  // namespace
+}  // namespace vox

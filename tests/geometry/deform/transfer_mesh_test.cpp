@@ -1,0 +1,238 @@
+#include "geometry/deform/transfer_mesh.h"
+
+#include "geometry/deform/label_groups.h"
+#include "geometry/error.h"
+#include "geometry/io/grid_io.h"
+#include "geometry/label_stats.h"
+#include "geometry/synth.h"
+#include "geometry/voxel_tetrahedralization.h"
+#include "tests/support/test_environment.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <map>
+#include <set>
+
+namespace vox {
+namespace {
+
+double foregroundVolume(const LabelGrid& grid) {
+  std::int64_t n = 0;
+  for (const Label l : grid.labels()) n += l != 0;
+  return double(n) * grid.geometry().voxelVolume();
+}
+
+// Total volume; every tet positive.
+double checkedVolume(const TetMesh& mesh) {
+  double total = 0.0;
+  for (const Tet& t : mesh.tets) {
+    const double v = signedVolume(mesh.positions, t);
+    EXPECT_GT(v, 0.0);
+    total += v;
+  }
+  return total;
+}
+
+TEST(TransferMesh, SphereVolumeCoverageAndDeterminism) {
+  LabelGrid grid = synthesize(SynthKind::NestedSpheres, 32);
+  grid.geometry().spacing = {1.5, 1.5, 4.0};  // anisotropic, like the phantoms
+  grid.geometry().origin = {3.0, -7.0, 11.0};
+  const LabelGrid b = binaryGroupGrid(grid);
+  const ScalarGrid sizing = defaultSizingField(grid.geometry());
+  EXPECT_FLOAT_EQ(sizing.values.front(), float(0.05 * grid.geometry().diagonal()));
+  const TetMesh tm = buildTransferMesh(b, sizing);
+  ASSERT_GT(tm.tetCount(), 100u);
+  EXPECT_NO_THROW(tm.validate("tm"));
+  for (const std::int32_t l : tm.labels) EXPECT_EQ(l, 1);
+  // The boundary offset (1.4 voxels) adds about area x 0.9 voxel: 10-15 %
+  // on this small sphere, a few % on a body.
+  EXPECT_GT(checkedVolume(tm), foregroundVolume(grid));
+  EXPECT_LT(checkedVolume(tm), 1.2 * foregroundVolume(grid));
+  EXPECT_EQ(countUncoveredVoxels(tm, grid), 0);
+
+  const TetMesh again = buildTransferMesh(b, sizing);
+  EXPECT_EQ(again.positions, tm.positions);
+  EXPECT_EQ(again.tets, tm.tets);
+  EXPECT_EQ(again.labels, tm.labels);
+}
+
+TEST(TransferMesh, SizingFieldControlsResolution) {
+  const LabelGrid b = binaryGroupGrid(synthesize(SynthKind::NestedSpheres, 24));
+  const ScalarGrid coarse = defaultSizingField(b.geometry(), 0.2);
+  const ScalarGrid fine = defaultSizingField(b.geometry(), 0.05);
+  const TetMesh a = buildTransferMesh(b, coarse), c = buildTransferMesh(b, fine);
+  EXPECT_GT(c.vertexCount(), a.vertexCount());
+  // Refine only the upper half: more vertices there than in the lower half.
+  ScalarGrid half = coarse;
+  const GridGeometry& g = half.geometry;
+  for (std::int64_t k = g.dims[2] / 2; k < g.dims[2]; ++k)
+    for (std::int64_t j = 0; j < g.dims[1]; ++j)
+      for (std::int64_t i = 0; i < g.dims[0]; ++i) half.at(i, j, k) = fine.at(i, j, k);
+  const TetMesh h = buildTransferMesh(b, half);
+  const double midZ = g.voxelCenter(0, 0, g.dims[2] / 2).z();
+  std::size_t upper = 0;
+  for (const Eigen::Vector3d& p : h.positions) upper += p.z() > midZ;
+  EXPECT_GT(double(upper), 1.5 * double(h.vertexCount() - upper));
+}
+
+TEST(TransferMesh, MultiMaterialFromLabelGroups) {
+  const LabelGrid grid = synthesize(SynthKind::StickFigure, 64);
+  const LabelGrid groups = labelGroupGrid(grid, synthOrganTable(SynthKind::StickFigure));
+  const TetMesh tm = buildTransferMesh(groups, defaultSizingField(grid.geometry()));
+  checkedVolume(tm);
+  EXPECT_EQ(countUncoveredVoxels(tm, grid), 0);
+  std::set<std::int32_t> present(tm.labels.begin(), tm.labels.end());
+  EXPECT_EQ(present.size(), std::size_t(kBodyPartCount));
+  EXPECT_GT(*present.begin(), 0);
+  // Interfaces pass between voxel centres: a tet whose centroid lies in a
+  // voxel whose 26 neighbours all share its group carries that group.
+  const GridGeometry& g = groups.geometry();
+  std::size_t checked = 0, wrong = 0;
+  for (std::size_t t = 0; t < tm.tetCount(); ++t) {
+    const Tet& q = tm.tets[t];
+    Index3 c;
+    if (!g.voxelAt((tm.positions[q[0]] + tm.positions[q[1]] + tm.positions[q[2]] + tm.positions[q[3]]) / 4.0, c)) continue;
+    const Label s = groups.at(c[0], c[1], c[2]);
+    bool uniform = s != 0;
+    for (int dz = -1; dz <= 1 && uniform; ++dz)
+      for (int dy = -1; dy <= 1 && uniform; ++dy)
+        for (int dx = -1; dx <= 1 && uniform; ++dx) uniform = groups.atOr(c[0] + dx, c[1] + dy, c[2] + dz) == s;
+    if (!uniform) continue;
+    ++checked;
+    wrong += tm.labels[t] != std::int32_t(s);
+  }
+  EXPECT_GT(checked, 200u);
+  EXPECT_EQ(wrong, 0u);
+}
+
+// Faces shared between a tet of group a and one of group b, with centroids
+// in `region` (all when empty).
+std::size_t sharedFaces(const TetMesh& mesh, std::int32_t a, std::int32_t b, const std::optional<Eigen::AlignedBox3d>& region) {
+  const auto nb = faceNeighbors(mesh);
+  std::size_t shared = 0;
+  for (std::size_t t = 0; t < mesh.tetCount(); ++t)
+    for (int k = 0; k < 4; ++k) {
+      const std::int32_t n = nb[t][k];
+      if (n < 0 || mesh.labels[t] != a || mesh.labels[n] != b) continue;
+      const Tri f = tetFace(mesh.tets[t], k);
+      const Eigen::Vector3d c = (mesh.positions[f[0]] + mesh.positions[f[1]] + mesh.positions[f[2]]) / 3.0;
+      shared += !region || region->contains(c);
+    }
+  return shared;
+}
+
+// Face-connected components of the tets of `labels`.
+std::size_t components(const TetMesh& mesh, const std::set<std::int32_t>& labels) {
+  const auto nb = faceNeighbors(mesh);
+  std::vector<int> seen(mesh.tetCount(), 0);
+  std::size_t count = 0;
+  for (std::size_t s = 0; s < mesh.tetCount(); ++s) {
+    if (seen[s] || !labels.count(mesh.labels[s])) continue;
+    ++count;
+    std::vector<std::size_t> stack{s};
+    seen[s] = 1;
+    while (!stack.empty()) {
+      const std::size_t t = stack.back();
+      stack.pop_back();
+      for (const std::int32_t n : nb[t])
+        if (n >= 0 && !seen[n] && labels.count(mesh.labels[n])) seen[n] = 1, stack.push_back(std::size_t(n));
+    }
+  }
+  return count;
+}
+
+// Cutting on a voxel tet mesh: group 1 for x < 3, group 2 for x >= 3; cut
+// in the region y < 2 only.
+TEST(TransferMesh, CutOpensTheInterfaceInsideTheRegionOnly) {
+  GridGeometry g;
+  g.dims = {6, 4, 3};
+  LabelGrid grid(g, 0);
+  for (std::int64_t v = 0; v < g.voxelCount(); ++v) grid.labels()[v] = g.ijk(v)[0] < 3 ? 1 : 2;
+  TetMesh mesh = tetrahedralizeVoxels(grid, {.includeBackground = false});
+  const Eigen::AlignedBox3d region(Eigen::Vector3d(-10, -10, -10), Eigen::Vector3d(10, 1.5, 10));
+  const std::size_t before = sharedFaces(mesh, 2, 1, std::nullopt);
+  const std::size_t inRegion = sharedFaces(mesh, 2, 1, region);
+  ASSERT_GT(inRegion, 0u);
+  ASSERT_GT(before, inRegion);
+  std::vector<double> volumes;
+  for (const Tet& t : mesh.tets) volumes.push_back(signedVolume(mesh.positions, t));
+  const std::size_t vertices = mesh.vertexCount();
+
+  const CutReport r = cutTransferMesh(mesh, 1, 2, region);
+  EXPECT_EQ(r.cutFaces, inRegion);
+  EXPECT_EQ(mesh.vertexCount(), vertices + r.duplicatedVertices);
+  EXPECT_GT(r.duplicatedVertices, 0u);
+  EXPECT_NO_THROW(mesh.validate("cut"));
+  for (std::size_t t = 0; t < mesh.tetCount(); ++t) EXPECT_DOUBLE_EQ(signedVolume(mesh.positions, mesh.tets[t]), volumes[t]);
+  EXPECT_EQ(sharedFaces(mesh, 2, 1, region), 0u);
+  EXPECT_EQ(sharedFaces(mesh, 1, 2, region), 0u);
+  // Outside the region (away from its rim) the groups stay glued.
+  EXPECT_EQ(sharedFaces(mesh, 2, 1, std::nullopt) + r.cutFaces + r.openedRimFaces, before);
+  EXPECT_GT(sharedFaces(mesh, 2, 1, std::nullopt), 0u);
+  EXPECT_EQ(components(mesh, {1, 2}), 1u);
+}
+
+TEST(TransferMesh, CutEverywhereSeparatesTheGroups) {
+  GridGeometry g;
+  g.dims = {6, 4, 3};
+  LabelGrid grid(g, 0);
+  // Group 2 wraps around a block of group 1 on three sides, and a group 3
+  // touches both: the cut must not tear group 3 off.
+  for (std::int64_t v = 0; v < g.voxelCount(); ++v) {
+    const Index3 c = g.ijk(v);
+    grid.labels()[v] = c[2] == 2 ? 3 : (c[0] >= 2 && c[0] < 4 && c[1] < 3) ? 1 : 2;
+  }
+  TetMesh mesh = tetrahedralizeVoxels(grid, {.includeBackground = false});
+  ASSERT_EQ(components(mesh, {1, 2}), 1u);
+  const CutReport r = cutTransferMesh(mesh, 1, 2);
+  EXPECT_GT(r.cutFaces, 0u);
+  EXPECT_EQ(sharedFaces(mesh, 1, 2, std::nullopt), 0u);
+  EXPECT_EQ(sharedFaces(mesh, 2, 1, std::nullopt), 0u);
+  EXPECT_EQ(components(mesh, {1}), 1u);
+  EXPECT_EQ(components(mesh, {2}), 1u);
+  // 1 and 2 are only joined through group 3 now.
+  EXPECT_EQ(components(mesh, {1, 2}), 2u);
+  EXPECT_EQ(components(mesh, {1, 2, 3}), 1u);
+  EXPECT_GT(sharedFaces(mesh, 3, 1, std::nullopt), 0u);
+  EXPECT_GT(sharedFaces(mesh, 3, 2, std::nullopt), 0u);
+}
+
+TEST(TransferMesh, CutStickFigureArmFromTrunk) {
+  const LabelGrid grid = synthesize(SynthKind::StickFigure, 64);
+  const LabelGrid groups = labelGroupGrid(grid, synthOrganTable(SynthKind::StickFigure));
+  TetMesh tm = buildTransferMesh(groups, defaultSizingField(grid.geometry()));
+  const double volume = checkedVolume(tm);
+  const auto arm = std::int32_t(BodyPart::RightArm), trunk = std::int32_t(BodyPart::Trunk);
+  ASSERT_GT(sharedFaces(tm, arm, trunk, std::nullopt) + sharedFaces(tm, trunk, arm, std::nullopt), 0u);
+  const CutReport r = cutTransferMesh(tm, trunk, arm);
+  EXPECT_GT(r.cutFaces, 0u);
+  EXPECT_GT(r.duplicatedVertices, 0u);
+  EXPECT_EQ(sharedFaces(tm, arm, trunk, std::nullopt) + sharedFaces(tm, trunk, arm, std::nullopt), 0u);
+  EXPECT_DOUBLE_EQ(checkedVolume(tm), volume);
+  RecordProperty("cut_faces", int(r.cutFaces));
+  RecordProperty("duplicated_vertices", int(r.duplicatedVertices));
+}
+
+TEST(TransferMesh, BadInput) {
+  GridGeometry g;
+  g.dims = {4, 4, 4};
+  const LabelGrid empty(g, 0);
+  EXPECT_THROW(buildTransferMesh(empty, defaultSizingField(g)), InputError);
+  LabelGrid one(g, 0);
+  one.at(1, 1, 1) = 1;
+  EXPECT_THROW(buildTransferMesh(one, ScalarGrid(g, 0.0f)), InputError);
+}
+
+TEST(TransferMesh, AdultMalePhantom) {
+  const LabelGrid grid = readGrid(test::assetPath("icrp110_am.nii.gz"));
+  const TetMesh tm = buildTransferMesh(binaryGroupGrid(grid), defaultSizingField(grid.geometry()));
+  const double volume = checkedVolume(tm);
+  EXPECT_NEAR(volume, foregroundVolume(grid), 0.06 * foregroundVolume(grid));
+  EXPECT_EQ(countUncoveredVoxels(tm, grid), 0);
+  RecordProperty("tm_vertices", int(tm.vertexCount()));
+  RecordProperty("tm_tets", int(tm.tetCount()));
+}
+
+}  // namespace
+}  // namespace vox
