@@ -68,7 +68,7 @@ inline void runRemesh(RemeshCliOptions& o, const TetMesh& initial, const remesh:
     std::cout << remesh::reportJson(report);
     return;
   }
-  std::printf("%s: %s\n%s", o.output.c_str(), o.input.c_str(), remesh::reportText(report).c_str());
+  std::printf("%s -> %s\n%s", o.input.c_str(), o.output.c_str(), remesh::reportText(report).c_str());
   if (!o.report.empty()) writeFileAtomic(o.report, remesh::reportJson(report));
 }
 

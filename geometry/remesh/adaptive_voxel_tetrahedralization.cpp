@@ -304,7 +304,10 @@ private:
 AdaptiveTetrahedralizationOptions adaptiveOptionsForTarget(const GridGeometry& geometry, double targetLength) {
   AdaptiveTetrahedralizationOptions o;
   o.coarsestLevel = 0;
-  while (o.coarsestLevel < 6 && double(std::int64_t(2) << o.coarsestLevel) * geometry.spacing.maxCoeff() <= 2.0 * targetLength)
+  // Along the finest axis the coarsest cubes span at most 2 l; the splits of
+  // the first iteration refine longer axes of anisotropic voxels.
+  while (o.coarsestLevel < 6 &&
+         double(std::int64_t(2) << o.coarsestLevel) * geometry.spacing.minCoeff() <= 2.0 * targetLength * (1.0 + 1e-9))
     ++o.coarsestLevel;
   o.margin = std::max(2, int(std::ceil(targetLength / geometry.spacing.minCoeff())));
   return o;

@@ -26,7 +26,7 @@ struct AdaptiveTetrahedralizationOptions {
 };
 
 // Options for remeshing at target length l (mm): coarsest cubes at most 2 l
-// along their longest side, and an imaginary layer at least l (and two
+// along the finest voxel axis, and an imaginary layer at least l (and two
 // voxels) thick.
 AdaptiveTetrahedralizationOptions adaptiveOptionsForTarget(const GridGeometry& geometry, double targetLength);
 

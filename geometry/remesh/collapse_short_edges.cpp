@@ -1,6 +1,7 @@
 #include "geometry/remesh/collapse_short_edges.h"
 
 #include "geometry/remesh/mesh_edges.h"
+#include "geometry/remesh/parallel_for.h"
 #include "geometry/remesh/tet_shape.h"
 
 #include <algorithm>
@@ -10,6 +11,11 @@
 
 namespace vox::remesh {
 
+namespace {
+const double kGuardCosine = std::cos(kCollapseMinDihedral * M_PI / 180.0);
+constexpr double kUnknownCosine = 3.0;
+}  // namespace
+
 EdgeCollapser::EdgeCollapser(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull)
     : complex_(complex), bounds_(bounds), hull_(hull) {}
 
@@ -17,43 +23,32 @@ const LabelSet& EdgeCollapser::edgeLabels(const VertexNeighborhood& n, std::int3
   return n.edgeLabels[std::size_t(n.find(w))];
 }
 
-std::int32_t EdgeCollapser::tryCollapse(std::int32_t u, std::int32_t v) {
+std::int32_t EdgeCollapser::tryCollapse(std::int32_t u, std::int32_t v, bool apply) {
   const std::int32_t dummy = complex_.dummyVertex();
   if (u == v || u == dummy || v == dummy || !complex_.vertexAlive(u) || !complex_.vertexAlive(v)) return -1;
-  const std::int32_t t = complex_.findEdgeTet(u, v);
+  const std::int32_t t = walker_.findEdgeTet(complex_, u, v);
   if (t < 0) return -1;
   // Label sets first: most short edges near interfaces meet the exclusion
   // condition, which needs no one-ring.
   complex_.edgeRing(u, v, t, ring_);
   LabelSet suv;
   for (std::int32_t q : ring_.tets) suv.insert(complex_.label(q));
-  complex_.incidentTets(u, nu_.tets);
-  complex_.incidentTets(v, nv_.tets);
+  walker_.incidentTets(complex_, u, nu_.tets);
+  walker_.incidentTets(complex_, v, nv_.tets);
   auto labelsOf = [&](const std::vector<std::int32_t>& tets) {
     LabelSet s;
     for (std::int32_t q : tets) s.insert(complex_.label(q));
     return s;
   };
   if (suv.overflow() || (!(labelsOf(nu_.tets) == suv) && !(labelsOf(nv_.tets) == suv))) return -1;
+  if (!anyPositionKeepsEdgesShort()) return -1;
   classifyNeighborhood(complex_, u, nu_);
   classifyNeighborhood(complex_, v, nv_);
   const EdgeRule rule = edgeRule(nu_, nv_, suv, dummy);
   if (rule.condition == EdgeCondition::Exclusion) return -1;
   if (!topologyTests(suv) || !linkCondition()) return -1;
 
-  // The worst angle around each end point now: no tet the collapse updates
-  // may be worse than the worst it replaces, unless it stays above
-  // kCollapseMinDihedral.
-  const auto& P = complex_.positions();
-  double worst[2] = {-1.0, -1.0};
-  for (int i = 0; i < 2; ++i)
-    for (std::int32_t q : (i ? nv_ : nu_).tets) {
-      if (complex_.isDummyTet(q)) continue;
-      const Tet& c = complex_.tet(q);
-      worst[i] = std::max(worst[i], minDihedralCosine(P[std::size_t(c[0])], P[std::size_t(c[1])],
-                                                      P[std::size_t(c[2])], P[std::size_t(c[3])]));
-    }
-  static const double guard = std::cos(kCollapseMinDihedral * M_PI / 180.0);
+  worstBefore_[0] = worstBefore_[1] = kUnknownCosine;
 
   const Eigen::Vector3d pu = complex_.position(u), pv = complex_.position(v);
   struct Option {
@@ -80,13 +75,40 @@ std::int32_t EdgeCollapser::tryCollapse(std::int32_t u, std::int32_t v) {
     const bool keptMoves = o.p != complex_.position(k.vertex);
     if (r.onHull() && !hull_.allows(planes[&r == &nu_ ? 0 : 1], o.p)) continue;
     if (keptMoves && k.onHull() && !hull_.allows(planes[&k == &nu_ ? 0 : 1], o.p)) continue;
-    allowedCosine_ = std::max(guard, worst[&r == &nu_ ? 0 : 1]);
-    if (keptMoves) allowedCosine_ = std::max(allowedCosine_, worst[&k == &nu_ ? 0 : 1]);
     if (!test2NoLongEdges(r, k, o.p) || !test1PositiveVolumes(r, k, o.p)) continue;
-    collapse(r, k, o.p);
+    if (apply) collapse(r, k, o.p);
     return k.vertex;
   }
   return -1;
+}
+
+bool EdgeCollapser::anyPositionKeepsEdgesShort() const {
+  // Test 2 for the three positions a collapse may take (either end point or
+  // the mid-point), from the two stars alone: most short edges that cannot
+  // be collapsed fail here, before any classification.
+  const std::int32_t u = ring_.a, v = ring_.b, dummy = complex_.dummyVertex();
+  const double emax2 = bounds_.emax * bounds_.emax;
+  const Eigen::Vector3d pu = complex_.position(u), pv = complex_.position(v), mid = 0.5 * (pu + pv);
+  bool toV = true, toU = true, toMid = true;
+  auto holds = [&](const std::vector<std::int32_t>& tets, std::int32_t w) {
+    for (std::int32_t q : tets)
+      if (complex_.localIndex(q, w) >= 0) return true;
+    return false;
+  };
+  auto scan = [&](const std::vector<std::int32_t>& tets, const std::vector<std::int32_t>& otherTets, std::int32_t self,
+                  std::int32_t other, bool& toOther) {
+    for (std::int32_t q : tets)
+      for (std::int32_t w : complex_.tet(q)) {
+        if (w == self || w == other || w == dummy) continue;
+        const Eigen::Vector3d& pw = complex_.position(w);
+        if (toMid && (pw - mid).squaredNorm() >= emax2) toMid = false;
+        // Moving `self` onto `other` creates (other, w) unless it exists.
+        if (toOther && (pw - complex_.position(other)).squaredNorm() >= emax2 && !holds(otherTets, w)) toOther = false;
+      }
+  };
+  scan(nu_.tets, nv_.tets, u, v, toV);
+  scan(nv_.tets, nu_.tets, v, u, toU);
+  return toV || toU || toMid;
 }
 
 bool EdgeCollapser::topologyTests(const LabelSet& suv) const {
@@ -197,11 +219,28 @@ bool EdgeCollapser::test1PositiveVolumes(const VertexNeighborhood& r, const Vert
       if (after < kQualityFloor && after < volumeLengthQuality(P[std::size_t(t[0])], P[std::size_t(t[1])],
                                                                P[std::size_t(t[2])], P[std::size_t(t[3])]))
         return false;
-      if (minDihedralCosine(x[0], x[1], x[2], x[3]) > allowedCosine_) return false;
+      // No new dihedral angle under kCollapseMinDihedral, unless the tets
+      // the collapse replaces already had a worse one.
+      const double worst = minDihedralCosine(x[0], x[1], x[2], x[3]);
+      if (worst > kGuardCosine && (worst > worstBefore(r) || (keptMoves && worst > worstBefore(k)))) return false;
     }
     return true;
   };
   return check(r, k.vertex) && (!keptMoves || check(k, r.vertex));
+}
+
+double EdgeCollapser::worstBefore(const VertexNeighborhood& nb) const {
+  double& w = worstBefore_[&nb == &nu_ ? 0 : 1];
+  if (w != kUnknownCosine) return w;
+  const auto& P = complex_.positions();
+  w = -1.0;
+  for (std::int32_t q : nb.tets) {
+    if (complex_.isDummyTet(q)) continue;
+    const Tet& c = complex_.tet(q);
+    w = std::max(w, minDihedralCosine(P[std::size_t(c[0])], P[std::size_t(c[1])], P[std::size_t(c[2])],
+                                      P[std::size_t(c[3])]));
+  }
+  return w;
 }
 
 bool EdgeCollapser::test2NoLongEdges(const VertexNeighborhood& r, const VertexNeighborhood& k,
@@ -243,16 +282,33 @@ void EdgeCollapser::collapse(const VertexNeighborhood& r, const VertexNeighborho
   complex_.removeVertex(rv);
 }
 
-std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull) {
+std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull,
+                               int threads) {
   const double emin2 = bounds.emin * bounds.emin;
   // Shortest first: the initial candidates sorted once, the edges made
   // short by a collapse in a small heap, always taking the shorter head.
   std::vector<WeightedEdge> edges;
-  collectEdges(complex, [&](std::int32_t, std::int32_t, double l2) { return l2 < emin2; }, edges);
+  collectEdges(complex, [&](std::int32_t, std::int32_t, double l2) { return l2 < emin2; }, edges, threads);
   auto shorter = [](const WeightedEdge& x, const WeightedEdge& y) {
     return std::tie(x.length2, x.a, x.b) < std::tie(y.length2, y.a, y.b);
   };
   std::sort(edges.begin(), edges.end(), shorter);
+
+  // Screening on all threads: most candidates cannot be collapsed
+  // (junctions, lengths, angles), and finding out only reads the complex.
+  // (Screened with one thread as well, so the result does not depend on
+  // the thread count.)
+  std::vector<char> promising(edges.size(), 0);
+  parallelFor(std::int64_t(edges.size()), threads, [&](std::int64_t b, std::int64_t e) {
+    EdgeCollapser screen(complex, bounds, hull);
+    for (std::int64_t i = b; i < e; ++i)
+      promising[std::size_t(i)] = screen.tryCollapse(edges[std::size_t(i)].a, edges[std::size_t(i)].b, false) >= 0;
+  });
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < edges.size(); ++i)
+    if (promising[i]) edges[kept++] = edges[i];
+  edges.resize(kept);
+
   auto later = [&](const WeightedEdge& x, const WeightedEdge& y) { return shorter(y, x); };
   std::priority_queue<WeightedEdge, std::vector<WeightedEdge>, decltype(later)> queue(later);
   std::size_t next = 0;
@@ -271,21 +327,21 @@ std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& b
     }
     if (!complex.vertexAlive(e.a) || !complex.vertexAlive(e.b)) continue;
     if ((complex.position(e.a) - complex.position(e.b)).squaredNorm() >= emin2) continue;
-    const std::int32_t kept = collapser.tryCollapse(e.a, e.b);
-    if (kept < 0) continue;
+    const std::int32_t survivor = collapser.tryCollapse(e.a, e.b);
+    if (survivor < 0) continue;
     ++collapses;
     // Cascade: the remaining vertex's short edges are candidates again.
-    complex.incidentTets(kept, star);
+    complex.incidentTets(survivor, star);
     ring.clear();
     for (std::int32_t q : star)
       for (std::int32_t w : complex.tet(q))
-        if (w != kept && w != dummy) ring.push_back(w);
+        if (w != survivor && w != dummy) ring.push_back(w);
     std::sort(ring.begin(), ring.end());
     ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
-    const Eigen::Vector3d pk = complex.position(kept);
+    const Eigen::Vector3d pk = complex.position(survivor);
     for (std::int32_t w : ring) {
       const double l2 = (complex.position(w) - pk).squaredNorm();
-      if (l2 < emin2) queue.push({std::min(kept, w), std::max(kept, w), l2});
+      if (l2 < emin2) queue.push({std::min(survivor, w), std::max(survivor, w), l2});
     }
   }
   return collapses;

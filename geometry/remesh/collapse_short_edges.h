@@ -32,10 +32,13 @@ public:
   EdgeCollapser(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull);
 
   // Collapses edge (u, v) when the rules above allow it. Returns the vertex
-  // that remains, or -1 (nothing changed).
-  std::int32_t tryCollapse(std::int32_t u, std::int32_t v);
+  // that remains, or -1 (nothing changed). With apply = false only says
+  // which vertex would remain (read-only: collapsers of other threads may
+  // evaluate the same complex meanwhile).
+  std::int32_t tryCollapse(std::int32_t u, std::int32_t v, bool apply = true);
 
 private:
+  bool anyPositionKeepsEdgesShort() const;
   bool topologyTests(const LabelSet& edgeLabels) const;
   bool linkCondition() const;
   bool test1PositiveVolumes(const VertexNeighborhood& removed, const VertexNeighborhood& kept,
@@ -48,15 +51,21 @@ private:
   RemeshComplex& complex_;
   EdgeLengthBounds bounds_;
   const HullConstraint& hull_;
+  StarWalker walker_;
   VertexNeighborhood nu_, nv_;
   EdgeRing ring_;
-  double allowedCosine_ = 1.0;  // worst dihedral cosine a collapse may leave
+  // Worst dihedral cosine around u and v, computed when first needed.
+  double worstBefore(const VertexNeighborhood& nb) const;
+  mutable double worstBefore_[2] = {3.0, 3.0};
 };
 
 // Collapses edges shorter than e_min, shortest first; after each collapse
 // the edges of the remaining vertex that became too short are queued too
 // (cascading), until every edge is long enough or cannot be collapsed.
 // Returns the number of collapses.
-std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull);
+// The candidates are first screened in parallel (read-only), the collapses
+// then applied one at a time in order, each re-checked.
+std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull,
+                               int threads = 2);
 
 }  // namespace vox::remesh

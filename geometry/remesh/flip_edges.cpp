@@ -1,5 +1,6 @@
 #include "geometry/remesh/flip_edges.h"
 
+#include "geometry/mesh_quality.h"
 #include "geometry/remesh/label_set.h"
 #include "geometry/remesh/parallel_for.h"
 #include "geometry/remesh/tet_shape.h"
@@ -292,10 +293,18 @@ FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
   for (std::int32_t t = 0; t < complex.tetSlots(); ++t) {
     const double w = worst[std::size_t(t)];
     if (w <= threshold || w > 1.5) continue;
+    // The edges at its two largest dihedral angles: removing either one
+    // takes a sliver apart (thesis 2.3.6); caps are left to face flips.
     const Tet& q = complex.tet(t);
-    for (int i = 0; i < 4; ++i)
-      for (int j = i + 1; j < 4; ++j)
-        candidates.push_back({-w, std::min(q[std::size_t(i)], q[std::size_t(j)]), std::max(q[std::size_t(i)], q[std::size_t(j)])});
+    const auto& P = complex.positions();
+    const auto angles = dihedralAngles(P[std::size_t(q[0])], P[std::size_t(q[1])], P[std::size_t(q[2])], P[std::size_t(q[3])]);
+    static constexpr int kEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+    int order[6] = {0, 1, 2, 3, 4, 5};
+    std::sort(order, order + 6, [&](int x, int y) { return angles[std::size_t(x)] > angles[std::size_t(y)] || (angles[std::size_t(x)] == angles[std::size_t(y)] && x < y); });
+    for (int r = 0; r < options.edgesPerPoorTet; ++r) {
+      const std::int32_t a = q[std::size_t(kEdge[order[r]][0])], b = q[std::size_t(kEdge[order[r]][1])];
+      candidates.push_back({-w, std::min(a, b), std::max(a, b)});
+    }
   }
   std::sort(candidates.begin(), candidates.end());
   edges.clear();

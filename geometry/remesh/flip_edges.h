@@ -27,6 +27,8 @@ struct FlipOptions {
   // Inner edges of tets whose smallest dihedral angle is under this are
   // candidates (degrees); better tets have nothing to gain.
   double innerFlipAngle = 40.0;
+  // Edges tried per such tet, largest dihedral angles first (6: all).
+  int edgesPerPoorTet = 3;
   // Largest ring considered for an n-m flip.
   int maxRing = 10;
   // A surface flip may not bend the interface more than this (degrees,

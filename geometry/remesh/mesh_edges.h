@@ -15,9 +15,10 @@ struct WeightedEdge {
   double length2 = 0.0;         // squared length
 };
 
-// Every edge (a, b), a < b, of the complex for which keep(a, b, |ab|^2) holds.
+// Every edge (a, b), a < b, of the complex for which keep(a, b, |ab|^2)
+// holds (`keep` is called from several threads).
 void collectEdges(const RemeshComplex& complex,
                   const std::function<bool(std::int32_t, std::int32_t, double)>& keep,
-                  std::vector<WeightedEdge>& out);
+                  std::vector<WeightedEdge>& out, int threads = 2);
 
 }  // namespace vox::remesh

@@ -67,9 +67,9 @@ void remeshComplex(RemeshComplex& complex, const RemeshOptions& options, RemeshS
       return s;
     };
     if (refine) {
-      step.splits = splitLongEdges(complex, bounds);
+      step.splits = splitLongEdges(complex, bounds, options.threads);
       step.splitSeconds = lap();
-      step.collapses = collapseShortEdges(complex, bounds, hull);
+      step.collapses = collapseShortEdges(complex, bounds, hull, options.threads);
       step.collapseSeconds = lap();
     }
     FlipOptions flipOptions = options.flip;

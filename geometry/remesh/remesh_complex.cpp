@@ -105,8 +105,8 @@ TetMesh RemeshComplex::toTetMesh(bool keepImaginary) const {
   return out;
 }
 
-std::uint32_t RemeshComplex::nextStamp() const {
-  if (mark_.size() < tets_.size()) mark_.resize(tets_.size() + tets_.size() / 4 + 16, 0);
+std::uint32_t StarWalker::nextStamp(std::size_t tetSlots) {
+  if (mark_.size() < tetSlots) mark_.resize(tetSlots + tetSlots / 4 + 16, 0);
   if (++stamp_ == 0) {
     std::fill(mark_.begin(), mark_.end(), 0);
     stamp_ = 1;
@@ -114,18 +114,18 @@ std::uint32_t RemeshComplex::nextStamp() const {
   return stamp_;
 }
 
-void RemeshComplex::incidentTets(std::int32_t v, std::vector<std::int32_t>& out) const {
+void StarWalker::incidentTets(const RemeshComplex& complex, std::int32_t v, std::vector<std::int32_t>& out) {
   out.clear();
-  const std::uint32_t s = nextStamp();
-  const std::int32_t start = vertexTet_[std::size_t(v)];
+  const std::uint32_t s = nextStamp(std::size_t(complex.tetSlots()));
+  const std::int32_t start = complex.anyTet(v);
   out.push_back(start);
   mark_[std::size_t(start)] = s;
   for (std::size_t i = 0; i < out.size(); ++i) {
     const std::int32_t t = out[i];
-    const Tet& q = tets_[std::size_t(t)];
+    const Tet& q = complex.tet(t);
     for (int k = 0; k < 4; ++k) {
       if (q[std::size_t(k)] == v) continue;
-      const std::int32_t n = neighbor(t, k);
+      const std::int32_t n = complex.neighbor(t, k);
       if (mark_[std::size_t(n)] == s) continue;
       mark_[std::size_t(n)] = s;
       out.push_back(n);
@@ -133,24 +133,23 @@ void RemeshComplex::incidentTets(std::int32_t v, std::vector<std::int32_t>& out)
   }
 }
 
-std::int32_t RemeshComplex::findEdgeTet(std::int32_t a, std::int32_t b) const {
+std::int32_t StarWalker::findEdgeTet(const RemeshComplex& complex, std::int32_t a, std::int32_t b) {
   // Walk a's star, stopping at the first tet that also holds b.
-  thread_local std::vector<std::int32_t> queue;
-  queue.clear();
-  const std::uint32_t s = nextStamp();
-  const std::int32_t start = vertexTet_[std::size_t(a)];
-  queue.push_back(start);
+  queue_.clear();
+  const std::uint32_t s = nextStamp(std::size_t(complex.tetSlots()));
+  const std::int32_t start = complex.anyTet(a);
+  queue_.push_back(start);
   mark_[std::size_t(start)] = s;
-  for (std::size_t i = 0; i < queue.size(); ++i) {
-    const std::int32_t t = queue[i];
-    const Tet& q = tets_[std::size_t(t)];
+  for (std::size_t i = 0; i < queue_.size(); ++i) {
+    const std::int32_t t = queue_[i];
+    const Tet& q = complex.tet(t);
     if (q[0] == b || q[1] == b || q[2] == b || q[3] == b) return t;
     for (int k = 0; k < 4; ++k) {
       if (q[std::size_t(k)] == a) continue;
-      const std::int32_t n = neighbor(t, k);
+      const std::int32_t n = complex.neighbor(t, k);
       if (mark_[std::size_t(n)] == s) continue;
       mark_[std::size_t(n)] = s;
-      queue.push_back(n);
+      queue_.push_back(n);
     }
   }
   return -1;

@@ -32,6 +32,26 @@ struct EdgeRing {
   std::size_t size() const { return tets.size(); }
 };
 
+class RemeshComplex;
+
+// Breadth-first walks of vertex stars that mark tets with a stamp instead of
+// clearing a set. Each walker has its own marks: one walker per thread lets
+// several threads read the same complex at once.
+class StarWalker {
+public:
+  // Tets incident to v, breadth first from anyTet(v) through the faces
+  // containing v. Never called on the dummy vertex.
+  void incidentTets(const RemeshComplex& complex, std::int32_t v, std::vector<std::int32_t>& out);
+  // A tet containing both a and b, or -1 when (a, b) is not an edge.
+  std::int32_t findEdgeTet(const RemeshComplex& complex, std::int32_t a, std::int32_t b);
+
+private:
+  std::uint32_t nextStamp(std::size_t tetSlots);
+  std::vector<std::uint32_t> mark_;
+  std::uint32_t stamp_ = 0;
+  std::vector<std::int32_t> queue_;
+};
+
 class RemeshComplex {
 public:
   RemeshComplex() = default;
@@ -84,12 +104,9 @@ public:
   // Signed volume of a geometric tet (dummy tets: undefined).
   double volume(std::int32_t t) const { return signedVolume(positions_, tets_[std::size_t(t)]); }
 
-  // --- Queries (single-threaded: they share one mark array).
-  // Tets incident to v, breadth first from anyTet(v) through the faces
-  // containing v. Never called on the dummy vertex.
-  void incidentTets(std::int32_t v, std::vector<std::int32_t>& out) const;
-  // A tet containing both a and b, or -1 when (a, b) is not an edge.
-  std::int32_t findEdgeTet(std::int32_t a, std::int32_t b) const;
+  // --- Queries (single-threaded: they share the complex's StarWalker).
+  void incidentTets(std::int32_t v, std::vector<std::int32_t>& out) const { walker_.incidentTets(*this, v, out); }
+  std::int32_t findEdgeTet(std::int32_t a, std::int32_t b) const { return walker_.findEdgeTet(*this, a, b); }
   // Circulates around edge (a, b) starting from tet t, which contains both.
   void edgeRing(std::int32_t a, std::int32_t b, std::int32_t t, EdgeRing& out) const;
 
@@ -129,10 +146,7 @@ private:
   std::vector<std::int32_t> freeTets_;
   std::int32_t dummy_ = -1;
 
-  // Breadth-first searches mark tets with a stamp instead of clearing a set.
-  mutable std::vector<std::uint32_t> mark_;
-  mutable std::uint32_t stamp_ = 0;
-  std::uint32_t nextStamp() const;
+  mutable StarWalker walker_;
 };
 
 }  // namespace vox::remesh

@@ -97,18 +97,10 @@ public:
   bool moveTowards(std::int32_t v, const Eigen::Vector3d& to, std::vector<std::int32_t>& tets) const {
     vt_.of(v, tets);
     const Eigen::Vector3d from = complex_.position(v);
-    const auto& P = complex_.positions();
-    double worstBefore = -1.0;
-    for (std::int32_t q : tets) {
-      if (complex_.isDummyTet(q)) continue;
-      const Tet& t = complex_.tet(q);
-      worstBefore = std::max(worstBefore, minDihedralCosine(P[std::size_t(t[0])], P[std::size_t(t[1])],
-                                                            P[std::size_t(t[2])], P[std::size_t(t[3])]));
-    }
-    const double allowed = std::max(worstBefore, kGoodAngleCosine);
+    double worstBefore = kUnknownCosine;
     for (double f : {1.0, 0.5, 0.25, 0.125}) {
       const Eigen::Vector3d p = from + f * (to - from);
-      if (valid(v, p, tets, allowed)) {
+      if (valid(v, p, tets, worstBefore)) {
         complex_.setPosition(v, p);
         return true;
       }
@@ -137,9 +129,11 @@ private:
     return len > 0.0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d::Zero();
   }
 
-  // No incident tet inverts or falls under the quality floor, and none has
-  // a worst dihedral cosine above `allowed`.
-  bool valid(std::int32_t v, const Eigen::Vector3d& p, const std::vector<std::int32_t>& tets, double allowed) const {
+  // No incident tet inverts or falls under the quality floor, and none gets
+  // a dihedral angle under 30 degrees that is worse than the worst around v
+  // before the move (computed into worstBefore when first needed).
+  bool valid(std::int32_t v, const Eigen::Vector3d& p, const std::vector<std::int32_t>& tets,
+             double& worstBefore) const {
     const auto& P = complex_.positions();
     for (std::int32_t q : tets) {
       if (complex_.isDummyTet(q)) continue;
@@ -151,12 +145,25 @@ private:
       if (after < kQualityFloor && after < volumeLengthQuality(P[std::size_t(t[0])], P[std::size_t(t[1])],
                                                                P[std::size_t(t[2])], P[std::size_t(t[3])]))
         return false;
-      if (minDihedralCosine(x[0], x[1], x[2], x[3]) > allowed) return false;
+      const double worst = minDihedralCosine(x[0], x[1], x[2], x[3]);
+      if (worst > kGoodAngleCosine) {
+        if (worstBefore == kUnknownCosine) {
+          worstBefore = -1.0;
+          for (std::int32_t o : tets) {
+            if (complex_.isDummyTet(o)) continue;
+            const Tet& u = complex_.tet(o);
+            worstBefore = std::max(worstBefore, minDihedralCosine(P[std::size_t(u[0])], P[std::size_t(u[1])],
+                                                                  P[std::size_t(u[2])], P[std::size_t(u[3])]));
+          }
+        }
+        if (worst > worstBefore) return false;
+      }
     }
     return true;
   }
 
   static constexpr double kGoodAngleCosine = 0.8660254037844387;  // cos 30 degrees
+  static constexpr double kUnknownCosine = 3.0;
   RemeshComplex& complex_;
   const InterfaceSurfaces* surfaces_;
   const HullConstraint& hull_;

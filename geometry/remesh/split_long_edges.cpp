@@ -44,12 +44,12 @@ std::int32_t splitEdge(RemeshComplex& complex, std::int32_t a, std::int32_t b, s
   return m;
 }
 
-std::size_t splitLongEdges(RemeshComplex& complex, const EdgeLengthBounds& bounds) {
+std::size_t splitLongEdges(RemeshComplex& complex, const EdgeLengthBounds& bounds, int threads) {
   const double emax2 = bounds.emax * bounds.emax;
   // Longest first: the initial candidates sorted once (ties by vertex ids),
   // the edges of new vertices that are still too long in a heap.
   std::vector<WeightedEdge> edges;
-  collectEdges(complex, [&](std::int32_t, std::int32_t, double length2) { return length2 > emax2; }, edges);
+  collectEdges(complex, [&](std::int32_t, std::int32_t, double length2) { return length2 > emax2; }, edges, threads);
   auto longer = [](const WeightedEdge& x, const WeightedEdge& y) {
     return x.length2 > y.length2 || (x.length2 == y.length2 && std::tie(x.a, x.b) < std::tie(y.a, y.b));
   };

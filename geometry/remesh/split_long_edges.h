@@ -18,6 +18,6 @@ std::int32_t splitEdge(RemeshComplex& complex, std::int32_t a, std::int32_t b, s
 
 // Splits, longest first, every edge longer than e_max, and again the halves
 // that are still too long. Returns the number of splits.
-std::size_t splitLongEdges(RemeshComplex& complex, const EdgeLengthBounds& bounds);
+std::size_t splitLongEdges(RemeshComplex& complex, const EdgeLengthBounds& bounds, int threads = 2);
 
 }  // namespace vox::remesh

@@ -10,6 +10,7 @@
 //   build/release/bench/remesh_bench                       # AM phantom, l = 8 mm
 //   VOX_REMESH_GRID=path.nii.gz VOX_REMESH_L=4.274 build/release/bench/remesh_bench
 //   VOX_REMESH_SYNTH=junctions:48 VOX_REMESH_L=2.5 build/release/bench/remesh_bench
+//   VOX_REMESH_CROP=60,20,100,96,64,40 build/release/bench/remesh_bench  # a box of voxels
 //
 // Counters: tets (domain), min/max dihedral, tets under 15 and 5 degrees,
 // topology differences against the grid (0 = every label, 1-junction and
@@ -35,6 +36,7 @@
 #include <cstdlib>
 #include <ctime>
 #include <memory>
+#include <stdexcept>
 #include <string>
 
 namespace {
@@ -70,6 +72,20 @@ const Case& benchCase() {
     } else {
       k->name = grid ? grid : std::string(VOX_ASSETS_DIR) + "/icrp110_am.nii.gz";
       k->grid = readGrid(k->name);
+    }
+    if (const char* crop = std::getenv("VOX_REMESH_CROP")) {
+      std::int64_t b[6];
+      if (std::sscanf(crop, "%ld,%ld,%ld,%ld,%ld,%ld", &b[0], &b[1], &b[2], &b[3], &b[4], &b[5]) != 6)
+        throw std::runtime_error("VOX_REMESH_CROP wants x0,y0,z0,nx,ny,nz");
+      GridGeometry g = k->grid.geometry();
+      g.dims = {b[3], b[4], b[5]};
+      g.origin = k->grid.geometry().voxelCenter(b[0], b[1], b[2]);
+      LabelGrid cropped(g);
+      for (std::int64_t z = 0; z < b[5]; ++z)
+        for (std::int64_t y = 0; y < b[4]; ++y)
+          for (std::int64_t x = 0; x < b[3]; ++x) cropped.at(x, y, z) = k->grid.atOr(b[0] + x, b[1] + y, b[2] + z);
+      k->grid = std::move(cropped);
+      k->name += std::string(" cropped to ") + crop;
     }
     if (const char* l = std::getenv("VOX_REMESH_L")) k->targetLength = std::atof(l);
     const auto t0 = std::chrono::steady_clock::now();
