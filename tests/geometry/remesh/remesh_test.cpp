@@ -67,6 +67,22 @@ TEST(Remesh, JunctionSphereKeepsLabelsJunctionsAndCorners) {
   bool outsideCurve = false;
   for (const auto& [set, n] : o.topology.junctionCurves) outsideCurve = outsideCurve || set.front() == 0;
   EXPECT_TRUE(outsideCurve);
+  // The hull of the imaginary layer is still the initial box: every hull
+  // vertex lies on one of its faces.
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+  for (const Eigen::Vector3d& p : o.initial.positions) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  for (std::int32_t t = 0; t < o.complex.tetSlots(); ++t) {
+    if (!o.complex.tetAlive(t) || o.complex.label(t) != kDummyLabel) continue;
+    for (std::int32_t v : o.complex.tet(t)) {
+      if (v == o.complex.dummyVertex()) continue;
+      const Eigen::Vector3d& p = o.complex.position(v);
+      ASSERT_TRUE(((p.array() == lo.array()) || (p.array() == hi.array())).any()) << p.transpose();
+      ASSERT_TRUE((p.array() >= lo.array()).all() && (p.array() <= hi.array()).all());
+    }
+  }
   // Coarser than the voxels: far fewer tets, decent angles.
   const TetQualitySummary q = summarizeTetQuality(o.output);
   EXPECT_LT(q.tets, summarizeTetQuality(o.initial).tets / 3);
