@@ -58,7 +58,7 @@ double EdgeFlipper::fanWorstCosine(double bound) const {
 bool EdgeFlipper::fanCreatesExistingEdge(std::size_t apex) {
   const std::size_t n = ring_.size();
   const std::int32_t top = ring_.ring[apex];
-  complex_.incidentTets(top, star_);
+  walker_.incidentTets(complex_, top, star_);
   if (n == 3) {
     // 3-2: the new facet must not exist yet.
     const std::int32_t x = ring_.ring[(apex + 1) % n], y = ring_.ring[(apex + 2) % n];
@@ -75,10 +75,10 @@ bool EdgeFlipper::fanCreatesExistingEdge(std::size_t apex) {
   return false;
 }
 
-bool EdgeFlipper::tryFlipInnerEdge(std::int32_t a, std::int32_t b) {
+bool EdgeFlipper::tryFlipInnerEdge(std::int32_t a, std::int32_t b, bool apply) {
   if (a == complex_.dummyVertex() || b == complex_.dummyVertex()) return false;
   if (!complex_.vertexAlive(a) || !complex_.vertexAlive(b)) return false;
-  const std::int32_t t = complex_.findEdgeTet(a, b);
+  const std::int32_t t = walker_.findEdgeTet(complex_, a, b);
   if (t < 0) return false;
   complex_.edgeRing(a, b, t, ring_);
   const std::size_t n = ring_.size();
@@ -104,6 +104,7 @@ bool EdgeFlipper::tryFlipInnerEdge(std::int32_t a, std::int32_t b) {
   std::sort(choices.begin(), choices.end());
   for (const auto& [worst, k] : choices) {
     if (fanCreatesExistingEdge(k)) continue;
+    if (!apply) return true;
     fanTowards(k);
     complex_.replaceTets(ring_.tets, fan_, fanLabels_, scratch_);
     return true;
@@ -113,7 +114,7 @@ bool EdgeFlipper::tryFlipInnerEdge(std::int32_t a, std::int32_t b) {
 
 std::pair<int, int> EdgeFlipper::boundaryValence(std::int32_t v, std::int32_t x, std::int32_t y) {
   // Edges of v on the x|y interface: sides of the boundary facets around v.
-  complex_.incidentTets(v, star_);
+  walker_.incidentTets(complex_, v, star_);
   thread_local std::vector<std::int32_t> others;
   others.clear();
   LabelSet labels;
@@ -132,10 +133,10 @@ std::pair<int, int> EdgeFlipper::boundaryValence(std::int32_t v, std::int32_t x,
   return {int(std::unique(others.begin(), others.end()) - others.begin()), labels.size()};
 }
 
-bool EdgeFlipper::tryFlipSurfaceEdge(std::int32_t a, std::int32_t b) {
+bool EdgeFlipper::tryFlipSurfaceEdge(std::int32_t a, std::int32_t b, bool apply) {
   if (a == complex_.dummyVertex() || b == complex_.dummyVertex()) return false;
   if (!complex_.vertexAlive(a) || !complex_.vertexAlive(b)) return false;
-  const std::int32_t t = complex_.findEdgeTet(a, b);
+  const std::int32_t t = walker_.findEdgeTet(complex_, a, b);
   if (t < 0) return false;
   complex_.edgeRing(a, b, t, ring_);
   const std::size_t n = ring_.size();
@@ -213,12 +214,13 @@ bool EdgeFlipper::tryFlipSurfaceEdge(std::int32_t a, std::int32_t b) {
   }
   if (fanCreatesExistingEdge(bestApex)) return false;
   if (bestApex == n) return false;
+  if (!apply) return true;
   fanTowards(bestApex);
   complex_.replaceTets(ring_.tets, fan_, fanLabels_, scratch_);
   return true;
 }
 
-bool EdgeFlipper::tryFlipFace(std::int32_t t, int k) {
+bool EdgeFlipper::tryFlipFace(std::int32_t t, int k, bool apply) {
   // 2-3 flip: the two tets on either side of a facet that is no interface
   // become three around the edge joining their apexes.
   if (!complex_.tetAlive(t) || complex_.isDummyTet(t)) return false;
@@ -241,10 +243,10 @@ bool EdgeFlipper::tryFlipFace(std::int32_t t, int k) {
     fanLabels_.push_back(complex_.label(t));
   }
   if (!(fanWorstCosine(current - 1e-3) < current - 1e-3)) return false;
-  complex_.incidentTets(apexT, star_);
+  walker_.incidentTets(complex_, apexT, star_);
   for (std::int32_t q : star_)
     if (complex_.localIndex(q, apexN) >= 0) return false;  // the new edge exists already
-  complex_.replaceTets({t, n}, fan_, fanLabels_, scratch_);
+  if (apply) complex_.replaceTets({t, n}, fan_, fanLabels_, scratch_);
   return true;
 }
 
@@ -263,6 +265,23 @@ void worstCosines(const RemeshComplex& complex, int threads, std::vector<double>
   });
 }
 }  // namespace
+
+// Keeps the candidate edges a flip would take on the complex as it is now,
+// found on all threads (read-only); the flips are then applied one by one
+// in order, each re-checked.
+template <typename Try>
+void screen(RemeshComplex& complex, const FlipOptions& options, std::vector<std::pair<std::int32_t, std::int32_t>>& edges,
+            const Try& tryFlip) {
+  std::vector<char> flippable(edges.size(), 0);
+  parallelFor(std::int64_t(edges.size()), options.threads, [&](std::int64_t b, std::int64_t e) {
+    EdgeFlipper f(complex, options);
+    for (std::int64_t i = b; i < e; ++i) flippable[std::size_t(i)] = tryFlip(f, edges[std::size_t(i)].first, edges[std::size_t(i)].second);
+  });
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < edges.size(); ++i)
+    if (flippable[i]) edges[kept++] = edges[i];
+  edges.resize(kept);
+}
 
 FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
   FlipCounts counts;
@@ -284,6 +303,7 @@ FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
   }
   std::sort(edges.begin(), edges.end());
   edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  screen(complex, options, edges, [](EdgeFlipper& f, std::int32_t a, std::int32_t b) { return f.tryFlipSurfaceEdge(a, b, false); });
   for (const auto& [a, b] : edges) counts.surface += flipper.tryFlipSurfaceEdge(a, b);
 
   // Inner edges of poor tets, worst tets first.
@@ -324,6 +344,7 @@ FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
     }
     edges.swap(ordered);
   }
+  screen(complex, options, edges, [](EdgeFlipper& f, std::int32_t a, std::int32_t b) { return f.tryFlipInnerEdge(a, b, false); });
   for (const auto& [a, b] : edges) counts.inner += flipper.tryFlipInnerEdge(a, b);
 
   // Face flips for the slivers and caps that are left.
@@ -332,6 +353,18 @@ FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
   for (std::int32_t t = 0; t < complex.tetSlots(); ++t)
     if (worst[std::size_t(t)] > threshold && worst[std::size_t(t)] < 1.5) poor.push_back({-worst[std::size_t(t)], t});
   std::sort(poor.begin(), poor.end());
+  {
+    std::vector<char> any(poor.size(), 0);
+    parallelFor(std::int64_t(poor.size()), options.threads, [&](std::int64_t b, std::int64_t e) {
+      EdgeFlipper f(complex, options);
+      for (std::int64_t i = b; i < e; ++i)
+        for (int k = 0; k < 4 && !any[std::size_t(i)]; ++k) any[std::size_t(i)] = f.tryFlipFace(poor[std::size_t(i)].second, k, false);
+    });
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < poor.size(); ++i)
+      if (any[i]) poor[kept++] = poor[i];
+    poor.resize(kept);
+  }
   for (const auto& [w, t] : poor)
     for (int k = 0; k < 4; ++k)
       if (flipper.tryFlipFace(t, k)) {

@@ -46,10 +46,12 @@ struct FlipCounts {
 class EdgeFlipper {
 public:
   EdgeFlipper(RemeshComplex& complex, const FlipOptions& options);
-  bool tryFlipInnerEdge(std::int32_t a, std::int32_t b);
-  bool tryFlipSurfaceEdge(std::int32_t a, std::int32_t b);
+  // Each returns whether it flipped; with apply = false only whether it
+  // would (read-only: flippers of other threads may read the complex too).
+  bool tryFlipInnerEdge(std::int32_t a, std::int32_t b, bool apply = true);
+  bool tryFlipSurfaceEdge(std::int32_t a, std::int32_t b, bool apply = true);
   // 2-3 flip of face k of tet t (sliver removal, thesis 2.3.6).
-  bool tryFlipFace(std::int32_t t, int k);
+  bool tryFlipFace(std::int32_t t, int k, bool apply = true);
 
 private:
   // Tets of the fan towards ring[apex], with their labels.
@@ -63,6 +65,7 @@ private:
 
   RemeshComplex& complex_;
   FlipOptions options_;
+  StarWalker walker_;
   EdgeRing ring_;
   std::vector<Tet> fan_;
   std::vector<std::int32_t> fanLabels_;
@@ -70,7 +73,7 @@ private:
 };
 
 // Surface flips first (valence), then inner flips (dihedral angle), then
-// face flips.
+// face flips. The candidates of each kind are screened on all threads first.
 FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options = {});
 
 }  // namespace vox::remesh
