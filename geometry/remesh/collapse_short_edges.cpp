@@ -13,6 +13,7 @@ namespace vox::remesh {
 
 namespace {
 const double kGuardCosine = std::cos(kCollapseMinDihedral * M_PI / 180.0);
+const double kGuardQuality = 2.0 * std::sin(kCollapseMinDihedral * M_PI / 180.0);
 constexpr double kUnknownCosine = 3.0;
 }  // namespace
 
@@ -220,7 +221,11 @@ bool EdgeCollapser::test1PositiveVolumes(const VertexNeighborhood& r, const Vert
                                                                P[std::size_t(t[2])], P[std::size_t(t[3])]))
         return false;
       // No new dihedral angle under kCollapseMinDihedral, unless the tets
-      // the collapse replaces already had a worse one.
+      // the collapse replaces already had a worse one. Since
+      // V = l_e h1 h2 sin(theta_e) / 6 for every edge e, the quality is at
+      // most 2 sin(theta_min): above 2 sin(kCollapseMinDihedral) no angle
+      // can be too small and the angles need not be computed.
+      if (after > kGuardQuality) continue;
       const double worst = minDihedralCosine(x[0], x[1], x[2], x[3]);
       if (worst > kGuardCosine && (worst > worstBefore(r) || (keptMoves && worst > worstBefore(k)))) return false;
     }
