@@ -1,6 +1,7 @@
 #include "geometry/remesh/adaptive_voxel_tetrahedralization.h"
 
 #include "geometry/error.h"
+#include "geometry/progress.h"
 
 #include <algorithm>
 #include <array>
@@ -99,12 +100,15 @@ public:
         bisected = true;
       }
       pending.swap(next);
+      reportProgress("voxel decomposition", std::min(0.99, double(round + 1) / double(finest + 4)));
       if (!bisected) {
         done.insert(done.end(), pending.begin(), pending.end());
         break;
       }
     }
-    return toMesh(done, includeBackground);
+    TetMesh mesh = toMesh(done, includeBackground);
+    reportProgress("voxel decomposition", 1.0);
+    return mesh;
   }
 
 private:

@@ -54,16 +54,20 @@ void remeshComplex(RemeshComplex& complex, const RemeshOptions& options, RemeshS
   }
 
   const int total = options.iterations + options.flipSmoothCycles;
+  reportProgress("remesh", 0.0);
   for (int round = 0; round < total; ++round) {
     const auto t0 = std::chrono::steady_clock::now();
     RemeshStep step;
     const bool refine = round < options.iterations;
     step.name = refine ? "iteration " + std::to_string(round + 1)
                        : "flip-smooth " + std::to_string(round - options.iterations + 1);
-    auto lap = [clock = std::chrono::steady_clock::now()]() mutable {
+    // Four stages per refining round (split, collapse, flip, smooth); flip-smooth cycles run the last two.
+    int stage = refine ? 0 : 2;
+    auto lap = [&, clock = std::chrono::steady_clock::now()]() mutable {
       const auto now = std::chrono::steady_clock::now();
       const double s = std::chrono::duration<double>(now - clock).count();
       clock = now;
+      reportProgress("remesh", (double(round) + double(++stage) / 4.0) / double(total));
       return s;
     };
     if (refine) {
@@ -87,7 +91,6 @@ void remeshComplex(RemeshComplex& complex, const RemeshOptions& options, RemeshS
     step.tets = complex.liveTetCount();
     step.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (stats) stats->steps.push_back(step);
-    reportProgress("remesh", double(round + 1) / double(total));
   }
   if (stats) stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }

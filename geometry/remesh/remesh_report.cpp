@@ -1,5 +1,7 @@
 #include "geometry/remesh/remesh_report.h"
 
+#include "geometry/progress.h"
+
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -10,6 +12,7 @@ namespace vox::remesh {
 
 RemeshReport buildRemeshReport(const TetMesh& input, const MeshTopology& inputTopology, const TetMesh& output,
                                double targetLength, const RemeshStats& stats, const ReportOptions& options) {
+  reportProgress("quality report", 0.0);
   RemeshReport r;
   r.targetLength = targetLength;
   r.stats = stats;
@@ -22,6 +25,7 @@ RemeshReport buildRemeshReport(const TetMesh& input, const MeshTopology& inputTo
   const TetQualitySummary inputQuality = summarizeTetQuality(input);
   const MeshTopology outputTopology = computeMeshTopology(output);
   r.topologyDifferences = compareTopology(inputTopology, outputTopology);
+  reportProgress("quality report", 0.5);
   r.junctionCurveSets = inputTopology.junctionCurves.size();
   r.junctionPointSets = inputTopology.junctionPoints.size();
   std::map<std::int32_t, InterfaceDistance> distances;
@@ -41,6 +45,7 @@ RemeshReport buildRemeshReport(const TetMesh& input, const MeshTopology& inputTo
     if (auto it = distances.find(label); it != distances.end()) lr.distance = it->second;
     r.labels.push_back(lr);
   }
+  reportProgress("quality report", 1.0);
   return r;
 }
 
