@@ -3,6 +3,7 @@
 #include "geometry/io/atomic_file.h"
 #include "geometry/progress.h"
 
+#include <chrono>
 #include <cstdio>
 #include <iostream>
 #include <string>
@@ -15,20 +16,35 @@ void installStderrProgress(bool quiet) {
     setProgressSink({});
     return;
   }
+  // A stage shows up only once it has run for a second, so quick steps stay
+  // silent; then a terminal line is rewritten at most ten times a second and
+  // a log gets a line every tenth of the work.
+  using Clock = std::chrono::steady_clock;
+  struct State {
+    std::string stage;
+    Clock::time_point started, lastPrint;
+    int lastDecile = -1;
+    bool shown = false;
+  };
   const bool tty = ::isatty(STDERR_FILENO) != 0;
-  setProgressSink([tty, lastStage = std::string(), lastDecile = -1](std::string_view stage, double f) mutable {
+  setProgressSink([tty, st = State()](std::string_view stage, double f) mutable {
+    const auto now = Clock::now();
+    if (stage != st.stage) st = State{std::string(stage), now, now, -1, false};
+    const bool done = f >= 1.0;
+    if (!st.shown && now - st.started < std::chrono::seconds(1)) return;
     const int percent = int(f * 100.0 + 0.5);
     if (tty) {
-      std::fprintf(stderr, "\r%.*s: %3d%%%s", int(stage.size()), stage.data(), percent, f >= 1.0 ? "\n" : "");
+      if (!done && st.shown && now - st.lastPrint < std::chrono::milliseconds(100)) return;
+      std::fprintf(stderr, "\r%.*s: %3d%%%s", int(stage.size()), stage.data(), percent, done ? "\n" : "");
       std::fflush(stderr);
-      return;
-    }
-    const int decile = percent / 10;
-    if (stage != lastStage || decile != lastDecile) {
+    } else {
+      const int decile = percent / 10;
+      if (decile == st.lastDecile) return;
+      st.lastDecile = decile;
       std::fprintf(stderr, "%.*s: %d%%\n", int(stage.size()), stage.data(), percent);
-      lastStage = stage;
-      lastDecile = decile;
     }
+    st.shown = true;
+    st.lastPrint = now;
   });
 }
 

@@ -14,6 +14,7 @@ void addInfoCommand(CLI::App& app);
 void addSynthCommand(CLI::App& app);
 void addMeshCommand(CLI::App& app);
 void addRemeshCommand(CLI::App& app);
+void addRenderCommand(CLI::App& app);
 
 // Prints progress of long operations on stderr ("stage: 42%"), rewriting the
 // line on a terminal and printing every 10% otherwise.

@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   vox::app::addSynthCommand(app);
   vox::app::addMeshCommand(app);
   vox::app::addRemeshCommand(app);
+  vox::app::addRenderCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -1,5 +1,6 @@
 #include "geometry/organ_table.h"
 
+#include "geometry/ascii_text.h"
 #include "geometry/error.h"
 #include "geometry/io/atomic_file.h"
 
@@ -11,13 +12,6 @@
 #include <sstream>
 
 namespace vox {
-
-namespace {
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return s;
-}
-}  // namespace
 
 OrganTable OrganTable::read(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -71,9 +65,9 @@ double OrganTable::mass(int id, std::uint64_t voxels, double voxelVolumeMm3) con
 std::vector<int> OrganTable::idsMatching(const std::vector<std::string>& substrings) const {
   std::vector<int> ids;
   for (const auto& [id, o] : organs_) {
-    const std::string n = lower(o.name);
+    const std::string n = toLowerAscii(o.name);
     for (const auto& s : substrings)
-      if (n.find(lower(s)) != std::string::npos) {
+      if (n.find(toLowerAscii(s)) != std::string::npos) {
         ids.push_back(id);
         break;
       }

@@ -1,5 +1,6 @@
 #include "gpu/context.h"
 
+#include "geometry/ascii_text.h"
 #include "geometry/error.h"
 #include "gpu/vk_check.h"
 
@@ -59,11 +60,6 @@ int typeRank(VkPhysicalDeviceType t) {
     case VK_PHYSICAL_DEVICE_TYPE_CPU: return 3;
     default: return 4;
   }
-}
-
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return s;
 }
 
 VkInstance createInstance(const ContextOptions& options) {
@@ -168,7 +164,7 @@ Context::Context(const ContextOptions& options) {
       for (std::size_t i = 0; i < devices.size() && chosen < 0; ++i) {
         VkPhysicalDeviceProperties p;
         vkGetPhysicalDeviceProperties(devices[i], &p);
-        const bool match = numeric ? std::to_string(i) == want : lower(p.deviceName).find(lower(want)) != std::string::npos;
+        const bool match = numeric ? std::to_string(i) == want : toLowerAscii(p.deviceName).find(toLowerAscii(want)) != std::string::npos;
         if (!match) continue;
         if (!suitable(instance_, devices[i], options))
           throw RuntimeFailure(std::string("Vulkan: VOXMORPH_DEVICE selects '") + p.deviceName +

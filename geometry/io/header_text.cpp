@@ -27,12 +27,6 @@ std::string_view trimText(std::string_view s) {
   return s;
 }
 
-std::string lowerText(std::string_view s) {
-  std::string out(s);
-  std::transform(out.begin(), out.end(), out.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return out;
-}
-
 std::vector<std::string_view> splitWords(std::string_view s) {
   std::vector<std::string_view> words;
   std::size_t i = 0;

@@ -16,7 +16,6 @@
 namespace vox {
 
 std::string_view trimText(std::string_view s);
-std::string lowerText(std::string_view s);
 std::vector<std::string_view> splitWords(std::string_view s);
 
 std::int64_t parseInteger(const std::string& source, const std::string& field, std::string_view text);

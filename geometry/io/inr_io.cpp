@@ -6,6 +6,7 @@
 // direction, which no rotation can express, is kept in a "#voxmorph-direction"
 // comment line that other readers skip.
 
+#include "geometry/ascii_text.h"
 #include "geometry/error.h"
 #include "geometry/io/grid_stream.h"
 #include "geometry/io/header_text.h"
@@ -103,7 +104,7 @@ InrLayout interpretInrHeader(const std::string& path, const InrHeader& h) {
     throw InputError(path, "VDIM is " + *v + ": labels need 1 value per voxel");
 
   InrLayout layout;
-  const std::string type = lowerText(required("TYPE"));
+  const std::string type = toLowerAscii(required("TYPE"));
   const std::string& pixsize = required("PIXSIZE");
   const auto sizeWords = splitWords(pixsize);
   if (sizeWords.size() != 2 || sizeWords[1] != "bits") throw InputError(path, "PIXSIZE \"" + pixsize + "\" is not \"<n> bits\"");
@@ -121,7 +122,7 @@ InrLayout interpretInrHeader(const std::string& path, const InrHeader& h) {
   layout.encoding.type = it->second;
 
   if (const std::string* v = field("CPU")) {
-    const std::string cpu = lowerText(*v);
+    const std::string cpu = toLowerAscii(*v);
     if (cpu == "decm" || cpu == "alpha" || cpu == "pc") layout.encoding.bigEndian = false;
     else if (cpu == "sun" || cpu == "sgi") layout.encoding.bigEndian = true;
     else throw InputError(path, "CPU=" + *v + " is not a known byte order (decm, alpha, pc, sun, sgi)");
@@ -204,7 +205,7 @@ std::string inrHeaderText(const GridGeometry& g, Label maxLabel) {
 }
 
 bool isGzipName(const std::string& path) {
-  const std::string s = lowerText(path);
+  const std::string s = toLowerAscii(path);
   return s.size() >= 3 && s.compare(s.size() - 3, 3, ".gz") == 0;
 }
 

@@ -3,6 +3,7 @@
 // that many records; indices are 1-based; the last integer of a record is its
 // reference, which for tetrahedra is our label.
 // Spec: libMeshb (github.com/LoicMarechal/libMeshb).
+#include "geometry/ascii_text.h"
 #include "geometry/error.h"
 #include "geometry/io/atomic_file.h"
 #include "geometry/io/mesh_io.h"
@@ -32,12 +33,7 @@ std::int32_t toLabel(io::TextScanner& in, std::int64_t ref) {
   return std::int32_t(ref);
 }
 
-bool isBinaryPath(const std::string& path) {
-  if (path.size() < 6) return false;
-  std::string e = path.substr(path.size() - 6);
-  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return e == ".meshb";
-}
+bool isBinaryPath(const std::string& path) { return endsWithIgnoringCase(path, ".meshb"); }
 
 // GMF binary keyword codes (libmeshb7.h).
 constexpr std::int32_t kGmfDimension = 3, kGmfVertices = 4, kGmfTetrahedra = 8, kGmfEnd = 54;

@@ -1,21 +1,10 @@
 #include "geometry/io/mesh_io.h"
 
+#include "geometry/ascii_text.h"
 #include "geometry/error.h"
 
-#include <algorithm>
-#include <cctype>
 
 namespace vox {
-
-namespace {
-std::string lowerExtension(const std::string& path) {
-  const auto dot = path.find_last_of('.');
-  if (dot == std::string::npos) return "";
-  std::string e = path.substr(dot);
-  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return e;
-}
-}  // namespace
 
 bool hasTetMeshExtension(const std::string& path) {
   const std::string e = lowerExtension(path);

@@ -3,6 +3,7 @@
 // (CompressedData). ITK's world is LPS: directions are converted to RAS on
 // reading and back on writing (see flipLpsRas).
 
+#include "geometry/ascii_text.h"
 #include "geometry/error.h"
 #include "geometry/io/grid_stream.h"
 #include "geometry/io/header_text.h"
@@ -32,7 +33,7 @@ bool metaVoxelType(const std::string& name, VoxelType& type) {
 }
 
 bool parseBool(const std::string& source, const std::string& field, std::string_view text) {
-  const std::string v = lowerText(trimText(text));
+  const std::string v = toLowerAscii(trimText(text));
   if (v == "true" || v == "1") return true;
   if (v == "false" || v == "0") return false;
   throw InputError(source, field + ": \"" + std::string(trimText(text)) + "\" is not True or False");
@@ -71,7 +72,7 @@ MetaHeader parseMetaHeader(const std::string& path, const std::string& text) {
     const std::size_t eq = content.find('=');
     if (eq == std::string_view::npos || trimText(content.substr(0, eq)).empty())
       throw InputError(path, "line " + std::to_string(line) + " of the MetaImage header is not a \"Key = Value\" field");
-    const std::string key = lowerText(trimText(content.substr(0, eq)));
+    const std::string key = toLowerAscii(trimText(content.substr(0, eq)));
     const std::string value(trimText(content.substr(eq + 1)));
     if (key == "elementdatafile") {
       h.dataFile = value;
@@ -95,7 +96,7 @@ MetaLayout interpretMetaHeader(const std::string& path, const MetaHeader& h) {
     if (!v) throw InputError(path, std::string("MetaImage header has no ") + name + " field");
     return *v;
   };
-  if (const std::string* v = h.find({"objecttype"}); v && lowerText(*v) != "image")
+  if (const std::string* v = h.find({"objecttype"}); v && toLowerAscii(*v) != "image")
     throw InputError(path, "ObjectType is \"" + *v + "\", not Image");
   if (parseInteger(path, "NDims", required("ndims", "NDims")) != 3)
     throw InputError(path, "NDims is " + required("ndims", "NDims") + ": only 3-D grids are supported");
@@ -160,11 +161,11 @@ std::unique_ptr<GridSliceReader> openMetaImage(const std::string& path) {
   std::FILE* data = headerFile;
   std::uint64_t start = header.headerBytes;
   std::string source = path;
-  if (lowerText(header.dataFile) != "local") {
+  if (toLowerAscii(header.dataFile) != "local") {
     std::fclose(headerFile);
     const auto words = splitWords(header.dataFile);
     if (words.empty()) throw InputError(path, "ElementDataFile is empty");
-    if (words.size() > 1 || lowerText(words[0]) == "list" || header.dataFile.find('%') != std::string::npos)
+    if (words.size() > 1 || toLowerAscii(words[0]) == "list" || header.dataFile.find('%') != std::string::npos)
       throw InputError(path, "ElementDataFile \"" + header.dataFile + "\" (a list of slice files) is not supported");
     const std::string dataPath = siblingPath(path, header.dataFile);
     data = openForReading(dataPath, path);
@@ -220,7 +221,7 @@ std::string metaHeaderText(const GridGeometry& g, Label maxLabel, bool compresse
   return h;
 }
 
-bool isDetachedHeader(const std::string& path) { return lowerText(std::filesystem::path(path).extension().string()) == ".mhd"; }
+bool isDetachedHeader(const std::string& path) { return toLowerAscii(std::filesystem::path(path).extension().string()) == ".mhd"; }
 
 // zlib-compressed samples gathered in memory: the header must state their size.
 class CompressedSamples final : public EncodedSliceWriter {

@@ -2,6 +2,7 @@
 // separate data file; raw or gzip encoding. World coordinates are converted
 // to RAS from the header's `space` (LPS, LAS or RAS); the writer uses RAS.
 
+#include "geometry/ascii_text.h"
 #include "geometry/error.h"
 #include "geometry/io/grid_stream.h"
 #include "geometry/io/header_text.h"
@@ -107,7 +108,7 @@ NrrdHeader parseNrrdHeader(const std::string& path, const std::string& text) {
     const std::size_t colon = content.find(": ");
     if (colon == std::string_view::npos)
       throw InputError(path, "line " + std::to_string(line) + " of the NRRD header is not a \"field: value\" line");
-    h.fields[lowerText(trimText(content.substr(0, colon)))] = std::string(trimText(content.substr(colon + 2)));
+    h.fields[toLowerAscii(trimText(content.substr(0, colon)))] = std::string(trimText(content.substr(colon + 2)));
   }
 }
 
@@ -134,7 +135,7 @@ std::vector<Eigen::Vector3d> parseVectors(const std::string& path, const std::st
 
 // The map from the header's space to RAS.
 Eigen::Matrix3d spaceToRas(const std::string& path, const std::string& space) {
-  const std::string s = lowerText(space);
+  const std::string s = toLowerAscii(space);
   if (s == "right-anterior-superior" || s == "ras" || s == "scanner-xyz" || s == "3d-right-handed" || s == "3d-left-handed")
     return Eigen::Matrix3d::Identity();
   if (s == "left-posterior-superior" || s == "lps") return Eigen::Vector3d(-1, -1, 1).asDiagonal();
@@ -158,19 +159,19 @@ NrrdLayout interpretNrrdHeader(const std::string& path, const NrrdHeader& h) {
   };
   NrrdLayout layout;
   const std::string& type = required("type");
-  if (!nrrdVoxelType(lowerText(type), layout.encoding.type))
+  if (!nrrdVoxelType(toLowerAscii(type), layout.encoding.type))
     throw InputError(path, "type \"" + type + "\" is not supported for labels (expected an integer or float type)");
   if (parseInteger(path, "dimension", required("dimension")) != 3)
     throw InputError(path, "dimension is " + required("dimension") + ": only 3-D grids are supported");
   const Index3 dims = parseDims(path, "sizes", required("sizes"));
   checkGridDims(path, dims);
 
-  const std::string encoding = lowerText(required("encoding"));
+  const std::string encoding = toLowerAscii(required("encoding"));
   if (encoding == "gzip" || encoding == "gz") layout.gzip = true;
   else if (encoding != "raw")
     throw InputError(path, "encoding \"" + encoding + "\" is not supported (expected raw or gzip)");
   if (const std::string* v = h.find({"endian"})) {
-    const std::string e = lowerText(*v);
+    const std::string e = toLowerAscii(*v);
     if (e != "little" && e != "big") throw InputError(path, "endian \"" + *v + "\" is neither little nor big");
     layout.encoding.bigEndian = e == "big";
   } else if (voxelTypeSize(layout.encoding.type) > 1) {
@@ -244,13 +245,13 @@ std::unique_ptr<GridSliceReader> openNrrd(const std::string& path) {
   if (const std::string* name = header.find({"data file", "datafile"})) {
     std::fclose(headerFile);
     const auto words = splitWords(*name);
-    if (words.size() != 1 || lowerText(words[0]) == "list" || name->find('%') != std::string::npos)
+    if (words.size() != 1 || toLowerAscii(words[0]) == "list" || name->find('%') != std::string::npos)
       throw InputError(path, "data file \"" + *name + "\" (a list of files) is not supported");
     const std::string dataPath = siblingPath(path, *name);
     data = openForReading(dataPath, path);
     start = 0;
     source = path + " (data file " + dataPath + ")";
-  } else if (lowerText(std::filesystem::path(path).extension().string()) == ".nhdr") {
+  } else if (toLowerAscii(std::filesystem::path(path).extension().string()) == ".nhdr") {
     std::fclose(headerFile);
     throw InputError(path, "detached NRRD header has no \"data file\" field");
   }
@@ -308,7 +309,7 @@ std::string nrrdHeaderText(const GridGeometry& g, Label maxLabel, const std::str
 std::unique_ptr<GridSliceReader> openNrrdSlices(const std::string& path) { return openNrrd(path); }
 
 std::unique_ptr<GridSliceWriter> createNrrdSlices(const std::string& path, const GridGeometry& geometry, Label maxLabel) {
-  if (lowerText(std::filesystem::path(path).extension().string()) != ".nhdr")
+  if (toLowerAscii(std::filesystem::path(path).extension().string()) != ".nhdr")
     return std::make_unique<TextHeaderSliceWriter>(path, geometry, maxLabel, nrrdHeaderText(geometry, maxLabel, ""), std::string(),
                                                    SampleCompression::Gzip);
   const std::filesystem::path dataPath = std::filesystem::path(path).replace_extension(".raw.gz");

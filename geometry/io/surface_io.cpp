@@ -6,6 +6,7 @@
 // face indices are ignored. PLY: the x, y, z properties of `vertex` and the
 // vertex_indices (or vertex_index) list of `face`; other elements and
 // properties are skipped.
+#include "geometry/ascii_text.h"
 #include "geometry/error.h"
 #include "geometry/io/atomic_file.h"
 #include "geometry/io/mesh_io.h"
@@ -23,14 +24,6 @@
 namespace vox {
 
 namespace {
-
-std::string lowerExtension(const std::string& path) {
-  const auto dot = path.find_last_of('.');
-  if (dot == std::string::npos) return "";
-  std::string e = path.substr(dot);
-  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return e;
-}
 
 // Appends the fan of `polygon` (vertex indices) to `triangles`; `in` names
 // the line on error, where vertices are numbered from `firstIndex` as in the file.

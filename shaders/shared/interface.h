@@ -159,6 +159,129 @@ static_assert(sizeof(RasterTaskPush) == 48);
 static_assert(sizeof(RasterReducePush) == 32);
 #endif
 
+// -------------------------------------------------------------------- raycast
+// Transfer-mesh-guided ray casting (gpu/kernels/raycast.h; CPU reference
+// geometry/render/raycast_reference.h). All positions are in the render frame
+// (geometry/render/raycast_scene.h): render cell c is a unit cube centred on
+// the integer point c.
+#define VOX_RAYCAST_GROUP_X 8
+#define VOX_RAYCAST_GROUP_Y 8
+#define VOX_RAYCAST_PREPARE_GROUP_SIZE 64
+#define VOX_RAYCAST_MAX_SLABS 8     // label slabs (z-slabs of whole slices), one binding each
+#define VOX_RAYCAST_MAX_CUTS 4      // three axis-aligned planes and one free plane
+#define VOX_RAYCAST_BVH_STACK 64    // 2 * kBvhMaxDepth (geometry/render/boundary_bvh.h)
+// Tolerances shared with the CPU reference (gpu/kernels/raycast.cpp checks
+// that they equal geometry/render's kFaceHitTolerance, kInsideTolerance,
+// kDegenerateTetRatio and kMaxEntryMarginCells).
+#define VOX_RAYCAST_FACE_HIT_TOLERANCE 1e-4
+#define VOX_RAYCAST_INSIDE_TOLERANCE 1e-5
+#define VOX_RAYCAST_DEGENERATE_TET_RATIO 1e-7
+#define VOX_RAYCAST_MAX_ENTRY_MARGIN_CELLS 16.0
+
+// raycast_prepare.comp: per-tet factors of eq. 5.1-5.2 from the deformed positions.
+#define VOX_RAYCAST_PREPARE_BINDING_TETS 0       // uvec4[tetCount]: vertex indices
+#define VOX_RAYCAST_PREPARE_BINDING_POSITIONS 1  // vec4[vertexCount]: render frame xyz
+#define VOX_RAYCAST_PREPARE_BINDING_FACTORS 2    // vec4[4 * tetCount]: planes 1..3 (xyz, w), anchor (xyz)
+
+// raycast_entries.comp: one invocation per boundary face; rasterizes the
+// front faces into the entry buffer (uint[3 * width * height], three planes):
+// the smallest hit parameter t >= 0 per pixel (float bits, pass 0), the
+// lowest face index hit at that t (pass 1), and the number of front faces
+// the pixel's ray hits (pass 0). Pass 0 also flags the image tiles
+// (VOX_RAYCAST_GROUP_X x VOX_RAYCAST_GROUP_Y pixels, row by row) that hold a
+// hit pixel: only those tiles run the ray pass.
+#define VOX_RAYCAST_ENTRIES_GROUP_SIZE 64
+// Pixels one invocation tests at most: lavapipe ends any invocation after
+// 65535 loop iterations, so faces that cover more pixels are split over the
+// dispatch's second dimension (the host bounds every face's pixel count).
+#define VOX_RAYCAST_ENTRIES_CHUNK_PIXELS 16384
+#define VOX_RAYCAST_NEAR_DEPTH 1e-3  // faces are clipped to depth t >= this (mm)
+#define VOX_RAYCAST_ENTRIES_BINDING_PARAMS 0
+#define VOX_RAYCAST_ENTRIES_BINDING_FACES 1
+#define VOX_RAYCAST_ENTRIES_BINDING_POSITIONS 2
+#define VOX_RAYCAST_ENTRIES_BINDING_ENTRIES 3
+#define VOX_RAYCAST_ENTRIES_BINDING_TILE_FLAGS 4  // uint[tile count]: 1 where a pixel is hit
+
+// raycast.comp: one invocation per pixel of the flagged tiles, one work group
+// per tile; the other pixels keep the background the image was filled with.
+#define VOX_RAYCAST_BINDING_PARAMS 0     // RaycastParams
+#define VOX_RAYCAST_BINDING_NODES 1      // RaycastNode[]: boundary BVH
+#define VOX_RAYCAST_BINDING_FACES 2      // uvec4[faceCount]: outward vertices a, b, c and the tet
+#define VOX_RAYCAST_BINDING_POSITIONS 3  // vec4[vertexCount]
+#define VOX_RAYCAST_BINDING_FACTORS 4    // vec4[4 * tetCount] (raycast_prepare.comp)
+#define VOX_RAYCAST_BINDING_NEIGHBORS 5  // ivec4[tetCount]: across the face opposite vertex k, -1 = boundary
+#define VOX_RAYCAST_BINDING_REST 6       // vec4[3 * tetCount]: (r1 - r0, r0.x), (r2 - r0, r0.y), (r3 - r0, r0.z)
+#define VOX_RAYCAST_BINDING_PALETTE 7    // uint[labelCount]: RGBA8 (r in the low byte), alpha 0 = hidden
+#define VOX_RAYCAST_BINDING_ENTRIES 8    // uint[3 * width * height] (raycast_entries.comp)
+#define VOX_RAYCAST_BINDING_IMAGE 9      // uint[width * height]: RGBA8, row 0 at the top
+#define VOX_RAYCAST_BINDING_TILES 10     // uint[]: indices of the flagged tiles, one per work group
+#define VOX_RAYCAST_BINDING_SLAB0 11     // uint[] x VOX_RAYCAST_MAX_SLABS: two uint16 labels per word
+
+struct RaycastPreparePush {
+  uint tetCount;
+  uint pad0;
+  uint pad1;
+  uint pad2;
+};
+
+struct RaycastPush {
+  uint tileCount;  // flagged tiles; work group g (row-major over the dispatch) takes tile tiles[g]
+  uint pad0;
+  uint pad1;
+  uint pad2;
+};
+
+struct RaycastEntriesPush {
+  uint faceCount;
+  uint pass;  // 0: depth and count, 1: face at the smallest depth
+  uint pad0;
+  uint pad1;
+};
+
+struct RaycastNode {
+  float lo[3];
+  int rightOrFirst;  // inner: right child (left child is the next node); leaf: first face
+  float hi[3];
+  int count;         // faces in a leaf, 0 for an inner node
+};
+
+struct RaycastParams {
+  float eye[4];      // camera centre
+  float forward[4];  // ray of pixel (x, y): eye + t (forward + sx right + sy up)
+  float right[4];
+  float up[4];
+  float cellsLo[4];  // box covered by the cells of the deformed grid
+  float cellsHi[4];
+  float cuts[4 * VOX_RAYCAST_MAX_CUTS];  // cell c removed iff dot(xyz, c) > w
+  float light[4];    // unit vector towards the light (grid-frame axes)
+  float toCamera[12];  // rows of [forward right up]^-1: q - eye -> (t, t sx, t sy)
+  float tanHalfFovY;
+  float aspect;
+  float ambient;
+  int sourceShift[4];  // source voxel = round(mapped point) + sourceShift
+  int sourceDims[4];
+  uint width;
+  uint height;
+  uint cutCount;
+  uint background;     // RGBA8
+  uint sliceVoxels;    // nx * ny of the source grid
+  uint slabSlices;     // z-slices per label slab
+  uint labelCount;     // palette entries; larger labels are hidden
+  uint maxWalkSteps;
+  uint maxEntries;
+  uint maxCells;
+  uint pad0;
+  uint pad1;
+};
+
+#ifdef __cplusplus
+static_assert(sizeof(RaycastPreparePush) == 16);
+static_assert(sizeof(RaycastNode) == 32);
+static_assert(sizeof(RaycastEntriesPush) == 16);
+static_assert(sizeof(RaycastPush) == 16);
+static_assert(sizeof(RaycastParams) == 316);
+#endif
+
 #ifdef __cplusplus
 static_assert(sizeof(LabelStatsPush) == 32);
 }  // namespace vox::shader

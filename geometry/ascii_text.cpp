@@ -1,0 +1,23 @@
+#include "geometry/ascii_text.h"
+
+namespace vox {
+
+std::string toLowerAscii(std::string_view s) {
+  std::string out(s);
+  for (char& c : out)
+    if (c >= 'A' && c <= 'Z') c = char(c - 'A' + 'a');
+  return out;
+}
+
+bool endsWithIgnoringCase(std::string_view s, std::string_view suffix) {
+  return s.size() >= suffix.size() && toLowerAscii(s.substr(s.size() - suffix.size())) == toLowerAscii(suffix);
+}
+
+std::string lowerExtension(std::string_view path) {
+  const auto slash = path.find_last_of('/');
+  const auto dot = path.find_last_of('.');
+  if (dot == std::string_view::npos || (slash != std::string_view::npos && dot < slash)) return "";
+  return toLowerAscii(path.substr(dot));
+}
+
+}  // namespace vox

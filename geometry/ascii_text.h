@@ -1,0 +1,17 @@
+#pragma once
+// ASCII case folding and file-name suffix tests, shared by the format
+// dispatchers, header parsers and name lookups.
+
+#include <string>
+#include <string_view>
+
+namespace vox {
+
+// ASCII lower case (bytes outside A-Z unchanged).
+std::string toLowerAscii(std::string_view s);
+// True when `s` ends with `suffix`, comparing without case.
+bool endsWithIgnoringCase(std::string_view s, std::string_view suffix);
+// The last extension of a path in lower case, dot included (".vtu"); "" when none.
+std::string lowerExtension(std::string_view path);
+
+}  // namespace vox

@@ -1,0 +1,91 @@
+#pragma once
+// GPU transfer-mesh-guided ray caster (shaders/raycast_prepare.comp and
+// shaders/raycast.comp; CPU reference geometry/render/raycast_reference.h).
+//
+// The source grid goes to the GPU once, as uint16 labels packed two per word
+// in z-slabs of whole slices, one storage binding (at most 128 MiB) per slab,
+// up to VOX_RAYCAST_MAX_SLABS slabs (512 M voxels with 128 MiB bindings). The
+// mesh connectivity, neighbours, boundary faces and rest coordinates go once
+// too. Per frame only the deformed positions and the refitted boundary BVH
+// are uploaded; one compute pass recomputes the per-tet factors (eq. 5.1-5.2),
+// two rasterize the front boundary faces into the entry buffer (each pixel's
+// first entry face and the number of front faces its ray crosses, and which
+// 8x8 tiles hold such pixels), then one invocation per pixel of those tiles
+// casts its ray, querying the BVH only for re-entries. The tile list is made
+// on the host between two submissions: on CPU drivers an invocation of the
+// ray shader costs even when it exits at once, and most tiles see no mesh.
+//
+// lavapipe ends a shader invocation after 65535 loop iterations. The entry
+// pass splits large faces to stay below; a ray takes about three iterations
+// per cell it crosses, so rays longer than about 20,000 cells (grids of over
+// 6,000 voxels per side) would be cut short there.
+
+#include "geometry/label_grid.h"
+#include "geometry/render/palette.h"
+#include "geometry/render/raycast_scene.h"
+#include "geometry/rgb_image.h"
+#include "gpu/buffer.h"
+#include "gpu/command.h"
+#include "gpu/context.h"
+#include "gpu/pipeline.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace vox::gpu {
+
+struct RaycastKernelOptions {
+  // Bytes per label slab; 0 = the context's largest binding. Tests set small
+  // values so that several slabs are exercised on small grids.
+  std::uint64_t slabBytes = 0;
+};
+
+// Times of the last render() (ms). GPU times come from timestamps (0 when the
+// queue has none).
+struct RaycastFrameTimes {
+  double uploadMs = 0.0;     // host: positions, BVH and parameters into staging memory
+  double prepareGpuMs = 0.0; // GPU: per-tet factors
+  double entriesGpuMs = 0.0; // GPU: entry buffer
+  double raycastGpuMs = 0.0; // GPU: the rays
+  std::uint32_t activeTiles = 0;  // 8x8 tiles that ran the ray pass
+  double totalMs = 0.0;      // host: render() from call to image
+};
+
+class RaycastKernel {
+public:
+  // `mesh` must have been built for `source` (buildRaycastMesh). Throws
+  // RuntimeFailure when it was not, when the grid needs more than
+  // VOX_RAYCAST_MAX_SLABS slabs, or when a mesh array exceeds one binding.
+  RaycastKernel(Context& context, const LabelGrid& source, const RaycastMesh& mesh, RaycastKernelOptions options = {});
+
+  RgbImage render(const RaycastFrame& frame, const RaycastView& view, const Palette& palette, const RaycastShading& shading = {},
+                  const RaycastLimits& limits = {});
+
+  const RaycastFrameTimes& lastTimes() const { return times_; }
+  std::size_t slabCount() const { return slabs_.size(); }
+  std::uint64_t gridUploadBytes() const { return gridBytes_; }
+
+private:
+  Context& context_;
+  GridGeometry source_;
+  Index3 sourceShift_{0, 0, 0};
+  std::size_t vertexCount_ = 0, tetCount_ = 0, nodeCount_ = 0, faceCount_ = 0;
+  std::vector<Tri> faceVertices_;  // host copy of the boundary faces, to bound their projections
+  ComputePipeline prepare_;
+  ComputePipeline entries_;
+  ComputePipeline raycast_;
+  std::uint32_t slabSlices_ = 0;
+  std::vector<Buffer> slabs_;
+  std::uint64_t gridBytes_ = 0;
+  // Uploaded once.
+  Buffer tets_, neighbors_, rest_, faces_;
+  // Per frame: staging (host visible) and device copies.
+  Buffer positionsStaging_, nodesStaging_, paramsStaging_, paletteStaging_;
+  Buffer positions_, nodes_, params_, palette_, factors_;
+  Buffer entryBuffer_, image_, imageReadback_, tileFlags_, tiles_;
+  std::uint32_t tileCount_ = 0;
+  CommandBatch batch_;
+  RaycastFrameTimes times_;
+};
+
+}  // namespace vox::gpu

@@ -1,0 +1,170 @@
+// GPU transfer-mesh-guided ray caster against its CPU reference and the
+// golden images: at most 0.1% of the pixels may differ by more than 5/255.
+
+#include "geometry/deform/label_groups.h"
+#include "geometry/deform/transfer_mesh.h"
+#include "geometry/error.h"
+#include "geometry/io/grid_io.h"
+#include "geometry/io/png_io.h"
+#include "geometry/organ_table.h"
+#include "geometry/render/raycast_reference.h"
+#include "geometry/render/raycast_scene.h"
+#include "geometry/render/rest_transfer_mesh.h"
+#include "geometry/synth.h"
+#include "gpu/context.h"
+#include "gpu/kernels/raycast.h"
+#include "tests/geometry/render_fixtures.h"
+#include "tests/support/test_environment.h"
+
+#include <gtest/gtest.h>
+
+namespace vox {
+namespace {
+
+constexpr int kThreshold = 5;
+constexpr double kFraction = 0.001;
+
+gpu::Context& context() {
+  static gpu::Context ctx;
+  return ctx;
+}
+
+const LabelGrid& amPhantom() {
+  static const LabelGrid grid = readGrid(test::assetPath("icrp110_am.nii.gz"));
+  return grid;
+}
+
+LabelGrid stickFigure() {
+  LabelGrid g = synthesize(SynthKind::StickFigure, 64);
+  g.geometry().spacing = {1.5, 1.5, 4.0};
+  return g;
+}
+
+struct Frame {
+  RaycastFrame frame;
+  RaycastView view;
+};
+
+Frame makeFrame(const RaycastMesh& mesh, const std::vector<Eigen::Vector3d>& positions, const std::string& camera, const std::string& cut,
+                int w, int h) {
+  Frame f;
+  f.frame = prepareRaycastFrame(mesh, positions);
+  CuttingPlanes cuts;
+  if (!cut.empty()) cuts.add(cut);
+  f.view = makeRaycastView(f.frame, parseCamera(camera, f.frame.toGrid(f.frame.cellsLo), f.frame.toGrid(f.frame.cellsHi), w, h), cuts);
+  return f;
+}
+
+TEST(RaycastGpu, SyntheticPosesCutsAndHiddenLabelsEqualTheCpuReference) {
+  // Through a coarse voxel TM and through the pipeline's transfer mesh.
+  const LabelGrid grid = stickFigure();
+  const Palette palette(grid.maxLabel());
+  for (const TetMesh& rest : {coarseVoxelTransferMesh(grid, 3),
+                              buildTransferMesh(binaryGroupGrid(grid), defaultSizingField(grid.geometry()))}) {
+    const RaycastMesh mesh = buildRaycastMesh(rest, grid.geometry());
+    gpu::RaycastKernel kernel(context(), grid, mesh);
+    for (test::Deformation d : {test::Deformation::Rest, test::Deformation::Twist, test::Deformation::Bend})
+      for (const char* cut : {"", "y<14", "plane=1,0.2,-0.5,-50"})
+        for (const char* hide : {"", "1"}) {
+          Palette p = palette;
+          if (*hide) p.hide(hide);
+          const Frame f = makeFrame(mesh, test::deform(rest.positions, grid.geometry(), d), "azimuth=-30,elevation=15", cut, 160, 120);
+          const RgbImage gpuImage = kernel.render(f.frame, f.view, p);
+          const RgbImage cpuImage = raycastReference(grid, mesh, f.frame, f.view, p);
+          const ImageDifference diff = compareImages(gpuImage, cpuImage, kThreshold);
+          EXPECT_LE(diff.differingFraction(), kFraction) << rest.tetCount() << " tets, " << test::deformationName(d) << " cut '"
+                                                         << cut << "' hide '" << hide << "': " << diff.differing << " pixels differ";
+          EXPECT_GT(countNotBackground(cpuImage, RaycastShading{}.background), 300u);
+        }
+  }
+}
+
+TEST(RaycastGpu, FacesCoveringTheWholeImageEqualTheCpuReference) {
+  // The identity TM's six tets seen from close by: a face covers nearly every
+  // pixel, more than one invocation of the entry pass may test on lavapipe.
+  const LabelGrid grid = stickFigure();
+  const TetMesh box = boxTransferMesh(grid);
+  const RaycastMesh mesh = buildRaycastMesh(box, grid.geometry());
+  gpu::RaycastKernel kernel(context(), grid, mesh);
+  Palette palette(grid.maxLabel());
+  palette.hide("1");
+  for (const char* camera : {"azimuth=10,elevation=5,distance=0.3", "azimuth=100,distance=0.25,fov=60"}) {
+    const Frame f = makeFrame(mesh, box.positions, camera, "", 640, 480);
+    const RgbImage cpuImage = raycastReference(grid, mesh, f.frame, f.view, palette);
+    const ImageDifference diff = compareImages(kernel.render(f.frame, f.view, palette), cpuImage, kThreshold);
+    EXPECT_LE(diff.differingFraction(), kFraction) << camera << ": " << diff.differing << " pixels differ";
+    EXPECT_GT(countNotBackground(cpuImage, RaycastShading{}.background), 5000u) << camera;
+  }
+}
+
+TEST(RaycastGpu, ManySlabsGiveTheSameImage) {
+  // Slabs of 5 slices: the stick figure's 64 slices need 13 slabs, more than
+  // the kernel binds; slabs of 8 slices need exactly 8.
+  const LabelGrid grid = stickFigure();
+  const std::uint64_t sliceBytes = std::uint64_t(grid.geometry().sliceVoxels()) * sizeof(Label);
+  const TetMesh rest = coarseVoxelTransferMesh(grid, 3);
+  const RaycastMesh mesh = buildRaycastMesh(rest, grid.geometry());
+  EXPECT_THROW(gpu::RaycastKernel(context(), grid, mesh, {5 * sliceBytes}), RuntimeFailure);
+  gpu::RaycastKernel one(context(), grid, mesh);
+  gpu::RaycastKernel eight(context(), grid, mesh, {8 * sliceBytes + 7});
+  EXPECT_EQ(one.slabCount(), 1u);
+  EXPECT_EQ(eight.slabCount(), 8u);
+  EXPECT_EQ(eight.gridUploadBytes(), std::uint64_t(grid.voxelCount()) * sizeof(Label));
+  const Palette palette(grid.maxLabel());
+  const Frame f = makeFrame(mesh, test::deform(rest.positions, grid.geometry(), test::Deformation::Twist), "azimuth=60,elevation=-20",
+                            "x>30", 128, 96);
+  const RgbImage a = one.render(f.frame, f.view, palette);
+  EXPECT_EQ(compareImages(a, eight.render(f.frame, f.view, palette), 0).differing, 0u);
+  EXPECT_GT(countNotBackground(a, RaycastShading{}.background), 300u);
+}
+
+TEST(RaycastGpu, OnlyPositionsChangeBetweenFrames) {
+  // One kernel renders a sequence of poses (the grid and the mesh stay on the
+  // GPU); each frame equals a fresh kernel's rendering of that pose.
+  const LabelGrid grid = stickFigure();
+  const TetMesh rest = coarseVoxelTransferMesh(grid, 4);
+  const RaycastMesh mesh = buildRaycastMesh(rest, grid.geometry());
+  const Palette palette(grid.maxLabel());
+  gpu::RaycastKernel kernel(context(), grid, mesh);
+  for (test::Deformation d : {test::Deformation::Bend, test::Deformation::Rest, test::Deformation::Rotate, test::Deformation::Bend}) {
+    const Frame f = makeFrame(mesh, test::deform(rest.positions, grid.geometry(), d), "azimuth=15", "", 96, 72);
+    gpu::RaycastKernel fresh(context(), grid, mesh);
+    EXPECT_EQ(compareImages(kernel.render(f.frame, f.view, palette), fresh.render(f.frame, f.view, palette), 0).differing, 0u)
+        << test::deformationName(d);
+  }
+  EXPECT_GT(kernel.lastTimes().totalMs, 0.0);
+}
+
+TEST(RaycastGpu, RejectsFramesAndGridsOfAnotherMesh) {
+  const LabelGrid grid = stickFigure();
+  const TetMesh a = coarseVoxelTransferMesh(grid, 3), b = coarseVoxelTransferMesh(grid, 4);
+  const RaycastMesh meshA = buildRaycastMesh(a, grid.geometry()), meshB = buildRaycastMesh(b, grid.geometry());
+  gpu::RaycastKernel kernel(context(), grid, meshA);
+  const Frame f = makeFrame(meshB, b.positions, "", "", 32, 24);
+  EXPECT_THROW(kernel.render(f.frame, f.view, Palette(grid.maxLabel())), RuntimeFailure);
+  LabelGrid shifted = grid;
+  shifted.geometry().origin[0] += 1.0;
+  EXPECT_THROW(gpu::RaycastKernel(context(), shifted, meshA), RuntimeFailure);
+}
+
+TEST(RaycastGpu, GoldenImagesAndCpuReferenceOnTheAmPhantom) {
+  const LabelGrid& grid = amPhantom();
+  const Palette palette = Palette::fromOrgans(OrganTable::read(test::assetPath("icrp110_am_organs.dat")), grid.maxLabel());
+  const TetMesh rest = coarseVoxelTransferMesh(grid, test::kGoldenTmFactor);
+  const RaycastMesh mesh = buildRaycastMesh(rest, grid.geometry());
+  gpu::RaycastKernel kernel(context(), grid, mesh);
+  for (const test::GoldenScene& s : test::goldenScenes()) {
+    const Frame f = makeFrame(mesh, test::deform(rest.positions, grid.geometry(), s.deformation), s.camera, s.cut, test::kGoldenWidth,
+                              test::kGoldenHeight);
+    const RgbImage gpuImage = kernel.render(f.frame, f.view, palette);
+    const ImageDifference golden = compareImages(gpuImage, readPng(test::assetPath("golden/raycast_" + s.name + ".png")), kThreshold);
+    EXPECT_LE(golden.differingFraction(), kFraction) << s.name << ": " << golden.differing << " pixels differ from the golden image";
+    const ImageDifference cpu = compareImages(gpuImage, raycastReference(grid, mesh, f.frame, f.view, palette), kThreshold);
+    EXPECT_LE(cpu.differingFraction(), kFraction) << s.name << ": " << cpu.differing << " pixels differ from the CPU reference";
+    std::printf("%s: GPU vs golden %zu, GPU vs CPU %zu pixels of %zu differ by more than %d/255\n", s.name.c_str(), golden.differing,
+                cpu.differing, cpu.pixels, kThreshold);
+  }
+}
+
+}  // namespace
+}  // namespace vox
