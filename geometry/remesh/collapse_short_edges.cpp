@@ -1,7 +1,7 @@
 #include "geometry/remesh/collapse_short_edges.h"
 
 #include "geometry/remesh/mesh_edges.h"
-#include "geometry/remesh/parallel_for.h"
+#include "geometry/remesh/parallel_ranges.h"
 #include "geometry/remesh/tet_shape.h"
 
 #include <algorithm>
@@ -304,7 +304,7 @@ std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& b
   // (Screened with one thread as well, so the result does not depend on
   // the thread count.)
   std::vector<char> promising(edges.size(), 0);
-  parallelFor(std::int64_t(edges.size()), threads, [&](std::int64_t b, std::int64_t e) {
+  parallelRanges(std::int64_t(edges.size()), threads, [&](std::int64_t b, std::int64_t e) {
     EdgeCollapser screen(complex, bounds, hull);
     for (std::int64_t i = b; i < e; ++i)
       promising[std::size_t(i)] = screen.tryCollapse(edges[std::size_t(i)].a, edges[std::size_t(i)].b, false) >= 0;

@@ -2,7 +2,7 @@
 
 #include "geometry/mesh_quality.h"
 #include "geometry/remesh/label_set.h"
-#include "geometry/remesh/parallel_for.h"
+#include "geometry/remesh/parallel_ranges.h"
 #include "geometry/remesh/tet_shape.h"
 
 #include <Eigen/Geometry>
@@ -255,7 +255,7 @@ namespace {
 void worstCosines(const RemeshComplex& complex, int threads, std::vector<double>& out) {
   out.assign(std::size_t(complex.tetSlots()), 2.0);
   const auto& P = complex.positions();
-  parallelFor(complex.tetSlots(), threads, [&](std::int64_t b, std::int64_t e) {
+  parallelRanges(complex.tetSlots(), threads, [&](std::int64_t b, std::int64_t e) {
     for (std::int32_t t = std::int32_t(b); t < std::int32_t(e); ++t) {
       if (!complex.tetAlive(t) || complex.isDummyTet(t)) continue;
       const Tet& q = complex.tet(t);
@@ -273,7 +273,7 @@ template <typename Try>
 void screen(RemeshComplex& complex, const FlipOptions& options, std::vector<std::pair<std::int32_t, std::int32_t>>& edges,
             const Try& tryFlip) {
   std::vector<char> flippable(edges.size(), 0);
-  parallelFor(std::int64_t(edges.size()), options.threads, [&](std::int64_t b, std::int64_t e) {
+  parallelRanges(std::int64_t(edges.size()), options.threads, [&](std::int64_t b, std::int64_t e) {
     EdgeFlipper f(complex, options);
     for (std::int64_t i = b; i < e; ++i) flippable[std::size_t(i)] = tryFlip(f, edges[std::size_t(i)].first, edges[std::size_t(i)].second);
   });
@@ -355,7 +355,7 @@ FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
   std::sort(poor.begin(), poor.end());
   {
     std::vector<char> any(poor.size(), 0);
-    parallelFor(std::int64_t(poor.size()), options.threads, [&](std::int64_t b, std::int64_t e) {
+    parallelRanges(std::int64_t(poor.size()), options.threads, [&](std::int64_t b, std::int64_t e) {
       EdgeFlipper f(complex, options);
       for (std::int64_t i = b; i < e; ++i)
         for (int k = 0; k < 4 && !any[std::size_t(i)]; ++k) any[std::size_t(i)] = f.tryFlipFace(poor[std::size_t(i)].second, k, false);

@@ -1,6 +1,6 @@
 #include "geometry/remesh/interface_distance.h"
 
-#include "geometry/remesh/parallel_for.h"
+#include "geometry/remesh/parallel_ranges.h"
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -90,7 +90,7 @@ std::map<std::int32_t, InterfaceDistance> interfaceDistances(const TetMesh& inpu
   for (const auto& [label, tris] : a)
     if (b.count(label)) labels.push_back(label);
   std::vector<InterfaceDistance> result(labels.size());
-  parallelFor(std::int64_t(labels.size()), threads, [&](std::int64_t begin, std::int64_t end) {
+  parallelRanges(std::int64_t(labels.size()), threads, [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t i = begin; i < end; ++i) {
       const auto& in = a.at(labels[std::size_t(i)]);
       const auto& out = b.at(labels[std::size_t(i)]);

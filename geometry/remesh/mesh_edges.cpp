@@ -1,6 +1,6 @@
 #include "geometry/remesh/mesh_edges.h"
 
-#include "geometry/remesh/parallel_for.h"
+#include "geometry/remesh/parallel_ranges.h"
 
 #include <algorithm>
 
@@ -15,7 +15,7 @@ void collectEdges(const RemeshComplex& complex,
   std::vector<std::vector<WeightedEdge>> chunks(kChunks);
   const std::int32_t dummy = complex.dummyVertex();
   const std::int64_t n = complex.vertexSlots();
-  parallelFor(kChunks, threads, [&](std::int64_t cb, std::int64_t ce) {
+  parallelRanges(kChunks, threads, [&](std::int64_t cb, std::int64_t ce) {
     StarWalker walker;
     std::vector<std::int32_t> star, ring;
     for (std::int64_t c = cb; c < ce; ++c)

@@ -1,7 +1,7 @@
 #include "geometry/remesh/smooth_vertices.h"
 
 #include "geometry/remesh/element_classification.h"
-#include "geometry/remesh/parallel_for.h"
+#include "geometry/remesh/parallel_ranges.h"
 #include "geometry/remesh/tet_shape.h"
 
 #include <Eigen/Geometry>
@@ -179,7 +179,7 @@ SmoothCounts smoothVertices(RemeshComplex& complex, const InterfaceSurfaces* sur
   const std::int32_t dummy = complex.dummyVertex();
   constexpr std::uint8_t kSkip = 0xFF;
   std::vector<std::uint8_t> kind(std::size_t(nv), kSkip);
-  parallelFor(nv, threads, [&](std::int64_t b, std::int64_t e) {
+  parallelRanges(nv, threads, [&](std::int64_t b, std::int64_t e) {
     VertexNeighborhood nb;
     for (std::int32_t v = std::int32_t(b); v < std::int32_t(e); ++v) {
       if (v == dummy || !complex.vertexAlive(v)) continue;
@@ -200,7 +200,7 @@ SmoothCounts smoothVertices(RemeshComplex& complex, const InterfaceSurfaces* sur
       if (kind[std::size_t(v)] == std::uint8_t(k)) level.push_back(v);
     targets.assign(level.size(), Eigen::Vector3d::Zero());
     moves.assign(level.size(), 0);
-    parallelFor(std::int64_t(level.size()), threads, [&](std::int64_t b, std::int64_t e) {
+    parallelRanges(std::int64_t(level.size()), threads, [&](std::int64_t b, std::int64_t e) {
       VertexNeighborhood nb;
       for (std::int64_t i = b; i < e; ++i) {
         vt.of(level[std::size_t(i)], nb.tets);
