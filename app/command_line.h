@@ -17,6 +17,8 @@ namespace vox::app {
 // Each subcommand adds itself to the application (one file per command).
 void addInfoCommand(CLI::App& app);
 void addSynthCommand(CLI::App& app);
+void addMeshCommand(CLI::App& app);
+void addRemeshCommand(CLI::App& app);
 void addRenderCommand(CLI::App& app);
 void addCageCommand(CLI::App& app);
 void addDeformCommand(CLI::App& app);

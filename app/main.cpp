@@ -14,6 +14,8 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "voxmorph 0.1.0");
   vox::app::addInfoCommand(app);
   vox::app::addSynthCommand(app);
+  vox::app::addMeshCommand(app);
+  vox::app::addRemeshCommand(app);
   vox::app::addRenderCommand(app);
   vox::app::addCageCommand(app);
   vox::app::addDeformCommand(app);

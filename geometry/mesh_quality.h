@@ -29,4 +29,22 @@ struct TetQualitySummary {
 // Summary over the domain tets (label > 0).
 TetQualitySummary summarizeTetQuality(const TetMesh& mesh);
 
+// Angles of the boundary facets: faces between tets of different labels and
+// faces on the domain boundary (domain tets only).
+struct BoundaryFacetSummary {
+  std::size_t facets = 0;
+  double minAngle = 180.0;         // degrees
+  double maxAngle = 0.0;
+  double meanDeviationFrom60 = 0;  // mean |angle - 60| over all facet angles
+};
+BoundaryFacetSummary summarizeBoundaryFacets(const TetMesh& mesh);
+
+// Lengths of the edges of the domain tets against a target length l.
+struct EdgeLengthSummary {
+  std::size_t edges = 0;
+  double minLength = 0.0, maxLength = 0.0, meanLength = 0.0;  // mm
+  double meanRelativeDeviation = 0.0;  // mean |length - l| / l
+};
+EdgeLengthSummary summarizeEdgeLengths(const TetMesh& mesh, double target);
+
 }  // namespace vox

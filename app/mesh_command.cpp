@@ -1,0 +1,33 @@
+// voxmorph mesh: a label grid to a multi-material tet mesh (M-MAd remesher
+// on a conforming decomposition of the voxels), with its quality report.
+
+#include "app/command_line.h"
+#include "app/remesh_cli.h"
+#include "geometry/io/grid_io.h"
+#include "geometry/io/mesh_io.h"
+#include "geometry/remesh/adaptive_voxel_tetrahedralization.h"
+#include "geometry/remesh/mesh_topology.h"
+
+#include <chrono>
+#include <cstdio>
+
+namespace vox::app {
+
+void addMeshCommand(CLI::App& app) {
+  auto o = std::make_shared<RemeshCliOptions>();
+  CLI::App* cmd = app.add_subcommand("mesh", "Mesh a label grid into a multi-material tet mesh (M-MAd)");
+  cmd->add_option("grid", o->input, "Label grid (.nii .nii.gz .mha .mhd .nrrd .nhdr .inr)")->required();
+  addRemeshOptions(*cmd, *o);
+  cmd->callback([o] {
+    installStderrProgress(o->quiet);
+    const auto t0 = std::chrono::steady_clock::now();
+    const LabelGrid grid = readGrid(o->input);
+    const remesh::AdaptiveTetrahedralizationOptions decomposition =
+        remesh::adaptiveOptionsForTarget(grid.geometry(), o->remesh.targetLength);
+    const TetMesh initial = remesh::tetrahedralizeVoxelsAdaptive(grid, decomposition);
+    const double setupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    runRemesh(*o, initial, remesh::computeGridTopology(grid), setupSeconds);
+  });
+}
+
+}  // namespace vox::app

@@ -1,0 +1,75 @@
+#pragma once
+// What `voxmorph mesh` and `voxmorph remesh` share: the remesher's options,
+// and running it on an initial mesh, writing the mesh and the report.
+
+#include "app/command_line.h"
+#include "geometry/io/atomic_file.h"
+#include "geometry/io/mesh_io.h"
+#include "geometry/remesh/remesh.h"
+#include "geometry/remesh/remesh_report.h"
+
+#include <cstdio>
+#include <iostream>
+#include <string>
+
+namespace vox::app {
+
+struct RemeshCliOptions {
+  std::string input, output, report;
+  remesh::RemeshOptions remesh;
+  std::string surface = "hpss";
+  bool keepImaginary = false;
+  bool noDistances = false;
+  bool quiet = false;
+};
+
+inline void addRemeshOptions(CLI::App& cmd, RemeshCliOptions& o) {
+  const CLI::Validator meshExtension(
+      [](std::string& path) {
+        return hasTetMeshExtension(path) ? std::string() : "unknown mesh format '" + path + "' (use .mesh, .vtu or .msh)";
+      },
+      "MESH");
+  cmd.add_option("-l,--length", o.remesh.targetLength, "Target edge length l (mm); e_min = 4/5 l, e_max = 4/3 l")
+      ->required()
+      ->check(CLI::PositiveNumber);
+  cmd.add_option("-o,--output", o.output, "Output tet mesh (.mesh .vtu .msh), domain tets (label > 0)")
+      ->required()
+      ->check(meshExtension);
+  cmd.add_option("--iterations", o.remesh.iterations, "Split-collapse-flip-smooth iterations (default 10)")
+      ->check(CLI::Range(0, 100));
+  cmd.add_option("--flip-smooth", o.remesh.flipSmoothCycles, "Final flip-smooth cycles (default 3)")->check(CLI::Range(0, 100));
+  cmd.add_option("--surface", o.surface, "Interface model boundary vertices are projected on: hpss (default), pss, none")
+      ->check(CLI::IsMember({"hpss", "pss", "none"}));
+  cmd.add_option("--mls-radius", o.remesh.mlsRadius, "Width of the interface model's kernel (mm; default automatic)")
+      ->check(CLI::NonNegativeNumber);
+  cmd.add_option("--threads", o.remesh.threads, "Threads (default 2)")->check(CLI::Range(1, 64));
+  cmd.add_option("--report", o.report, "Also write the quality report as JSON (- for stdout instead of the text)");
+  cmd.add_flag("--keep-imaginary", o.keepImaginary, "Also write the imaginary layer around the domain (label 0)");
+  cmd.add_flag("--no-distance", o.noDistances, "Skip the interface Hausdorff distances of the report");
+  cmd.add_flag("-q,--quiet", o.quiet, "No progress on stderr");
+}
+
+// Remeshes `initial` (whose domain tets and topology the report compares
+// against), writes the output mesh, prints the report and writes its JSON.
+inline void runRemesh(RemeshCliOptions& o, const TetMesh& initial, const remesh::MeshTopology& initialTopology,
+                      double setupSeconds) {
+  o.remesh.projectOnInterfaces = o.surface != "none";
+  o.remesh.hermite = o.surface == "hpss";
+  remesh::RemeshStats stats;
+  const TetMesh output = remesh::remeshTetMesh(initial, o.remesh, &stats, o.keepImaginary, o.input);
+  writeTetMesh(o.output, output);
+  remesh::ReportOptions reportOptions;
+  reportOptions.distances = !o.noDistances;
+  reportOptions.threads = o.remesh.threads;
+  remesh::RemeshReport report =
+      remesh::buildRemeshReport(initial, initialTopology, output, o.remesh.targetLength, stats, reportOptions);
+  report.setupSeconds = setupSeconds;
+  if (o.report == "-") {
+    std::cout << remesh::reportJson(report);
+    return;
+  }
+  std::printf("%s -> %s\n%s", o.input.c_str(), o.output.c_str(), remesh::reportText(report).c_str());
+  if (!o.report.empty()) writeFileAtomic(o.report, remesh::reportJson(report));
+}
+
+}  // namespace vox::app

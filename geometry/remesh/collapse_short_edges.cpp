@@ -1,0 +1,355 @@
+#include "geometry/remesh/collapse_short_edges.h"
+
+#include "geometry/remesh/mesh_edges.h"
+#include "geometry/remesh/parallel_ranges.h"
+#include "geometry/remesh/tet_shape.h"
+
+#include <algorithm>
+#include <cmath>
+#include <queue>
+#include <tuple>
+
+namespace vox::remesh {
+
+namespace {
+const double kGuardCosine = std::cos(kCollapseMinDihedral * M_PI / 180.0);
+const double kGuardQuality = 2.0 * std::sin(kCollapseMinDihedral * M_PI / 180.0);
+constexpr double kUnknownCosine = 3.0;
+}  // namespace
+
+EdgeCollapser::EdgeCollapser(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull)
+    : complex_(complex), bounds_(bounds), hull_(hull) {}
+
+const LabelSet& EdgeCollapser::edgeLabels(const VertexNeighborhood& n, std::int32_t w) const {
+  return n.edgeLabels[std::size_t(n.find(w))];
+}
+
+std::int32_t EdgeCollapser::tryCollapse(std::int32_t u, std::int32_t v, bool apply) {
+  const std::int32_t dummy = complex_.dummyVertex();
+  if (u == v || u == dummy || v == dummy || !complex_.vertexAlive(u) || !complex_.vertexAlive(v)) return -1;
+  const std::int32_t t = walker_.findEdgeTet(complex_, u, v);
+  if (t < 0) return -1;
+  // Label sets first: most short edges near interfaces meet the exclusion
+  // condition, which needs no one-ring.
+  complex_.edgeRing(u, v, t, ring_);
+  LabelSet suv;
+  for (std::int32_t q : ring_.tets) suv.insert(complex_.label(q));
+  walker_.incidentTets(complex_, u, nu_.tets);
+  walker_.incidentTets(complex_, v, nv_.tets);
+  auto labelsOf = [&](const std::vector<std::int32_t>& tets) {
+    LabelSet s;
+    for (std::int32_t q : tets) s.insert(complex_.label(q));
+    return s;
+  };
+  if (suv.overflow() || (!(labelsOf(nu_.tets) == suv) && !(labelsOf(nv_.tets) == suv))) return -1;
+  if (!anyPositionKeepsEdgesShort()) return -1;
+  classifyNeighborhood(complex_, u, nu_);
+  classifyNeighborhood(complex_, v, nv_);
+  const EdgeRule rule = edgeRule(nu_, nv_, suv, dummy);
+  if (rule.condition == EdgeCondition::Exclusion) return -1;
+  if (!topologyTests(suv) || !linkCondition()) return -1;
+
+  worstBefore_[0] = worstBefore_[1] = kUnknownCosine;
+
+  const Eigen::Vector3d pu = complex_.position(u), pv = complex_.position(v);
+  struct Option {
+    const VertexNeighborhood* removed;
+    const VertexNeighborhood* kept;
+    Eigen::Vector3d p;
+  };
+  Option options[3];
+  int count = 0;
+  if (rule.condition == EdgeCondition::Similarity) {
+    options[count++] = {&nu_, &nv_, 0.5 * (pu + pv)};
+    options[count++] = {&nu_, &nv_, pv};
+    options[count++] = {&nv_, &nu_, pu};
+  } else if (rule.moving == u) {
+    options[count++] = {&nu_, &nv_, pv};
+  } else {
+    options[count++] = {&nv_, &nu_, pu};
+  }
+  const HullConstraint::Planes planes[2] = {hull_.planes(complex_, nu_), hull_.planes(complex_, nv_)};
+  for (int i = 0; i < count; ++i) {
+    const Option& o = options[i];
+    const VertexNeighborhood& r = *o.removed;
+    const VertexNeighborhood& k = *o.kept;
+    const bool keptMoves = o.p != complex_.position(k.vertex);
+    if (r.onHull() && !hull_.allows(planes[&r == &nu_ ? 0 : 1], o.p)) continue;
+    if (keptMoves && k.onHull() && !hull_.allows(planes[&k == &nu_ ? 0 : 1], o.p)) continue;
+    if (!test2NoLongEdges(r, k, o.p) || !test1PositiveVolumes(r, k, o.p)) continue;
+    if (apply) collapse(r, k, o.p);
+    return k.vertex;
+  }
+  return -1;
+}
+
+bool EdgeCollapser::anyPositionKeepsEdgesShort() const {
+  // Test 2 for the three positions a collapse may take (either end point or
+  // the mid-point), from the two stars alone: most short edges that cannot
+  // be collapsed fail here, before any classification.
+  const std::int32_t u = ring_.a, v = ring_.b, dummy = complex_.dummyVertex();
+  const double emax2 = bounds_.emax * bounds_.emax;
+  const Eigen::Vector3d pu = complex_.position(u), pv = complex_.position(v), mid = 0.5 * (pu + pv);
+  bool toV = true, toU = true, toMid = true;
+  auto holds = [&](const std::vector<std::int32_t>& tets, std::int32_t w) {
+    for (std::int32_t q : tets)
+      if (complex_.localIndex(q, w) >= 0) return true;
+    return false;
+  };
+  auto scan = [&](const std::vector<std::int32_t>& tets, const std::vector<std::int32_t>& otherTets, std::int32_t self,
+                  std::int32_t other, bool& toOther) {
+    for (std::int32_t q : tets)
+      for (std::int32_t w : complex_.tet(q)) {
+        if (w == self || w == other || w == dummy) continue;
+        const Eigen::Vector3d& pw = complex_.position(w);
+        if (toMid && (pw - mid).squaredNorm() >= emax2) toMid = false;
+        // Moving `self` onto `other` creates (other, w) unless it exists.
+        if (toOther && (pw - complex_.position(other)).squaredNorm() >= emax2 && !holds(otherTets, w)) toOther = false;
+      }
+  };
+  scan(nu_.tets, nv_.tets, u, v, toV);
+  scan(nv_.tets, nu_.tets, v, u, toU);
+  return toV || toU || toMid;
+}
+
+bool EdgeCollapser::topologyTests(const LabelSet& suv) const {
+  // Tests 3 and 4 (Figure 2.16), on the facets (u, v, c) around the edge.
+  const bool boundaryEdge = suv.size() >= 2, featureEdge = suv.size() >= 3;
+  if (!boundaryEdge) return true;
+  const std::size_t n = ring_.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::int32_t c = ring_.ring[i];
+    const std::int32_t l0 = complex_.label(ring_.tets[(i + n - 1) % n]), l1 = complex_.label(ring_.tets[i]);
+    const int uc = edgeLabels(nu_, c).size(), vc = edgeLabels(nv_, c).size();
+    if (l0 == l1 && uc >= 2 && vc >= 2) return false;                   // 3: pinched boundary
+    if (featureEdge && l0 != l1 && uc >= 3 && vc >= 3) return false;  // 4: 1-junction shortcut
+  }
+  return true;
+}
+
+bool EdgeCollapser::linkCondition() const {
+  // Lk(u) and Lk(v) may only share Lk(uv) -- in the whole complex and in the
+  // closure of every set of labels (each K_X and their intersections) -- and
+  // the simplices merged by the contraction must carry nested label sets, so
+  // that every such subcomplex after the collapse is the contraction of the
+  // one before (Dey et al. 1999; Attali et al. 2012: homotopy preserved).
+  const std::size_t n = ring_.size();
+  const std::int32_t u = nu_.vertex, v = nv_.vertex;
+  // Position in the ring of each one-ring vertex of u and of v, by slot.
+  thread_local std::vector<int> ringOfU, ringOfV;
+  ringOfU.assign(nu_.neighbors.size(), -1);
+  ringOfV.assign(nv_.neighbors.size(), -1);
+  for (std::size_t i = 0; i < n; ++i) {
+    ringOfU[std::size_t(nu_.find(ring_.ring[i]))] = int(i);
+    ringOfV[std::size_t(nv_.find(ring_.ring[i]))] = int(i);
+  }
+  auto ringIndex = [&](const VertexNeighborhood& nb, std::int32_t w) {
+    const int slot = nb.find(w);
+    if (slot < 0) return -1;
+    return (&nb == &nu_ ? ringOfU : ringOfV)[std::size_t(slot)];
+  };
+  // Vertices: the common neighbours of u and v are exactly the ring.
+  std::size_t common = 0;
+  for (std::size_t i = 0; i < nu_.neighbors.size(); ++i) {
+    const std::int32_t w = nu_.neighbors[i];
+    if (w != v && nv_.find(w) >= 0) {
+      if (ringOfU[i] < 0) return false;
+      ++common;
+    }
+  }
+  if (common != n) return false;
+  // Label sets of the edges (u, c) and (v, c) that merge into one.
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::int32_t c = ring_.ring[i];
+    LabelSet suvc;
+    suvc.insert(complex_.label(ring_.tets[(i + n - 1) % n]));
+    suvc.insert(complex_.label(ring_.tets[i]));
+    const LabelSet& suc = edgeLabels(nu_, c);
+    const LabelSet& svc = edgeLabels(nv_, c);
+    if (!suc.intersection(svc).subsetOf(suvc)) return false;
+    if (!suc.subsetOf(svc) && !svc.subsetOf(suc)) return false;
+  }
+  // Facets (u, c, d) and (v, c, d) merge: one of the two tets beyond them
+  // must carry the label of the removed tet (u, v, c, d), or that label
+  // would vanish from the merged facet and from the edge (c, d).
+  for (std::int32_t q : ring_.tets) {
+    const std::int32_t l = complex_.label(q);
+    const std::int32_t beyondU = complex_.neighbor(q, complex_.localIndex(q, v));
+    const std::int32_t beyondV = complex_.neighbor(q, complex_.localIndex(q, u));
+    if (complex_.label(beyondU) != l && complex_.label(beyondV) != l) return false;
+  }
+  // Edges: an edge (c, d) between ring vertices lying in both links must be
+  // a ring edge.
+  thread_local std::vector<char> inLinkU;
+  inLinkU.assign(n * n, 0);
+  auto visitLinkEdges = [&](const VertexNeighborhood& nb, std::int32_t other, bool mark) {
+    for (std::int32_t q : nb.tets) {
+      if (complex_.localIndex(q, other) >= 0) continue;
+      int idx[3], m = 0;
+      for (std::int32_t w : complex_.tet(q))
+        if (w != nb.vertex) idx[m++] = ringIndex(nb, w);
+      for (int x = 0; x < 3; ++x)
+        for (int y = x + 1; y < 3; ++y) {
+          if (idx[x] < 0 || idx[y] < 0) continue;
+          const std::size_t i = std::size_t(std::min(idx[x], idx[y])), j = std::size_t(std::max(idx[x], idx[y]));
+          if (mark) {
+            inLinkU[i * n + j] = 1;
+          } else if (inLinkU[i * n + j] && j != i + 1 && !(i == 0 && j == n - 1)) {
+            return false;
+          }
+        }
+    }
+    return true;
+  };
+  visitLinkEdges(nu_, v, true);
+  return visitLinkEdges(nv_, u, false);
+}
+
+bool EdgeCollapser::test1PositiveVolumes(const VertexNeighborhood& r, const VertexNeighborhood& k,
+                                         const Eigen::Vector3d& p) const {
+  const auto& P = complex_.positions();
+  const bool keptMoves = p != P[std::size_t(k.vertex)];
+  auto check = [&](const VertexNeighborhood& nb, std::int32_t other) {
+    for (std::int32_t q : nb.tets) {
+      if (complex_.isDummyTet(q) || complex_.localIndex(q, other) >= 0) continue;  // no geometry, or removed
+      const Tet& t = complex_.tet(q);
+      Eigen::Vector3d x[4];
+      for (int i = 0; i < 4; ++i) x[i] = t[std::size_t(i)] == nb.vertex ? p : P[std::size_t(t[std::size_t(i)])];
+      const double after = volumeLengthQuality(x[0], x[1], x[2], x[3]);
+      if (!(after > 0.0) || signedVolume(x[0], x[1], x[2], x[3]) <= 0.0) return false;
+      if (after < kQualityFloor && after < volumeLengthQuality(P[std::size_t(t[0])], P[std::size_t(t[1])],
+                                                               P[std::size_t(t[2])], P[std::size_t(t[3])]))
+        return false;
+      // No new dihedral angle under kCollapseMinDihedral, unless the tets
+      // the collapse replaces already had a worse one. Since
+      // V = l_e h1 h2 sin(theta_e) / 6 for every edge e, the quality is at
+      // most 2 sin(theta_min): above 2 sin(kCollapseMinDihedral) no angle
+      // can be too small and the angles need not be computed.
+      if (after > kGuardQuality) continue;
+      const double worst = minDihedralCosine(x[0], x[1], x[2], x[3]);
+      if (worst > kGuardCosine && (worst > worstBefore(r) || (keptMoves && worst > worstBefore(k)))) return false;
+    }
+    return true;
+  };
+  return check(r, k.vertex) && (!keptMoves || check(k, r.vertex));
+}
+
+double EdgeCollapser::worstBefore(const VertexNeighborhood& nb) const {
+  double& w = worstBefore_[&nb == &nu_ ? 0 : 1];
+  if (w != kUnknownCosine) return w;
+  const auto& P = complex_.positions();
+  w = -1.0;
+  for (std::int32_t q : nb.tets) {
+    if (complex_.isDummyTet(q)) continue;
+    const Tet& c = complex_.tet(q);
+    w = std::max(w, minDihedralCosine(P[std::size_t(c[0])], P[std::size_t(c[1])], P[std::size_t(c[2])],
+                                      P[std::size_t(c[3])]));
+  }
+  return w;
+}
+
+bool EdgeCollapser::test2NoLongEdges(const VertexNeighborhood& r, const VertexNeighborhood& k,
+                                     const Eigen::Vector3d& p) const {
+  const double emax2 = bounds_.emax * bounds_.emax;
+  const std::int32_t dummy = complex_.dummyVertex();
+  const bool keptMoves = p != complex_.position(k.vertex);
+  for (std::int32_t w : r.neighbors) {
+    if (w == dummy || w == k.vertex) continue;
+    if (!keptMoves && k.find(w) >= 0) continue;  // an existing, unchanged edge of k
+    if ((complex_.position(w) - p).squaredNorm() >= emax2) return false;
+  }
+  if (keptMoves)
+    for (std::int32_t w : k.neighbors) {
+      if (w == dummy || w == r.vertex) continue;
+      if ((complex_.position(w) - p).squaredNorm() >= emax2) return false;
+    }
+  return true;
+}
+
+void EdgeCollapser::collapse(const VertexNeighborhood& r, const VertexNeighborhood& k, const Eigen::Vector3d& p) {
+  const std::int32_t rv = r.vertex, kv = k.vertex;
+  for (std::int32_t q : r.tets)
+    if (complex_.localIndex(q, kv) < 0) complex_.setTetVertex(q, complex_.localIndex(q, rv), kv);
+  std::int32_t survivor = -1;
+  for (std::int32_t q : ring_.tets) {
+    const int ir = complex_.localIndex(q, rv), ik = complex_.localIndex(q, kv);
+    const std::int32_t beyondR = complex_.encodedNeighbor(q, ik);  // holds r's side facet
+    const std::int32_t beyondK = complex_.encodedNeighbor(q, ir);
+    complex_.setEncodedNeighbor(beyondR >> 2, beyondR & 3, beyondK);
+    complex_.setEncodedNeighbor(beyondK >> 2, beyondK & 3, beyondR);
+    for (std::int32_t w : complex_.tet(q))
+      if (w != rv && w != kv) complex_.setAnyTet(w, beyondK >> 2);
+    survivor = beyondK >> 2;
+    complex_.removeTet(q);
+  }
+  complex_.setPosition(kv, p);
+  complex_.setAnyTet(kv, survivor);
+  complex_.removeVertex(rv);
+}
+
+std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull,
+                               int threads) {
+  const double emin2 = bounds.emin * bounds.emin;
+  // Shortest first: the initial candidates sorted once, the edges made
+  // short by a collapse in a small heap, always taking the shorter head.
+  std::vector<WeightedEdge> edges;
+  collectEdges(complex, [&](std::int32_t, std::int32_t, double l2) { return l2 < emin2; }, edges, threads);
+  auto shorter = [](const WeightedEdge& x, const WeightedEdge& y) {
+    return std::tie(x.length2, x.a, x.b) < std::tie(y.length2, y.a, y.b);
+  };
+  std::sort(edges.begin(), edges.end(), shorter);
+
+  // Screening on all threads: most candidates cannot be collapsed
+  // (junctions, lengths, angles), and finding out only reads the complex.
+  // (Screened with one thread as well, so the result does not depend on
+  // the thread count.)
+  std::vector<char> promising(edges.size(), 0);
+  parallelRanges(std::int64_t(edges.size()), threads, [&](std::int64_t b, std::int64_t e) {
+    EdgeCollapser screen(complex, bounds, hull);
+    for (std::int64_t i = b; i < e; ++i)
+      promising[std::size_t(i)] = screen.tryCollapse(edges[std::size_t(i)].a, edges[std::size_t(i)].b, false) >= 0;
+  });
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < edges.size(); ++i)
+    if (promising[i]) edges[kept++] = edges[i];
+  edges.resize(kept);
+
+  auto later = [&](const WeightedEdge& x, const WeightedEdge& y) { return shorter(y, x); };
+  std::priority_queue<WeightedEdge, std::vector<WeightedEdge>, decltype(later)> queue(later);
+  std::size_t next = 0;
+
+  EdgeCollapser collapser(complex, bounds, hull);
+  std::vector<std::int32_t> star, ring;
+  std::size_t collapses = 0;
+  const std::int32_t dummy = complex.dummyVertex();
+  while (next < edges.size() || !queue.empty()) {
+    WeightedEdge e;
+    if (queue.empty() || (next < edges.size() && shorter(edges[next], queue.top()))) {
+      e = edges[next++];
+    } else {
+      e = queue.top();
+      queue.pop();
+    }
+    if (!complex.vertexAlive(e.a) || !complex.vertexAlive(e.b)) continue;
+    if ((complex.position(e.a) - complex.position(e.b)).squaredNorm() >= emin2) continue;
+    const std::int32_t survivor = collapser.tryCollapse(e.a, e.b);
+    if (survivor < 0) continue;
+    ++collapses;
+    // Cascade: the remaining vertex's short edges are candidates again.
+    complex.incidentTets(survivor, star);
+    ring.clear();
+    for (std::int32_t q : star)
+      for (std::int32_t w : complex.tet(q))
+        if (w != survivor && w != dummy) ring.push_back(w);
+    std::sort(ring.begin(), ring.end());
+    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+    const Eigen::Vector3d pk = complex.position(survivor);
+    for (std::int32_t w : ring) {
+      const double l2 = (complex.position(w) - pk).squaredNorm();
+      if (l2 < emin2) queue.push({std::min(survivor, w), std::max(survivor, w), l2});
+    }
+  }
+  return collapses;
+}
+
+}  // namespace vox::remesh

@@ -1,0 +1,71 @@
+#pragma once
+// Collapse (thesis 2.3.3, Figure 2.18). An edge shorter than e_min is
+// contracted according to the condition it meets (Table 2.3): similarity
+// gives a mid-point collapse (then, as in CGAL, towards either end point),
+// inclusion moves the vertex of higher dimension onto the other one,
+// exclusion forbids the collapse. It is performed only if
+//   1. every updated tet keeps a positive volume,
+//   2. every new edge is shorter than e_max,
+//   3. no non-boundary facet around a boundary edge has three boundary edges,
+//   4. no boundary facet around a feature edge has three feature edges
+//      (the topology exceptions of Figure 2.16),
+// and if the label-aware link condition holds: tests 3 and 4 are special
+// cases of it, and it also rejects the contractions that would merge two
+// simplices of different label sets or empty a label from a simplex, which
+// is what keeps every label region, 1-junction and 0-junction intact.
+
+#include "geometry/remesh/edge_length_bounds.h"
+#include "geometry/remesh/element_classification.h"
+#include "geometry/remesh/hull_constraint.h"
+#include "geometry/remesh/remesh_complex.h"
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
+
+namespace vox::remesh {
+
+inline constexpr double kCollapseMinDihedral = 10.0;  // degrees
+
+class EdgeCollapser {
+public:
+  EdgeCollapser(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull);
+
+  // Collapses edge (u, v) when the rules above allow it. Returns the vertex
+  // that remains, or -1 (nothing changed). With apply = false only says
+  // which vertex would remain (read-only: collapsers of other threads may
+  // evaluate the same complex meanwhile).
+  std::int32_t tryCollapse(std::int32_t u, std::int32_t v, bool apply = true);
+
+private:
+  bool anyPositionKeepsEdgesShort() const;
+  bool topologyTests(const LabelSet& edgeLabels) const;
+  bool linkCondition() const;
+  bool test1PositiveVolumes(const VertexNeighborhood& removed, const VertexNeighborhood& kept,
+                            const Eigen::Vector3d& p) const;
+  bool test2NoLongEdges(const VertexNeighborhood& removed, const VertexNeighborhood& kept,
+                        const Eigen::Vector3d& p) const;
+  void collapse(const VertexNeighborhood& removed, const VertexNeighborhood& kept, const Eigen::Vector3d& p);
+  const LabelSet& edgeLabels(const VertexNeighborhood& n, std::int32_t w) const;
+
+  RemeshComplex& complex_;
+  EdgeLengthBounds bounds_;
+  const HullConstraint& hull_;
+  StarWalker walker_;
+  VertexNeighborhood nu_, nv_;
+  EdgeRing ring_;
+  // Worst dihedral cosine around u and v, computed when first needed.
+  double worstBefore(const VertexNeighborhood& nb) const;
+  mutable double worstBefore_[2] = {3.0, 3.0};
+};
+
+// Collapses edges shorter than e_min, shortest first; after each collapse
+// the edges of the remaining vertex that became too short are queued too
+// (cascading), until every edge is long enough or cannot be collapsed.
+// Returns the number of collapses.
+// The candidates are first screened in parallel (read-only), the collapses
+// then applied one at a time in order, each re-checked.
+std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull,
+                               int threads = 2);
+
+}  // namespace vox::remesh

@@ -1,0 +1,79 @@
+#pragma once
+// Flip (edge removal; thesis 2.3.4, Figures 2.19-2.20). The n tets around an
+// edge are replaced by a fan towards one link vertex: 3-2 for n = 3, 4-4 for
+// n = 4 (two choices), n-m with m = 2n - 4 for n > 4 (n choices). A flip
+// never inverts a tet nor creates an edge that already exists.
+//  - Inner edges (all tets around them carry one label) take the choice that
+//    maximizes the worst dihedral angle, if it beats the current one.
+//  - Surface edges (two labels, exactly two boundary facets) are flipped
+//    towards one of the two boundary facets' apexes, so the interface stays
+//    a surface, when it lowers the deviation of the boundary valences from 6
+//    (surface vertices) and 4 (feature vertices), or when it lifts a worst
+//    dihedral angle under 30 degrees; no 3-2 boundary flip.
+//  - Feature edges are never flipped.
+// Then the faces of the tets still under `innerFlipAngle` get 2-3 flips
+// (the face flip of the thesis' sliver removal, 2.3.6) when that helps.
+
+#include "geometry/remesh/remesh_complex.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+namespace vox::remesh {
+
+struct FlipOptions {
+  // Inner edges of tets whose smallest dihedral angle is under this are
+  // candidates (degrees); better tets have nothing to gain.
+  double innerFlipAngle = 40.0;
+  // Edges tried per such tet, largest dihedral angles first (6: all).
+  int edgesPerPoorTet = 3;
+  // Largest ring considered for an n-m flip.
+  int maxRing = 10;
+  // A surface flip may not bend the interface more than this (degrees,
+  // angle between the normals of the two facets replaced).
+  double surfaceFlipMaxBend = 20.0;
+  int threads = 2;  // for the quality scans
+};
+
+struct FlipCounts {
+  std::size_t surface = 0;
+  std::size_t inner = 0;
+  std::size_t face = 0;
+};
+
+class EdgeFlipper {
+public:
+  EdgeFlipper(RemeshComplex& complex, const FlipOptions& options);
+  // Each returns whether it flipped; with apply = false only whether it
+  // would (read-only: flippers of other threads may read the complex too).
+  bool tryFlipInnerEdge(std::int32_t a, std::int32_t b, bool apply = true);
+  bool tryFlipSurfaceEdge(std::int32_t a, std::int32_t b, bool apply = true);
+  // 2-3 flip of face k of tet t (sliver removal, thesis 2.3.6).
+  bool tryFlipFace(std::int32_t t, int k, bool apply = true);
+
+private:
+  // Tets of the fan towards ring[apex], with their labels.
+  void fanTowards(std::size_t apex);
+  // Worst dihedral cosine of the fan, or +inf when a tet is invalid; stops
+  // early once it reaches `bound`.
+  double fanWorstCosine(double bound) const;
+  bool fanCreatesExistingEdge(std::size_t apex);
+  // Edges of v on the x|y interface, and |S(v)|.
+  std::pair<int, int> boundaryValence(std::int32_t v, std::int32_t x, std::int32_t y);
+
+  RemeshComplex& complex_;
+  FlipOptions options_;
+  StarWalker walker_;
+  EdgeRing ring_;
+  std::vector<Tet> fan_;
+  std::vector<std::int32_t> fanLabels_;
+  std::vector<std::int32_t> star_, scratch_;
+};
+
+// Surface flips first (valence), then inner flips (dihedral angle), then
+// face flips. The candidates of each kind are screened on all threads first.
+FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options = {});
+
+}  // namespace vox::remesh

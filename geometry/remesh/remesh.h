@@ -1,0 +1,60 @@
+#pragma once
+// M-MAd: multi-material isotropic remeshing of a labeled tet mesh with exact
+// preservation of every label's topology and of every 1- and 0-junction
+// (thesis chapter 2). The main loop reads like the paper (2.2.1):
+//
+//   repeat `iterations` times:  split long edges, collapse short edges,
+//                               flip edges, smooth vertices
+//   repeat `flipSmoothCycles`:  flip edges, smooth vertices
+//
+// with e_max = 4/3 l and e_min = 4/5 l for the target length l.
+
+#include "geometry/remesh/flip_edges.h"
+#include "geometry/remesh/remesh_complex.h"
+#include "geometry/tet_mesh.h"
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace vox::remesh {
+
+struct RemeshOptions {
+  double targetLength = 0.0;   // l in mm (required, > 0)
+  int iterations = 10;         // split-collapse-flip-smooth rounds (thesis: 5-10)
+  int flipSmoothCycles = 3;    // final flip-smooth rounds
+  // Width of the point set surfaces' Gaussian (mm); 0 picks the larger of
+  // l / 2 and the mean length of the input's boundary edges.
+  double mlsRadius = 0.0;
+  bool projectOnInterfaces = true;  // project boundary vertices onto the PSS/MLS models
+  // Hermite point set surfaces (HPSS) instead of plain PSS: measured to keep
+  // label volumes far better on voxel input (docs/REMESH.md).
+  bool hermite = true;
+  int threads = 2;
+  FlipOptions flip;
+};
+
+struct RemeshStep {
+  std::string name;  // "iteration 3", "flip-smooth 1"
+  std::size_t splits = 0, collapses = 0, surfaceFlips = 0, innerFlips = 0, faceFlips = 0;
+  std::size_t smoothedFeature = 0, smoothedSurface = 0, smoothedInside = 0;
+  std::size_t tets = 0;  // live tets of the extended complex afterwards
+  double splitSeconds = 0.0, collapseSeconds = 0.0, flipSeconds = 0.0, smoothSeconds = 0.0;
+  double seconds = 0.0;
+};
+
+struct RemeshStats {
+  std::vector<RemeshStep> steps;
+  double seconds = 0.0;
+};
+
+// Remeshes the extended complex in place. Throws InputError("remesh", ...)
+// for a target length that is not positive and finite.
+void remeshComplex(RemeshComplex& complex, const RemeshOptions& options, RemeshStats* stats = nullptr);
+
+// The extended complex of `mesh` (see RemeshComplex), remeshed; returns its
+// domain tets, plus the geometric imaginary tets with keepImaginary.
+TetMesh remeshTetMesh(const TetMesh& mesh, const RemeshOptions& options, RemeshStats* stats = nullptr,
+                      bool keepImaginary = false, const std::string& source = "mesh");
+
+}  // namespace vox::remesh

@@ -1,0 +1,317 @@
+#include "geometry/remesh/remesh_complex.h"
+
+#include "geometry/error.h"
+
+#include <algorithm>
+#include <limits>
+
+namespace vox::remesh {
+
+RemeshComplex::RemeshComplex(const TetMesh& mesh, const std::string& source) {
+  mesh.validate(source);
+  if (mesh.positions.size() >= std::size_t(std::numeric_limits<std::int32_t>::max() / 4) ||
+      mesh.tets.size() >= std::size_t(std::numeric_limits<std::int32_t>::max() / 8))
+    throw InputError(source, "is too large to remesh (more than 2^28 tets)");
+  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
+    if (mesh.labels[t] < 0) throw InputError(source, "tet " + std::to_string(t) + " has a negative label");
+    if (!(signedVolume(mesh.positions, mesh.tets[t]) > 0.0))
+      throw InputError(source, "tet " + std::to_string(t) + " is inverted or has zero volume");
+  }
+
+  positions_ = mesh.positions;
+  tets_ = mesh.tets;
+  labels_ = mesh.labels;
+  neighbors_ = tetFaceAdjacency(tets_, std::int32_t(positions_.size()), source);
+
+  // Join every open facet to the dummy vertex. Face k of a positive tet is
+  // oriented outwards (tetFace), so (face, dummy) is positive "at infinity".
+  dummy_ = std::int32_t(positions_.size());
+  positions_.push_back(Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()));
+  const std::size_t domainTets = tets_.size();
+  std::vector<Tet> cone;
+  std::vector<std::int32_t> coneBase;  // 4 * tet + k of the facet each cone tet closes
+  for (std::size_t t = 0; t < domainTets; ++t)
+    for (int k = 0; k < 4; ++k)
+      if (neighbors_[t][std::size_t(k)] == kNoFace) {
+        const Tri f = tetFace(tets_[t], k);
+        cone.push_back({f[0], f[1], f[2], dummy_});
+        coneBase.push_back(std::int32_t(4 * t + std::size_t(k)));
+      }
+  const auto coneAdjacency = tetFaceAdjacency(cone, std::int32_t(positions_.size()), source);
+  for (std::size_t c = 0; c < cone.size(); ++c) {
+    const std::int32_t t = std::int32_t(domainTets + c);
+    tets_.push_back(cone[c]);
+    const std::int32_t base = coneBase[c];
+    labels_.push_back(mesh.labels[std::size_t(base / 4)] == kBackgroundLabel ? kDummyLabel : kBackgroundLabel);
+    std::array<std::int32_t, 4> nb{};
+    for (int k = 0; k < 3; ++k) {
+      const std::int32_t code = coneAdjacency[c][std::size_t(k)];
+      if (code == kNoFace)
+        throw InputError(source, "the outer boundary is not a closed manifold surface near vertex " +
+                                     std::to_string(cone[c][std::size_t((k + 1) % 3)]));
+      nb[std::size_t(k)] = std::int32_t(4 * domainTets) + code;
+    }
+    nb[3] = base;
+    neighbors_.push_back(nb);
+    neighbors_[std::size_t(base / 4)][std::size_t(base % 4)] = 4 * t + 3;
+  }
+
+  vertexTet_.assign(positions_.size(), -1);
+  std::vector<std::int32_t> incidence(positions_.size(), 0);
+  for (std::size_t t = 0; t < tets_.size(); ++t)
+    for (std::int32_t v : tets_[t]) {
+      if (vertexTet_[std::size_t(v)] < 0) vertexTet_[std::size_t(v)] = std::int32_t(t);
+      ++incidence[std::size_t(v)];
+    }
+  for (std::int32_t v = 0; v < std::int32_t(positions_.size()); ++v)
+    if (vertexTet_[std::size_t(v)] < 0 && v != dummy_) freeVertices_.push_back(v);
+  std::reverse(freeVertices_.begin(), freeVertices_.end());
+
+  // The operations find a vertex's tets by walking through its faces: that
+  // walk must reach all of them (no pinched vertex).
+  std::vector<std::int32_t> star;
+  for (std::int32_t v = 0; v < std::int32_t(positions_.size()); ++v) {
+    if (v == dummy_ || vertexTet_[std::size_t(v)] < 0) continue;
+    incidentTets(v, star);
+    if (std::int32_t(star.size()) != incidence[std::size_t(v)])
+      throw InputError(source, "vertex " + std::to_string(v) + " is non-manifold (its tets are not connected through faces)");
+  }
+}
+
+TetMesh RemeshComplex::toTetMesh(bool keepImaginary) const {
+  TetMesh out;
+  std::vector<std::int32_t> remap(positions_.size(), -1);
+  auto kept = [&](std::size_t t) {
+    if (tets_[t][0] < 0) return false;
+    if (labels_[t] > 0) return true;
+    return keepImaginary && labels_[t] == kBackgroundLabel && !isDummyTet(std::int32_t(t));
+  };
+  for (std::size_t t = 0; t < tets_.size(); ++t)
+    if (kept(t))
+      for (std::int32_t v : tets_[t]) remap[std::size_t(v)] = 0;
+  std::int32_t next = 0;
+  for (std::size_t v = 0; v < positions_.size(); ++v)
+    if (remap[v] == 0) {
+      remap[v] = next++;
+      out.positions.push_back(positions_[v]);
+    }
+  for (std::size_t t = 0; t < tets_.size(); ++t)
+    if (kept(t)) {
+      Tet q = tets_[t];
+      for (auto& v : q) v = remap[std::size_t(v)];
+      out.tets.push_back(q);
+      out.labels.push_back(labels_[t]);
+    }
+  return out;
+}
+
+std::uint32_t StarWalker::nextStamp(std::size_t tetSlots) {
+  if (mark_.size() < tetSlots) mark_.resize(tetSlots + tetSlots / 4 + 16, 0);
+  if (++stamp_ == 0) {
+    std::fill(mark_.begin(), mark_.end(), 0);
+    stamp_ = 1;
+  }
+  return stamp_;
+}
+
+void StarWalker::incidentTets(const RemeshComplex& complex, std::int32_t v, std::vector<std::int32_t>& out) {
+  out.clear();
+  const std::uint32_t s = nextStamp(std::size_t(complex.tetSlots()));
+  const std::int32_t start = complex.anyTet(v);
+  out.push_back(start);
+  mark_[std::size_t(start)] = s;
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    const std::int32_t t = out[i];
+    const Tet& q = complex.tet(t);
+    for (int k = 0; k < 4; ++k) {
+      if (q[std::size_t(k)] == v) continue;
+      const std::int32_t n = complex.neighbor(t, k);
+      if (mark_[std::size_t(n)] == s) continue;
+      mark_[std::size_t(n)] = s;
+      out.push_back(n);
+    }
+  }
+}
+
+std::int32_t StarWalker::findEdgeTet(const RemeshComplex& complex, std::int32_t a, std::int32_t b) {
+  // Walk a's star, stopping at the first tet that also holds b.
+  queue_.clear();
+  const std::uint32_t s = nextStamp(std::size_t(complex.tetSlots()));
+  const std::int32_t start = complex.anyTet(a);
+  queue_.push_back(start);
+  mark_[std::size_t(start)] = s;
+  for (std::size_t i = 0; i < queue_.size(); ++i) {
+    const std::int32_t t = queue_[i];
+    const Tet& q = complex.tet(t);
+    if (q[0] == b || q[1] == b || q[2] == b || q[3] == b) return t;
+    for (int k = 0; k < 4; ++k) {
+      if (q[std::size_t(k)] == a) continue;
+      const std::int32_t n = complex.neighbor(t, k);
+      if (mark_[std::size_t(n)] == s) continue;
+      mark_[std::size_t(n)] = s;
+      queue_.push_back(n);
+    }
+  }
+  return -1;
+}
+
+void RemeshComplex::edgeRing(std::int32_t a, std::int32_t b, std::int32_t t, EdgeRing& out) const {
+  out.a = a;
+  out.b = b;
+  out.tets.clear();
+  out.ring.clear();
+  const Tet& q0 = tets_[std::size_t(t)];
+  std::int32_t p = -1, r = -1;
+  for (std::int32_t v : q0)
+    if (v != a && v != b) (p < 0 ? p : r) = v;
+  std::int32_t cur = t;
+  for (int guard = 0; guard < 4096; ++guard) {
+    out.tets.push_back(cur);
+    out.ring.push_back(p);
+    // Step across the face opposite p; it holds a, b and r.
+    const int kp = localIndex(cur, p);
+    const std::int32_t next = neighbor(cur, kp);
+    if (next == t) return;
+    std::int32_t s = -1;
+    for (std::int32_t v : tets_[std::size_t(next)])
+      if (v != a && v != b && v != r) s = v;
+    cur = next;
+    p = r;
+    r = s;
+  }
+  throw RuntimeFailure("remesh: the tets around an edge do not close up (corrupt complex)");
+}
+
+std::int32_t RemeshComplex::addVertex(const Eigen::Vector3d& p) {
+  if (!freeVertices_.empty()) {
+    const std::int32_t v = freeVertices_.back();
+    freeVertices_.pop_back();
+    positions_[std::size_t(v)] = p;
+    return v;
+  }
+  positions_.push_back(p);
+  vertexTet_.push_back(-1);
+  return std::int32_t(positions_.size() - 1);
+}
+
+void RemeshComplex::removeVertex(std::int32_t v) {
+  vertexTet_[std::size_t(v)] = -1;
+  freeVertices_.push_back(v);
+}
+
+std::int32_t RemeshComplex::addTet(const Tet& q, std::int32_t label) {
+  if (!freeTets_.empty()) {
+    const std::int32_t t = freeTets_.back();
+    freeTets_.pop_back();
+    tets_[std::size_t(t)] = q;
+    labels_[std::size_t(t)] = label;
+    return t;
+  }
+  tets_.push_back(q);
+  labels_.push_back(label);
+  neighbors_.push_back({kNoFace, kNoFace, kNoFace, kNoFace});
+  return std::int32_t(tets_.size() - 1);
+}
+
+void RemeshComplex::removeTet(std::int32_t t) {
+  tets_[std::size_t(t)] = {-1, -1, -1, -1};
+  neighbors_[std::size_t(t)] = {kNoFace, kNoFace, kNoFace, kNoFace};
+  freeTets_.push_back(t);
+}
+
+void RemeshComplex::replaceTets(const std::vector<std::int32_t>& removed, const std::vector<Tet>& added,
+                                const std::vector<std::int32_t>& addedLabels, std::vector<std::int32_t>& out) {
+  struct OpenFace {
+    std::array<std::int32_t, 3> key;
+    std::int32_t code;  // the face it must be glued to (outside the cavity), or an added face
+    bool matched = false;
+  };
+  auto sortedFace = [](const Tet& q, int k) {
+    std::array<std::int32_t, 3> f{};
+    int n = 0;
+    for (int i = 0; i < 4; ++i)
+      if (i != k) f[std::size_t(n++)] = q[std::size_t(i)];
+    std::sort(f.begin(), f.end());
+    return f;
+  };
+  thread_local std::vector<OpenFace> boundary;
+  boundary.clear();
+  for (std::int32_t t : removed)
+    for (int k = 0; k < 4; ++k) {
+      const std::int32_t n = neighbor(t, k);
+      if (std::find(removed.begin(), removed.end(), n) == removed.end())
+        boundary.push_back({sortedFace(tets_[std::size_t(t)], k), encodedNeighbor(t, k)});
+    }
+  for (std::int32_t t : removed) removeTet(t);
+  out.clear();
+  for (std::size_t i = 0; i < added.size(); ++i) out.push_back(addTet(added[i], addedLabels[i]));
+  thread_local std::vector<OpenFace> inner;
+  inner.clear();
+  for (std::int32_t t : out)
+    for (int k = 0; k < 4; ++k) {
+      const auto key = sortedFace(tets_[std::size_t(t)], k);
+      bool glued = false;
+      for (OpenFace& b : boundary)
+        if (!b.matched && b.key == key) {
+          b.matched = true;
+          setEncodedNeighbor(t, k, b.code);
+          setEncodedNeighbor(b.code >> 2, b.code & 3, 4 * t + k);
+          glued = true;
+          break;
+        }
+      for (std::size_t j = 0; !glued && j < inner.size(); ++j)
+        if (!inner[j].matched && inner[j].key == key) {
+          inner[j].matched = true;
+          glue(t, k, inner[j].code >> 2, inner[j].code & 3);
+          glued = true;
+        }
+      if (!glued) inner.push_back({key, 4 * t + k});
+    }
+  for (const OpenFace& f : inner)
+    if (!f.matched) throw RuntimeFailure("remesh: new tets do not fill the cavity they replace");
+  for (const OpenFace& f : boundary)
+    if (!f.matched) throw RuntimeFailure("remesh: new tets leave a face of the cavity open");
+  for (std::int32_t t : out)
+    for (std::int32_t v : tets_[std::size_t(t)]) vertexTet_[std::size_t(v)] = t;
+}
+
+std::string RemeshComplex::checkConsistency(bool geometry) const {
+  auto sortedFace = [&](std::int32_t t, int k) {
+    std::array<std::int32_t, 3> f{};
+    int n = 0;
+    for (int i = 0; i < 4; ++i)
+      if (i != k) f[std::size_t(n++)] = tets_[std::size_t(t)][std::size_t(i)];
+    std::sort(f.begin(), f.end());
+    return f;
+  };
+  for (std::int32_t t = 0; t < tetSlots(); ++t) {
+    if (!tetAlive(t)) continue;
+    const Tet& q = tets_[std::size_t(t)];
+    for (int k = 0; k < 4; ++k) {
+      if (q[std::size_t(k)] < 0 || q[std::size_t(k)] >= vertexSlots() || !vertexAlive(q[std::size_t(k)]))
+        return "tet " + std::to_string(t) + " uses a removed vertex";
+      for (int m = 0; m < k; ++m)
+        if (q[std::size_t(m)] == q[std::size_t(k)]) return "tet " + std::to_string(t) + " repeats a vertex";
+      const std::int32_t code = neighbors_[std::size_t(t)][std::size_t(k)];
+      if (code < 0) return "tet " + std::to_string(t) + " has an open face";
+      const std::int32_t n = code >> 2;
+      const int kn = code & 3;
+      if (!tetAlive(n)) return "tet " + std::to_string(t) + " neighbours a removed tet";
+      if (neighbors_[std::size_t(n)][std::size_t(kn)] != 4 * t + k)
+        return "adjacency of tets " + std::to_string(t) + " and " + std::to_string(n) + " is not symmetric";
+      if (sortedFace(t, k) != sortedFace(n, kn))
+        return "tets " + std::to_string(t) + " and " + std::to_string(n) + " are glued along different faces";
+    }
+    if (geometry && !isDummyTet(t) && !(volume(t) > 0.0))
+      return "tet " + std::to_string(t) + " is inverted or flat (volume " + std::to_string(volume(t)) + ")";
+  }
+  for (std::int32_t v = 0; v < vertexSlots(); ++v) {
+    if (!vertexAlive(v)) continue;
+    const std::int32_t t = vertexTet_[std::size_t(v)];
+    if (t < 0 || t >= tetSlots() || !tetAlive(t) || localIndex(t, v) < 0)
+      return "vertex " + std::to_string(v) + " points to a tet that does not hold it";
+  }
+  return {};
+}
+
+}  // namespace vox::remesh

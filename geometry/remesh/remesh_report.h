@@ -1,0 +1,59 @@
+#pragma once
+// The remesher's quality report (DESIGN.md): dihedral angles, slivers,
+// boundary facet angles, edge lengths against the target, and per label the
+// volume change, components, Euler characteristic and the distance between
+// the input and output interfaces; plus the topology check of the labels and
+// junctions. Printed as text and written as JSON.
+
+#include "geometry/mesh_quality.h"
+#include "geometry/remesh/interface_distance.h"
+#include "geometry/remesh/mesh_topology.h"
+#include "geometry/remesh/remesh.h"
+#include "geometry/tet_mesh.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace vox::remesh {
+
+struct LabelReport {
+  std::int32_t label = 0;
+  std::size_t tets = 0;
+  double inputVolume = 0.0, outputVolume = 0.0;  // mm^3
+  LabelTopology input, output;
+  InterfaceDistance distance;  // zero when not measured
+};
+
+struct RemeshReport {
+  double targetLength = 0.0;
+  std::size_t inputTets = 0;  // domain tets of the input
+  std::size_t outputTets = 0, outputVertices = 0;
+  TetQualitySummary quality;
+  BoundaryFacetSummary boundaryFacets;
+  EdgeLengthSummary edgeLengths;
+  std::vector<LabelReport> labels;
+  bool distancesMeasured = false;
+  std::size_t junctionCurveSets = 0, junctionPointSets = 0;  // label sets with 1- / 0-junctions in the input
+  std::vector<std::string> topologyDifferences;              // empty: topology preserved
+  RemeshStats stats;
+  double setupSeconds = 0.0;  // reading and decomposing the input
+};
+
+struct ReportOptions {
+  bool distances = true;               // interface Hausdorff distances (CGAL AABB trees)
+  std::size_t maxDistanceSamples = 100000;
+  int threads = 2;
+};
+
+// `input` holds the domain tets the remesher started from (its volumes and
+// interfaces), `inputTopology` their topology (computeGridTopology of the
+// grid, or computeMeshTopology of the input mesh).
+RemeshReport buildRemeshReport(const TetMesh& input, const MeshTopology& inputTopology, const TetMesh& output,
+                               double targetLength, const RemeshStats& stats, const ReportOptions& options = {});
+
+std::string reportText(const RemeshReport& report);
+std::string reportJson(const RemeshReport& report);
+
+}  // namespace vox::remesh

@@ -1,0 +1,219 @@
+#include "geometry/remesh/smooth_vertices.h"
+
+#include "geometry/remesh/element_classification.h"
+#include "geometry/remesh/parallel_ranges.h"
+#include "geometry/remesh/tet_shape.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+
+namespace vox::remesh {
+
+namespace {
+
+struct VertexTets {
+  std::vector<std::int64_t> start;
+  std::vector<std::int32_t> tets;
+  void of(std::int32_t v, std::vector<std::int32_t>& out) const {
+    out.assign(tets.begin() + start[std::size_t(v)], tets.begin() + start[std::size_t(v) + 1]);
+  }
+};
+
+VertexTets vertexTets(const RemeshComplex& complex) {
+  VertexTets vt;
+  vt.start.assign(std::size_t(complex.vertexSlots()) + 1, 0);
+  for (std::int32_t t = 0; t < complex.tetSlots(); ++t)
+    if (complex.tetAlive(t))
+      for (std::int32_t v : complex.tet(t)) ++vt.start[std::size_t(v) + 1];
+  for (std::size_t v = 1; v < vt.start.size(); ++v) vt.start[v] += vt.start[v - 1];
+  vt.tets.resize(std::size_t(vt.start.back()));
+  std::vector<std::int64_t> fill(vt.start.begin(), vt.start.end() - 1);
+  for (std::int32_t t = 0; t < complex.tetSlots(); ++t)
+    if (complex.tetAlive(t))
+      for (std::int32_t v : complex.tet(t)) vt.tets[std::size_t(fill[std::size_t(v)]++)] = t;
+  return vt;
+}
+
+class Smoother {
+public:
+  Smoother(RemeshComplex& complex, const InterfaceSurfaces* surfaces, const HullConstraint& hull, const VertexTets& vt)
+      : complex_(complex), surfaces_(surfaces), hull_(hull), vt_(vt) {}
+
+  // Where v should go, from the current positions; false to stay.
+  bool target(VertexNeighborhood& nb, Eigen::Vector3d& out) const {
+    const std::int32_t dummy = complex_.dummyVertex();
+    const Eigen::Vector3d p = complex_.position(nb.vertex);
+    Eigen::Vector3d g = Eigen::Vector3d::Zero();
+    int count = 0;
+    switch (nb.kind) {
+      case VertexKind::Corner:
+        return false;
+      case VertexKind::Inside:
+        for (std::int32_t w : nb.neighbors)
+          if (w != dummy) {
+            g += complex_.position(w);
+            ++count;
+          }
+        if (count == 0) return false;
+        out = g / count;
+        return true;
+      case VertexKind::Feature:
+        // Neighbours along the same 1-junction (Table 2.3 similarity or inclusion).
+        for (std::size_t i = 0; i < nb.neighbors.size(); ++i)
+          if (nb.neighbors[i] != dummy && isFeatureEdge(nb.edgeLabels[i]) && nb.edgeLabels[i] == nb.labels) {
+            g += complex_.position(nb.neighbors[i]);
+            ++count;
+          }
+        if (count != 2) return false;
+        out = g / count;
+        if (surfaces_) surfaces_->projectOnCurve(nb.labels, out);
+        return true;
+      case VertexKind::Surface: {
+        for (std::size_t i = 0; i < nb.neighbors.size(); ++i)
+          if (nb.neighbors[i] != dummy && nb.edgeLabels[i] == nb.labels) {
+            g += complex_.position(nb.neighbors[i]);
+            ++count;
+          }
+        if (count == 0) return false;
+        g /= count;
+        if (nb.onHull()) {
+          const HullConstraint::Planes planes = hull_.planes(complex_, nb);
+          if (planes.frozen) return false;
+          out = hull_.snap(planes, g);
+          return true;
+        }
+        const std::int32_t x = nb.labels[0], y = nb.labels[1];
+        const Eigen::Vector3d n = interfaceNormal(nb, x, y);
+        if (!(n.squaredNorm() > 0.0)) return false;
+        out = g - n * n.dot(g - p);  // tangential Laplacian
+        if (surfaces_) surfaces_->projectOnSurface(x, y, n, out);
+        return true;
+      }
+    }
+    return false;
+  }
+
+  // Moves v towards `to`, halving the step until no incident tet degrades.
+  bool moveTowards(std::int32_t v, const Eigen::Vector3d& to, std::vector<std::int32_t>& tets) const {
+    vt_.of(v, tets);
+    const Eigen::Vector3d from = complex_.position(v);
+    double worstBefore = kUnknownCosine;
+    for (double f : {1.0, 0.5, 0.25, 0.125}) {
+      const Eigen::Vector3d p = from + f * (to - from);
+      if (valid(v, p, tets, worstBefore)) {
+        complex_.setPosition(v, p);
+        return true;
+      }
+    }
+    return false;
+  }
+
+private:
+  // Area-weighted normal of the x|y facets around v, pointing from x to y.
+  Eigen::Vector3d interfaceNormal(const VertexNeighborhood& nb, std::int32_t x, std::int32_t y) const {
+    Eigen::Vector3d n = Eigen::Vector3d::Zero();
+    const auto& P = complex_.positions();
+    for (std::int32_t q : nb.tets) {
+      const std::int32_t l = complex_.label(q);
+      if ((l != x && l != y) || complex_.isDummyTet(q)) continue;
+      const std::int32_t other = l == x ? y : x;
+      for (int k = 0; k < 4; ++k) {
+        if (complex_.tet(q)[std::size_t(k)] == nb.vertex || complex_.label(complex_.neighbor(q, k)) != other) continue;
+        const Tri f = tetFace(complex_.tet(q), k);
+        const Eigen::Vector3d a = P[std::size_t(f[0])];
+        const Eigen::Vector3d outward = (P[std::size_t(f[1])] - a).cross(P[std::size_t(f[2])] - a);
+        n += l == x ? outward : Eigen::Vector3d(-outward);
+      }
+    }
+    const double len = n.norm();
+    return len > 0.0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d::Zero();
+  }
+
+  // No incident tet inverts or falls under the quality floor, and none gets
+  // a dihedral angle under 30 degrees that is worse than the worst around v
+  // before the move (computed into worstBefore when first needed).
+  bool valid(std::int32_t v, const Eigen::Vector3d& p, const std::vector<std::int32_t>& tets,
+             double& worstBefore) const {
+    const auto& P = complex_.positions();
+    for (std::int32_t q : tets) {
+      if (complex_.isDummyTet(q)) continue;
+      const Tet& t = complex_.tet(q);
+      Eigen::Vector3d x[4];
+      for (int i = 0; i < 4; ++i) x[i] = t[std::size_t(i)] == v ? p : P[std::size_t(t[std::size_t(i)])];
+      const double after = volumeLengthQuality(x[0], x[1], x[2], x[3]);
+      if (!(after > 0.0) || signedVolume(x[0], x[1], x[2], x[3]) <= 0.0) return false;
+      if (after < kQualityFloor && after < volumeLengthQuality(P[std::size_t(t[0])], P[std::size_t(t[1])],
+                                                               P[std::size_t(t[2])], P[std::size_t(t[3])]))
+        return false;
+      const double worst = minDihedralCosine(x[0], x[1], x[2], x[3]);
+      if (worst > kGoodAngleCosine) {
+        if (worstBefore == kUnknownCosine) {
+          worstBefore = -1.0;
+          for (std::int32_t o : tets) {
+            if (complex_.isDummyTet(o)) continue;
+            const Tet& u = complex_.tet(o);
+            worstBefore = std::max(worstBefore, minDihedralCosine(P[std::size_t(u[0])], P[std::size_t(u[1])],
+                                                                  P[std::size_t(u[2])], P[std::size_t(u[3])]));
+          }
+        }
+        if (worst > worstBefore) return false;
+      }
+    }
+    return true;
+  }
+
+  static constexpr double kGoodAngleCosine = 0.8660254037844387;  // cos 30 degrees
+  static constexpr double kUnknownCosine = 3.0;
+  RemeshComplex& complex_;
+  const InterfaceSurfaces* surfaces_;
+  const HullConstraint& hull_;
+  const VertexTets& vt_;
+};
+
+}  // namespace
+
+SmoothCounts smoothVertices(RemeshComplex& complex, const InterfaceSurfaces* surfaces, const HullConstraint& hull,
+                            int threads) {
+  const VertexTets vt = vertexTets(complex);
+  const std::int32_t nv = complex.vertexSlots();
+  const std::int32_t dummy = complex.dummyVertex();
+  constexpr std::uint8_t kSkip = 0xFF;
+  std::vector<std::uint8_t> kind(std::size_t(nv), kSkip);
+  parallelRanges(nv, threads, [&](std::int64_t b, std::int64_t e) {
+    VertexNeighborhood nb;
+    for (std::int32_t v = std::int32_t(b); v < std::int32_t(e); ++v) {
+      if (v == dummy || !complex.vertexAlive(v)) continue;
+      vt.of(v, nb.tets);
+      classifyNeighborhood(complex, v, nb);
+      kind[std::size_t(v)] = std::uint8_t(nb.kind);
+    }
+  });
+
+  Smoother smoother(complex, surfaces, hull, vt);
+  SmoothCounts counts;
+  std::vector<std::int32_t> level, tets;
+  std::vector<Eigen::Vector3d> targets;
+  std::vector<char> moves;
+  for (VertexKind k : {VertexKind::Feature, VertexKind::Surface, VertexKind::Inside}) {
+    level.clear();
+    for (std::int32_t v = 0; v < nv; ++v)
+      if (kind[std::size_t(v)] == std::uint8_t(k)) level.push_back(v);
+    targets.assign(level.size(), Eigen::Vector3d::Zero());
+    moves.assign(level.size(), 0);
+    parallelRanges(std::int64_t(level.size()), threads, [&](std::int64_t b, std::int64_t e) {
+      VertexNeighborhood nb;
+      for (std::int64_t i = b; i < e; ++i) {
+        vt.of(level[std::size_t(i)], nb.tets);
+        classifyNeighborhood(complex, level[std::size_t(i)], nb);
+        moves[std::size_t(i)] = smoother.target(nb, targets[std::size_t(i)]);
+      }
+    });
+    std::size_t moved = 0;
+    for (std::size_t i = 0; i < level.size(); ++i)
+      if (moves[i]) moved += smoother.moveTowards(level[i], targets[i], tets);
+    (k == VertexKind::Feature ? counts.feature : k == VertexKind::Surface ? counts.surface : counts.inside) = moved;
+  }
+  return counts;
+}
+
+}  // namespace vox::remesh

@@ -1,0 +1,35 @@
+#pragma once
+// Filtering (thesis 2.3.5, Figure 2.21): hierarchical smoothing of the
+// vertex positions. Feature vertices first (the mean of their two neighbours
+// along the 1-junction, projected onto its MLS line), then surface vertices
+// (tangential Laplacian over the neighbours of their 2-junction, projected
+// onto its PSS), then inside vertices (Laplacian over the whole one-ring),
+// each level using the already smoothed positions of the level before.
+// Corners never move; hull vertices slide within their box faces. A move is
+// shortened until no incident tet inverts (nor drops under the quality
+// floor) and the worst dihedral angle around the vertex does not get worse
+// unless it stays above 30 degrees; it is dropped when even a small step
+// fails. (The thesis only forbids inversions; on voxel input with many
+// fixed junction points, plain Laplacian moves create most slivers.)
+//
+// Targets are computed in parallel from the positions of the previous level;
+// moves are then applied one vertex at a time in index order, so the result
+// does not depend on the thread count.
+
+#include "geometry/remesh/hull_constraint.h"
+#include "geometry/remesh/interface_surfaces.h"
+#include "geometry/remesh/remesh_complex.h"
+
+#include <cstddef>
+
+namespace vox::remesh {
+
+struct SmoothCounts {
+  std::size_t feature = 0, surface = 0, inside = 0;  // vertices moved
+};
+
+// `surfaces` may be null: boundary vertices then move tangentially only.
+SmoothCounts smoothVertices(RemeshComplex& complex, const InterfaceSurfaces* surfaces, const HullConstraint& hull,
+                            int threads);
+
+}  // namespace vox::remesh

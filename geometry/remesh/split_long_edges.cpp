@@ -1,0 +1,87 @@
+#include "geometry/remesh/split_long_edges.h"
+
+#include "geometry/remesh/mesh_edges.h"
+
+#include <algorithm>
+#include <queue>
+#include <tuple>
+
+namespace vox::remesh {
+
+std::int32_t splitEdge(RemeshComplex& complex, std::int32_t a, std::int32_t b, std::int32_t t) {
+  thread_local EdgeRing ring;
+  thread_local std::vector<std::int32_t> halves;
+  complex.edgeRing(a, b, t, ring);
+  const std::int32_t m = complex.addVertex(0.5 * (complex.position(a) + complex.position(b)));
+  const std::size_t n = ring.size();
+  halves.resize(n);
+  // Each ring tet keeps its slot with a replaced by m; its twin is the tet
+  // with b replaced by m. The twin takes over the face opposite b.
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::int32_t q = ring.tets[i];
+    const int ia = complex.localIndex(q, a), ib = complex.localIndex(q, b);
+    Tet twin = complex.tet(q);
+    twin[std::size_t(ib)] = m;
+    const std::int32_t h = complex.addTet(twin, complex.label(q));
+    halves[i] = h;
+    const std::int32_t outer = complex.encodedNeighbor(q, ib);
+    complex.setEncodedNeighbor(h, ib, outer);
+    complex.setEncodedNeighbor(outer >> 2, outer & 3, 4 * h + ib);
+    complex.setTetVertex(q, ia, m);
+    complex.glue(q, ib, h, ia);
+  }
+  // Twins of consecutive ring tets meet across the faces holding the edge,
+  // with the same local face indices as the tets they came from.
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::int32_t q = ring.tets[i];
+    const int k = complex.localIndex(q, ring.ring[i]);
+    const std::int32_t across = complex.encodedNeighbor(q, k);  // the next ring tet, unchanged slot
+    complex.glue(halves[i], k, halves[(i + 1) % n], across & 3);
+  }
+  complex.setAnyTet(m, ring.tets[0]);
+  complex.setAnyTet(b, ring.tets[0]);
+  complex.setAnyTet(a, halves[0]);
+  return m;
+}
+
+std::size_t splitLongEdges(RemeshComplex& complex, const EdgeLengthBounds& bounds, int threads) {
+  const double emax2 = bounds.emax * bounds.emax;
+  // Longest first: the initial candidates sorted once (ties by vertex ids),
+  // the edges of new vertices that are still too long in a heap.
+  std::vector<WeightedEdge> edges;
+  collectEdges(complex, [&](std::int32_t, std::int32_t, double length2) { return length2 > emax2; }, edges, threads);
+  auto longer = [](const WeightedEdge& x, const WeightedEdge& y) {
+    return x.length2 > y.length2 || (x.length2 == y.length2 && std::tie(x.a, x.b) < std::tie(y.a, y.b));
+  };
+  std::sort(edges.begin(), edges.end(), longer);
+  auto later = [&](const WeightedEdge& x, const WeightedEdge& y) { return longer(y, x); };
+  std::priority_queue<WeightedEdge, std::vector<WeightedEdge>, decltype(later)> queue(later);
+  std::size_t next = 0, splits = 0;
+  std::vector<std::int32_t> star;
+  const std::int32_t dummy = complex.dummyVertex();
+  while (next < edges.size() || !queue.empty()) {
+    WeightedEdge e;
+    if (queue.empty() || (next < edges.size() && longer(edges[next], queue.top()))) {
+      e = edges[next++];
+    } else {
+      e = queue.top();
+      queue.pop();
+    }
+    const std::int32_t t = complex.findEdgeTet(e.a, e.b);
+    if (t < 0) continue;
+    const std::int32_t m = splitEdge(complex, e.a, e.b, t);
+    ++splits;
+    // The halves and the new edges at m may still be too long.
+    complex.incidentTets(m, star);
+    const Eigen::Vector3d pm = complex.position(m);
+    for (std::int32_t q : star)
+      for (std::int32_t w : complex.tet(q)) {
+        if (w == m || w == dummy) continue;
+        const double l2 = (complex.position(w) - pm).squaredNorm();
+        if (l2 > emax2) queue.push({std::min(m, w), std::max(m, w), l2});
+      }
+  }
+  return splits;
+}
+
+}  // namespace vox::remesh

@@ -1,0 +1,104 @@
+// `voxmorph mesh` and `voxmorph remesh` end to end: files written, read back
+// by meshio, byte-identical on a second run, the JSON report, bad input.
+
+#include "geometry/io/mesh_io.h"
+#include "geometry/remesh/mesh_topology.h"
+#include "tests/support/test_environment.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace vox::remesh {
+namespace {
+
+namespace fs = std::filesystem;
+using test::quote;
+using test::runCommand;
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string voxmorph(const std::string& args) { return quote(test::voxmorphBinary()) + " " + args; }
+
+TEST(RemeshCli, MeshesAGridDeterministicallyWithAReport) {
+  const std::string dir = test::tempDir();
+  const std::string grid = dir + "/junctions.nii.gz";
+  ASSERT_EQ(runCommand(voxmorph("synth junctions --size 20 -o " + quote(grid))).exitCode, 0);
+  for (const char* name : {"a.mesh", "b.mesh"}) {
+    const auto r = runCommand(voxmorph("mesh " + quote(grid) + " -l 2.5 -q -o " + quote(dir + "/" + name) +
+                                       " --report " + quote(dir + "/" + name + ".json")));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("topology             preserved"), std::string::npos) << r.out;
+  }
+  const std::string a = slurp(dir + "/a.mesh");
+  ASSERT_FALSE(a.empty());
+  EXPECT_EQ(a, slurp(dir + "/b.mesh")) << "two runs differ";
+
+  const auto report = nlohmann::json::parse(slurp(dir + "/a.mesh.json"));
+  EXPECT_TRUE(report["topology"]["preserved"].get<bool>());
+  EXPECT_EQ(report["inverted_tets"].get<int>(), 0);
+  EXPECT_GT(report["dihedral_degrees"]["min"].get<double>(), 10.0);
+  EXPECT_EQ(report["labels"].size(), 5u);
+
+  // The written mesh holds what the report says, and only domain tets.
+  const TetMesh mesh = readTetMesh(dir + "/a.mesh");
+  EXPECT_EQ(mesh.tetCount(), report["tets"]["output"].get<std::size_t>());
+  for (std::int32_t l : mesh.labels) ASSERT_GT(l, 0);
+}
+
+TEST(RemeshCli, RemeshesAMeshIntoEveryFormat) {
+  const std::string dir = test::tempDir();
+  const std::string grid = dir + "/spheres.nii.gz";
+  ASSERT_EQ(runCommand(voxmorph("synth spheres --size 16 -o " + quote(grid))).exitCode, 0);
+  ASSERT_EQ(runCommand(voxmorph("mesh " + quote(grid) + " -l 2 -q -o " + quote(dir + "/in.vtu"))).exitCode, 0);
+  const MeshTopology before = computeMeshTopology(readTetMesh(dir + "/in.vtu"));
+  for (const char* ext : {"mesh", "vtu", "msh"}) {
+    const std::string out = dir + "/out." + ext;
+    const auto r = runCommand(voxmorph("remesh " + quote(dir + "/in.vtu") + " -l 3 -q --iterations 4 -o " + quote(out)));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_TRUE(compareTopology(before, computeMeshTopology(readTetMesh(out))).empty()) << ext;
+  }
+  if (!test::python().empty()) {
+    const auto r = runCommand(quote(test::python()) + " -c " +
+                              quote("import meshio; m = meshio.read('" + dir + "/out.vtu'); "
+                                    "print(len(m.cells_dict['tetra']), sorted(set(m.cell_data['label'][0].tolist())))"));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("[1, 2, 3]"), std::string::npos) << r.out;
+  }
+}
+
+TEST(RemeshCli, BadInputIsOneLineAndLeavesNoFile) {
+  const std::string dir = test::tempDir();
+  const std::string out = dir + "/out.mesh";
+  // Missing input: failure, exit 1.
+  auto r = runCommand(voxmorph("mesh " + quote(dir + "/missing.nii.gz") + " -l 2 -q -o " + quote(out)));
+  EXPECT_EQ(r.exitCode, 1);
+  EXPECT_NE(r.err.find("missing.nii.gz"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+  // Usage errors: exit 2.
+  EXPECT_EQ(runCommand(voxmorph("mesh " + quote(dir + "/x.nii.gz") + " -l 0 -o " + quote(out))).exitCode, 2);
+  EXPECT_EQ(runCommand(voxmorph("mesh " + quote(dir + "/x.nii.gz") + " -l 2 -o " + quote(dir + "/out.obj"))).exitCode, 2);
+  // An inverted tet is the input's fault: named, exit 1, nothing written.
+  {
+    std::ofstream bad(dir + "/inverted.mesh");
+    bad << "MeshVersionFormatted 2\nDimension 3\nVertices\n4\n0 0 0 0\n1 0 0 0\n0 1 0 0\n0 0 1 0\n"
+           "Tetrahedra\n1\n1 3 2 4 1\nEnd\n";
+  }
+  r = runCommand(voxmorph("remesh " + quote(dir + "/inverted.mesh") + " -l 1 -q -o " + quote(out)));
+  EXPECT_EQ(r.exitCode, 1);
+  EXPECT_NE(r.err.find("inverted.mesh"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("inverted"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+}  // namespace
+}  // namespace vox::remesh

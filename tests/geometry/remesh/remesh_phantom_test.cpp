@@ -1,0 +1,98 @@
+// The remesher on real anatomy: cropped regions of the ICRP 110 adult male
+// phantom (many labels, thin structures, 1- and 0-junctions everywhere)
+// meshed at l = 2 voxels. The whole phantom at l = 2 voxels takes longer
+// than the test budget; it runs in tests/bench/remesh_bench
+// (VOX_REMESH_VOXELS=2), which checks the same properties, and its result
+// is in docs/BENCHMARKS.md.
+
+#include "geometry/io/grid_io.h"
+#include "geometry/mesh_quality.h"
+#include "geometry/remesh/adaptive_voxel_tetrahedralization.h"
+#include "geometry/remesh/mesh_topology.h"
+#include "geometry/remesh/remesh.h"
+#include "geometry/tet_mesh.h"
+#include "tests/support/test_environment.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <limits>
+#include <string>
+
+namespace vox::remesh {
+namespace {
+
+LabelGrid cropAdultMale(std::int64_t x0, std::int64_t y0, std::int64_t z0, std::int64_t nx, std::int64_t ny,
+                        std::int64_t nz) {
+  const LabelGrid am = readGrid(test::assetPath("icrp110_am.nii.gz"));
+  GridGeometry g = am.geometry();
+  g.dims = {nx, ny, nz};
+  g.origin = am.geometry().voxelCenter(x0, y0, z0);
+  LabelGrid crop(g);
+  for (std::int64_t k = 0; k < nz; ++k)
+    for (std::int64_t j = 0; j < ny; ++j)
+      for (std::int64_t i = 0; i < nx; ++i) crop.at(i, j, k) = am.at(x0 + i, y0 + j, z0 + k);
+  return crop;
+}
+
+TEST(RemeshPhantom, AdultMaleCropKeepsEveryLabelAndJunction) {
+  // The head: brain, skull, eyes, lenses, sinuses, teeth, skin... (30 labels).
+  const LabelGrid grid = cropAdultMale(128, 54, 186, 32, 28, 10);
+  const MeshTopology input = computeGridTopology(grid);
+  ASSERT_GE(input.labels.size(), 25u);
+  ASSERT_GE(input.junctionCurves.size(), 40u);
+  ASSERT_GE(input.junctionPoints.size(), 20u);
+
+  const double l = 2.0 * grid.spacing().minCoeff();  // 2 voxels
+  const TetMesh initial = tetrahedralizeVoxelsAdaptive(grid, adaptiveOptionsForTarget(grid.geometry(), l));
+  RemeshOptions options;
+  options.targetLength = l;
+  options.iterations = 4;
+  options.flipSmoothCycles = 1;
+  const TetMesh output = remeshTetMesh(initial, options);
+
+  std::string differences;
+  for (const std::string& d : compareTopology(input, computeMeshTopology(output))) differences += d + "\n";
+  EXPECT_EQ(differences, "");
+  const TetQualitySummary q = summarizeTetQuality(output);
+  EXPECT_EQ(q.inverted, 0u);
+  EXPECT_GT(q.minDihedral, 5.0);
+  EXPECT_NEAR(summarizeEdgeLengths(output, l).meanLength, l, 0.3 * l);
+}
+
+TEST(RemeshPhantom, AdultMaleTorsoKeepsEveryLabelAndJunction) {
+  // A slab through the chest and upper abdomen, the full default schedule
+  // (10 rounds and 3 flip-smooth cycles): lungs, heart, liver, stomach,
+  // spine, ribs, sternum, blood vessels, muscle, fat, skin.
+  const LabelGrid grid = cropAdultMale(80, 30, 148, 95, 90, 10);
+  const MeshTopology input = computeGridTopology(grid);
+  ASSERT_GE(input.labels.size(), 35u);
+  ASSERT_GE(input.junctionCurves.size(), 100u);
+  ASSERT_GE(input.junctionPoints.size(), 50u);
+
+  const double l = 2.0 * grid.spacing().minCoeff();
+  const TetMesh initial = tetrahedralizeVoxelsAdaptive(grid, adaptiveOptionsForTarget(grid.geometry(), l));
+  RemeshOptions options;
+  options.targetLength = l;
+  const TetMesh output = remeshTetMesh(initial, options);
+
+  const MeshTopology outputTopology = computeMeshTopology(output);
+  std::string differences;
+  for (const std::string& d : compareTopology(input, outputTopology)) differences += d + "\n";
+  EXPECT_EQ(differences, "");
+  EXPECT_EQ(outputTopology.labels.size(), input.labels.size());
+  double minVolume = std::numeric_limits<double>::infinity();
+  for (const Tet& t : output.tets) minVolume = std::min(minVolume, signedVolume(output.positions, t));
+  EXPECT_GT(minVolume, 0.0);
+  const TetQualitySummary q = summarizeTetQuality(output);
+  EXPECT_EQ(q.inverted, 0u);
+  EXPECT_GT(q.minDihedral, 5.0);
+  RecordProperty("labels", int(input.labels.size()));
+  RecordProperty("junction_curve_sets", int(input.junctionCurves.size()));
+  RecordProperty("junction_point_sets", int(input.junctionPoints.size()));
+  RecordProperty("tets", int(q.tets));
+  RecordProperty("min_dihedral", std::to_string(q.minDihedral));
+}
+
+}  // namespace
+}  // namespace vox::remesh

@@ -1,0 +1,198 @@
+// The remesher's acceptance properties on synthetic inputs: exact label and
+// junction topology, no inverted or flat tet, determinism, sizes near the
+// target, volumes kept.
+
+#include "geometry/error.h"
+#include "geometry/mesh_quality.h"
+#include "geometry/remesh/adaptive_voxel_tetrahedralization.h"
+#include "geometry/remesh/mesh_topology.h"
+#include "geometry/remesh/remesh.h"
+#include "geometry/remesh/remesh_report.h"
+#include "geometry/synth.h"
+#include "geometry/voxel_tetrahedralization.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+
+namespace vox::remesh {
+namespace {
+
+std::string joined(const std::vector<std::string>& lines) {
+  std::string s;
+  for (const auto& l : lines) s += l + "\n";
+  return s;
+}
+
+struct Outcome {
+  TetMesh initial;
+  TetMesh output;
+  MeshTopology topology;  // of the grid
+  RemeshComplex complex;
+};
+
+Outcome meshGrid(const LabelGrid& grid, double lInVoxels, int threads = 2, int iterations = 6) {
+  Outcome o;
+  const double l = lInVoxels * grid.spacing().maxCoeff();
+  o.initial = tetrahedralizeVoxelsAdaptive(grid, adaptiveOptionsForTarget(grid.geometry(), l));
+  o.topology = computeGridTopology(grid);
+  o.complex = RemeshComplex(o.initial);
+  RemeshOptions options;
+  options.targetLength = l;
+  options.iterations = iterations;
+  options.flipSmoothCycles = 2;
+  options.threads = threads;
+  remeshComplex(o.complex, options);
+  o.output = o.complex.toTetMesh();
+  return o;
+}
+
+void expectValidAndTopologyKept(const Outcome& o, const std::string& what) {
+  EXPECT_EQ(o.complex.checkConsistency(true), "") << what;
+  double minVolume = std::numeric_limits<double>::infinity();
+  for (const Tet& t : o.output.tets) minVolume = std::min(minVolume, signedVolume(o.output.positions, t));
+  EXPECT_GT(minVolume, 0.0) << what;
+  EXPECT_EQ(joined(compareTopology(o.topology, computeMeshTopology(o.output))), "") << what;
+}
+
+TEST(Remesh, JunctionSphereKeepsLabelsJunctionsAndCorners) {
+  const LabelGrid grid = synthesize(SynthKind::JunctionSphere, 24);
+  const Outcome o = meshGrid(grid, 2.5);
+  expectValidAndTopologyKept(o, "junction sphere");
+  // The case does exercise junctions: curves and corners, including the
+  // outside (label 0) in their label sets.
+  ASSERT_GE(o.topology.junctionCurves.size(), 4u);
+  ASSERT_GE(o.topology.junctionPoints.size(), 2u);
+  bool outsideCurve = false;
+  for (const auto& [set, n] : o.topology.junctionCurves) outsideCurve = outsideCurve || set.front() == 0;
+  EXPECT_TRUE(outsideCurve);
+  // The hull of the imaginary layer is still the initial box: every hull
+  // vertex lies on one of its faces.
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+  for (const Eigen::Vector3d& p : o.initial.positions) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  for (std::int32_t t = 0; t < o.complex.tetSlots(); ++t) {
+    if (!o.complex.tetAlive(t) || o.complex.label(t) != kDummyLabel) continue;
+    for (std::int32_t v : o.complex.tet(t)) {
+      if (v == o.complex.dummyVertex()) continue;
+      const Eigen::Vector3d& p = o.complex.position(v);
+      ASSERT_TRUE(((p.array() == lo.array()) || (p.array() == hi.array())).any()) << p.transpose();
+      ASSERT_TRUE((p.array() >= lo.array()).all() && (p.array() <= hi.array()).all());
+    }
+  }
+  // Coarser than the voxels: far fewer tets, decent angles.
+  const TetQualitySummary q = summarizeTetQuality(o.output);
+  EXPECT_LT(q.tets, summarizeTetQuality(o.initial).tets / 3);
+  EXPECT_GT(q.minDihedral, 10.0);
+}
+
+TEST(Remesh, NestedShellsAndStickFigureKeepTopology) {
+  expectValidAndTopologyKept(meshGrid(synthesize(SynthKind::NestedSpheres, 24), 2.5), "nested spheres");
+  // Arms touching the trunk, thin humeri inside them, legs with a gap.
+  expectValidAndTopologyKept(meshGrid(synthesize(SynthKind::StickFigure, 40), 2.0), "stick figure");
+}
+
+TEST(Remesh, ThinTubeTorusAndHollowShellKeepTopology) {
+  // One-voxel-thin structures at a target length of three voxels: a tube
+  // (1-junction-free but thinner than any tet), a torus (Euler 0) and a
+  // hollow shell with a cavity (Euler 2), inside a block of label 1.
+  GridGeometry g;
+  g.dims = {20, 20, 20};
+  LabelGrid grid(g, 0);
+  for (int k = 2; k < 18; ++k)
+    for (int j = 2; j < 18; ++j)
+      for (int i = 2; i < 18; ++i) grid.at(i, j, k) = 1;
+  for (int k = 3; k < 17; ++k) grid.at(5, 5, k) = 2;  // tube
+  for (int j = 9; j < 15; ++j)
+    for (int i = 3; i < 9; ++i)
+      if (i == 3 || i == 8 || j == 9 || j == 14) grid.at(i, j, 10) = 3;  // torus (a square ring)
+  for (int k = 9; k < 15; ++k)
+    for (int j = 9; j < 15; ++j)
+      for (int i = 10; i < 16; ++i)
+        if (i == 10 || i == 15 || j == 9 || j == 14 || k == 9 || k == 14) grid.at(i, j, k) = 4;  // shell
+  const MeshTopology t = computeGridTopology(grid);
+  ASSERT_EQ(t.labels.at(3).euler, 0);
+  ASSERT_EQ(t.labels.at(4).euler, 2);
+  expectValidAndTopologyKept(meshGrid(grid, 3.0), "thin structures");
+}
+
+TEST(Remesh, DeterministicAndIndependentOfThreads) {
+  const LabelGrid grid = synthesize(SynthKind::JunctionSphere, 20);
+  const Outcome a = meshGrid(grid, 2.0, 2, 3);
+  const Outcome b = meshGrid(grid, 2.0, 2, 3);
+  const Outcome c = meshGrid(grid, 2.0, 1, 3);
+  for (const Outcome* other : {&b, &c}) {
+    ASSERT_EQ(a.output.tets, other->output.tets);
+    ASSERT_EQ(a.output.labels, other->output.labels);
+    ASSERT_EQ(a.output.positions.size(), other->output.positions.size());
+    EXPECT_EQ(std::memcmp(a.output.positions.data(), other->output.positions.data(),
+                          a.output.positions.size() * sizeof(Eigen::Vector3d)),
+              0);
+  }
+}
+
+TEST(Remesh, EdgeLengthsApproachTargetAndVolumesAreKept) {
+  const LabelGrid grid = synthesize(SynthKind::NestedSpheres, 32);
+  const double l = 2.5;
+  const Outcome o = meshGrid(grid, l, 2, 8);
+  const EdgeLengthSummary e = summarizeEdgeLengths(o.output, l);
+  EXPECT_NEAR(e.meanLength, l, 0.25 * l);
+  EXPECT_LT(e.meanRelativeDeviation, 0.3);
+  const RemeshReport r = buildRemeshReport(o.initial, o.topology, o.output, l, {});
+  EXPECT_TRUE(r.topologyDifferences.empty());
+  double in = 0.0, out = 0.0;
+  for (const LabelReport& lr : r.labels) {
+    // The core is a ball of 4.8 voxels radius meshed with 2.5-voxel edges:
+    // its inscribed polyhedron alone is some 6% smaller than the ball.
+    EXPECT_NEAR(lr.outputVolume / lr.inputVolume, 1.0, 0.12) << lr.label;
+    in += lr.inputVolume;
+    out += lr.outputVolume;
+    // Interfaces stay within about a voxel of the voxel staircase.
+    EXPECT_LT(lr.distance.hausdorff(), 1.5) << lr.label;
+    EXPECT_GT(lr.distance.hausdorff(), 0.0) << lr.label;
+  }
+  EXPECT_NEAR(out / in, 1.0, 0.02);
+  EXPECT_NE(reportJson(r).find("\"preserved\": true"), std::string::npos);
+}
+
+TEST(Remesh, RemeshesAnExistingMeshAndRejectsABadLength) {
+  // A tet mesh without an imaginary layer: the outside is then label 0 of
+  // the dummy tets, with the same rules as an interface.
+  const LabelGrid grid = synthesize(SynthKind::JunctionSphere, 16);
+  const TetMesh input = tetrahedralizeVoxels(grid, {.includeBackground = false});
+  RemeshOptions options;
+  options.targetLength = 2.0;
+  options.iterations = 4;
+  const TetMesh output = remeshTetMesh(input, options);
+  EXPECT_EQ(joined(compareTopology(computeMeshTopology(input), computeMeshTopology(output))), "");
+  EXPECT_EQ(summarizeTetQuality(output).inverted, 0u);
+  options.targetLength = -1.0;
+  EXPECT_THROW(remeshTetMesh(input, options), InputError);
+}
+
+TEST(AdaptiveTetrahedralization, ConformingExactAndCoarser) {
+  for (SynthKind kind : {SynthKind::NestedSpheres, SynthKind::JunctionSphere, SynthKind::StickFigure}) {
+    const LabelGrid grid = synthesize(kind, 24);
+    const TetMesh mesh = tetrahedralizeVoxelsAdaptive(grid, {.coarsestLevel = 3, .margin = 2});
+    const RemeshComplex complex(mesh);  // throws unless conforming and positive
+    EXPECT_EQ(complex.checkConsistency(true), "");
+    EXPECT_EQ(joined(compareTopology(computeGridTopology(grid), computeMeshTopology(mesh))), "") << synthKindName(kind);
+    const TetQualitySummary q = summarizeTetQuality(mesh);
+    std::map<std::int32_t, double> voxels;
+    std::size_t foreground = 0;
+    for (Label l : grid.labels())
+      if (l) {
+        voxels[l] += grid.geometry().voxelVolume();
+        ++foreground;
+      }
+    for (const auto& [label, volume] : voxels) EXPECT_NEAR(q.volumePerLabel.at(label), volume, 1e-9 * volume);
+    EXPECT_LT(q.tets, 6 * foreground * 7 / 10) << synthKindName(kind);
+  }
+  EXPECT_THROW(tetrahedralizeVoxelsAdaptive(LabelGrid(GridGeometry{.dims = {4, 4, 4}}, 0)), InputError);
+}
+
+}  // namespace
+}  // namespace vox::remesh
