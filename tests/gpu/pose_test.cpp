@@ -9,13 +9,15 @@
 // few tets where the hand touches the thigh stretch with the arm; the test
 // prints it.) Ray casting a pose through its transfer
 // mesh shows what ray casting the rasterized posed grid through an identity
-// mesh shows, except at silhouette ties.
+// mesh shows, except at silhouette ties, and matches golden images.
 
 #include "geometry/deform/deformation_report.h"
 #include "gpu/context.h"
 #include "geometry/render/camera.h"
 #include "geometry/render/cutting_planes.h"
 #include "geometry/render/palette.h"
+#include "geometry/io/png_io.h"
+#include "geometry/render/raycast_reference.h"
 #include "geometry/render/raycast_scene.h"
 #include "geometry/render/rest_transfer_mesh.h"
 #include "gpu/kernels/rasterize.h"
@@ -28,6 +30,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <iostream>
 
 namespace vox {
@@ -128,6 +131,35 @@ void expectRenderEqualsRasterizedRender(const test::PosedPhantom& p) {
   }
 }
 
+// Golden images of a pose, ray cast through its posed TM at 320 x 240 with
+// and without a cutting plane: the GPU kernel against the PNGs under
+// assets/golden (VOXMORPH_WRITE_GOLDEN=1 rewrites them from the CPU
+// reference) and against the CPU reference, each within 0.1 % of the pixels
+// off by more than 5/255.
+void expectGoldenImages(const test::PosedPhantom& p) {
+  const std::string stem = p.pose.substr(0, p.pose.find('.'));
+  const Palette palette = Palette::fromOrgans(p.organs, p.source.maxLabel());
+  const RaycastMesh mesh = buildRaycastMesh(p.rest, p.source.geometry());
+  const RaycastFrame frame = prepareRaycastFrame(mesh, p.deformed);
+  const Camera camera = parseCamera("azimuth=20,elevation=10", frame.toGrid(frame.cellsLo), frame.toGrid(frame.cellsHi), 320, 240);
+  gpu::RaycastKernel kernel(context(), p.source, mesh);
+  for (const std::string cut : {"", "y<135mm"}) {
+    CuttingPlanes planes;
+    if (!cut.empty()) planes.add(cut);
+    const RaycastView view = makeRaycastView(frame, camera, planes);
+    const RgbImage gpuImage = kernel.render(frame, view, palette);
+    const RgbImage cpuImage = raycastReference(p.source, mesh, frame, view, palette);
+    const std::string golden = test::assetPath("golden/raycast_" + stem + (cut.empty() ? "" : "_cut") + ".png");
+    if (std::getenv("VOXMORPH_WRITE_GOLDEN")) writePng(golden, cpuImage);
+    const ImageDifference g = compareImages(gpuImage, readPng(golden), 5);
+    const ImageDifference c = compareImages(gpuImage, cpuImage, 5);
+    std::cout << "[ stats    ] " << stem << (cut.empty() ? "" : " cut " + cut) << ": GPU vs golden " << g.differing
+              << ", GPU vs CPU " << c.differing << " of " << c.pixels << " pixels differ by more than 5/255\n";
+    EXPECT_LE(g.differingFraction(), 0.001) << golden;
+    EXPECT_LE(c.differingFraction(), 0.001) << golden;
+  }
+}
+
 class PoseFile : public testing::TestWithParam<std::string> {};
 
 TEST_P(PoseFile, RunsEndToEnd) {
@@ -135,7 +167,10 @@ TEST_P(PoseFile, RunsEndToEnd) {
   expectGpuEqualsCpu(p);
   if (p.phantom == "icrp110_am") expectVolumesAndMassesKept(p);
   if (p.pose == "am_right_arm_raised_45.json") expectPropagationDistortionBounded(p);
-  if (p.pose == "am_right_arm_raised_45.json" || p.pose == "am_left_knee_bent_30.json") expectRenderEqualsRasterizedRender(p);
+  if (p.pose == "am_right_arm_raised_45.json" || p.pose == "am_left_knee_bent_30.json") {
+    expectRenderEqualsRasterizedRender(p);
+    expectGoldenImages(p);
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Assets, PoseFile, testing::ValuesIn(test::poseFiles()), [](const testing::TestParamInfo<std::string>& info) {
