@@ -100,13 +100,14 @@ struct Engine {
 
 void makeEngine(Engine& e, Source& source, const TetMesh& rest, const std::vector<Eigen::Vector3d>& deformed, const DeformOptions& o,
                 std::int64_t rasterBudget) {
-  const std::optional<RasterMemoryLimits> limits =
-      rasterBudget > 0 ? std::optional(rasterMemoryLimits(rasterBudget, o.samples)) : std::nullopt;
+  // Without a budget the engines keep their own slab and window sizes (in core).
+  const RasterMemoryLimits limits = rasterBudget > 0 ? rasterMemoryLimits(rasterBudget, o.samples) : RasterMemoryLimits{};
+  const bool limited = rasterBudget > 0;
   if (e.context) {
     gpu::RasterizeKernelOptions ko{.samples = o.samples};
-    if (limits) {
-      ko.maxSlabSamples = std::uint64_t(limits->slabSamples);
-      ko.maxWindowVoxels = std::uint64_t(limits->windowVoxels);
+    if (limited) {
+      ko.maxSlabSamples = std::uint64_t(limits.slabSamples);
+      ko.maxWindowVoxels = std::uint64_t(limits.windowVoxels);
     }
     e.kernel = source.grid ? std::make_unique<gpu::RasterizeKernel>(*e.context, *source.grid, rest, ko)
                            : std::make_unique<gpu::RasterizeKernel>(*e.context, source.outOfCore->slices(), rest, ko);
@@ -122,7 +123,7 @@ void makeEngine(Engine& e, Source& source, const TetMesh& rest, const std::vecto
     reader = &source.outOfCore->slices();
   }
   CpuRasterizerLimits cl;
-  if (limits) cl = {.slabSamples = limits->slabSamples, .windowVoxels = limits->windowVoxels};
+  if (limited) cl = {.slabSamples = limits.slabSamples, .windowVoxels = limits.windowVoxels};
   e.cpu = std::make_unique<CpuSlabRasterizer>(*e.plan, *reader, cl);
 }
 
