@@ -1,5 +1,6 @@
 #include "geometry/deform/pipeline.h"
 
+#include "geometry/deform/green_coordinates.h"
 #include "geometry/deform/label_groups.h"
 #include "geometry/deform/out_of_core.h"
 #include "geometry/deform/surface_checks.h"
@@ -8,7 +9,9 @@
 #include "geometry/parallel.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
+#include <numeric>
 #include <set>
 #include <sys/resource.h>
 
@@ -169,6 +172,46 @@ void DeformationPipeline::precomputeFrame(bool withEnvelope) {
   FrameDeformerOptions frame = options_.frame;
   frame.propagateAnyway = acrossSeparation();
   deformer_.precompute(cage_, envelope, transferMesh_, handles_.vertices, frame);
+  if (frame.propagateAnyway.empty() || handles_.vertices.empty()) return;
+  // Tears: a limb vertex that Green coordinates leave with the body beside
+  // it (or the reverse) while its own group's neighbours follow the limb
+  // shows, in the full pose, as edges to those neighbours stretched by more
+  // than e. Such vertices are propagated from their group too, and the
+  // embedding redone, a few rounds at most.
+  for (int round = 0; round < 3; ++round) {
+    deformer_.update(handleTargets(pose_, handles_, cage_, 1.0), pose_.arapIterations);
+    if (markTornVertices(frame.propagateAnyway) == 0) break;
+    deformer_.precompute(cage_, envelope, transferMesh_, handles_.vertices, frame);
+  }
+  deformer_.update(handleTargets(pose_, handles_, cage_, 0.0), pose_.arapIterations);
+}
+
+std::size_t DeformationPipeline::markTornVertices(std::vector<std::uint8_t>& propagate) const {
+  const std::vector<Eigen::Vector3d>& posed = deformer_.transferMeshPositions();
+  const std::vector<std::uint8_t>& inside = deformer_.transferMeshInside();
+  const std::size_t nv = transferMesh_.vertexCount();
+  std::vector<std::int32_t> edges(nv, 0), torn(nv, 0);
+  for (std::size_t t = 0; t < transferMesh_.tetCount(); ++t) {
+    const Tet& tet = transferMesh_.tets[t];
+    for (int a = 0; a < 4; ++a)
+      for (int b = a + 1; b < 4; ++b) {
+        const auto u = std::size_t(tet[a]), v = std::size_t(tet[b]);
+        const double rest = (transferMesh_.positions[u] - transferMesh_.positions[v]).norm();
+        const double now = (posed[u] - posed[v]).norm();
+        const bool stretched = rest > 0.0 && std::abs(std::log(std::max(now, 1e-12) / rest)) > 1.0;
+        for (const std::size_t w : {u, v}) {
+          ++edges[w];
+          torn[w] += stretched;
+        }
+      }
+  }
+  std::size_t added = 0;
+  for (std::size_t v = 0; v < nv; ++v)
+    if (inside[v] && !propagate[v] && 2 * torn[v] > edges[v]) {
+      propagate[v] = 1;
+      ++added;
+    }
+  return added;
 }
 
 std::vector<std::uint8_t> DeformationPipeline::acrossSeparation() const {
@@ -220,6 +263,40 @@ std::vector<std::uint8_t> DeformationPipeline::acrossSeparation() const {
         out[std::size_t(v)] = 1;
       }
   });
+
+  // Islands: inside vertices of a separated group joined (through edges of
+  // their group's tets) to less than 5 % of the group's largest inside
+  // region, e.g. fingertips inside the part of the cage around the thigh
+  // they touch, whose neighbours all lie outside. They are propagated too.
+  std::vector<std::uint8_t> separated(kBodyPartCount + 2, 0);
+  for (const LimbSeparation& s : cuts)
+    for (const Label g : {s.groupA, s.groupB})
+      if (g < separated.size()) separated[g] = 1;
+  const std::vector<std::uint8_t> inside = insideCage(cage_, transferMesh_.positions);
+  auto candidate = [&](std::size_t v) {
+    const Label g = vertexGroup[v];
+    return inside[v] && !out[v] && g != kMixed && g < separated.size() && separated[g];
+  };
+  std::vector<std::int32_t> root(nv);
+  std::iota(root.begin(), root.end(), 0);
+  const auto find = [&](std::int32_t v) {
+    while (root[std::size_t(v)] != v) v = root[std::size_t(v)] = root[std::size_t(root[std::size_t(v)])];
+    return v;
+  };
+  for (std::size_t t = 0; t < transferMesh_.tetCount(); ++t) {
+    const Tet& tet = transferMesh_.tets[t];
+    for (int a = 0; a < 4; ++a)
+      for (int b = a + 1; b < 4; ++b)
+        if (candidate(std::size_t(tet[a])) && candidate(std::size_t(tet[b]))) root[std::size_t(find(tet[a]))] = find(tet[b]);
+  }
+  std::vector<std::int64_t> size(nv, 0);
+  std::vector<std::int64_t> largest(separated.size(), 0);
+  for (std::size_t v = 0; v < nv; ++v)
+    if (candidate(v)) ++size[std::size_t(find(std::int32_t(v)))];
+  for (std::size_t v = 0; v < nv; ++v)
+    if (candidate(v)) largest[vertexGroup[v]] = std::max(largest[vertexGroup[v]], size[std::size_t(find(std::int32_t(v)))]);
+  for (std::size_t v = 0; v < nv; ++v)
+    if (candidate(v) && 20 * size[std::size_t(find(std::int32_t(v)))] < largest[vertexGroup[v]]) out[v] = 1;
   return out;
 }
 

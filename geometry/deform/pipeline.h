@@ -161,6 +161,7 @@ private:
   void buildTransferMesh();
   void precomputeFrame(bool withEnvelope);
   std::vector<std::uint8_t> acrossSeparation() const;
+  std::size_t markTornVertices(std::vector<std::uint8_t>& propagate) const;
   void recordStage(StageTime time);
 
   PipelineOptions options_;

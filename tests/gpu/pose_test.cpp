@@ -4,10 +4,9 @@
 // body's volume within 3 % and every organ of 1000 voxels or more within
 // 10 % of its mass; on the arm pose the transfer-mesh vertices outside the
 // cage, placed by the rigidity propagation, keep a median edge-length
-// distortion within twice that of the inside vertices around them or 1 %,
-// whichever is larger. (The mean is not bounded: the shoulder joint and a
-// few tets where the hand touches the thigh stretch with the arm; the test
-// prints it.) Ray casting a pose through its transfer
+// distortion within twice that of the inside vertices around them (the
+// mean is not bounded: the shoulder joint stretches with the arm; the test
+// prints it). Ray casting a pose through its transfer
 // mesh shows what ray casting the rasterized posed grid through an identity
 // mesh shows, except at silhouette ties, and matches golden images.
 
@@ -91,11 +90,10 @@ void expectPropagationDistortionBounded(const test::PosedPhantom& p) {
             << d.insideNearby.median << " mean " << d.insideNearby.mean << " p95 " << d.insideNearby.p95 << "\n";
   ASSERT_GT(d.outside.edges, 0u);
   ASSERT_GT(d.insideNearby.edges, 0u);
-  // The cage carries the arm rigidly, so the inside edges barely change
-  // (median ~6e-5) and twice their distortion is no scale for the joint the
-  // outside vertices form: the bound is that or a 1 % length change,
-  // whichever is larger.
-  EXPECT_LE(d.outside.median, std::max(2.0 * d.insideNearby.median, 0.01));
+  // The typical (median) outside edge stays within twice the typical inside
+  // edge around it. The mean and the 95th percentile are larger (the shoulder
+  // joint the outside vertices form; printed above).
+  EXPECT_LE(d.outside.median, 2.0 * d.insideNearby.median);
 }
 
 // Ray casts the source through the posed TM, and the CPU rasterization of
