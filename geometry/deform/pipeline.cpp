@@ -225,17 +225,10 @@ std::vector<std::uint8_t> DeformationPipeline::acrossSeparation() const {
   const std::vector<LimbSeparation>& cuts = options_.cuts ? *options_.cuts : options_.cage.separations;
   std::vector<std::uint8_t> out;
   if (cuts.empty() || cageGroups_.size() != builtCage_.vertexCount() || cage_.vertexCount() == 0) return out;
-  // Groups of the cage the deformation uses (setPose keeps the parts with handles, in order).
-  std::vector<Label> groups;
-  {
-    std::size_t k = 0;
-    for (std::size_t v = 0; v < builtCage_.vertexCount() && groups.size() < cage_.vertexCount(); ++v)
-      if (builtCage_.positions[v] == cage_.positions[k]) {
-        groups.push_back(cageGroups_[v]);
-        ++k;
-      }
-    if (groups.size() != cage_.vertexCount()) return out;
-  }
+  // Groups of the cage the deformation uses (the built cage's parts with handles).
+  if (cageSource_.size() != cage_.vertexCount()) return out;
+  std::vector<Label> groups(cage_.vertexCount());
+  for (std::size_t c = 0; c < groups.size(); ++c) groups[c] = cageGroups_[std::size_t(cageSource_[c])];
   const std::size_t nv = transferMesh_.vertexCount();
   constexpr Label kMixed = Label(0xffff);
   std::vector<Label> vertexGroup(nv, 0);
@@ -311,10 +304,12 @@ void DeformationPipeline::setPose(const Pose& pose, const std::string& source) {
   for (const std::int32_t v : handles.vertices) held[std::size_t(parts[std::size_t(v)])] = 1;
   std::vector<std::int32_t> index(builtCage_.vertexCount(), -1);
   cage_ = {};
+  cageSource_.clear();
   for (std::size_t v = 0; v < builtCage_.vertexCount(); ++v)
     if (held[std::size_t(parts[v])]) {
       index[v] = std::int32_t(cage_.positions.size());
       cage_.positions.push_back(builtCage_.positions[v]);
+      cageSource_.push_back(std::int32_t(v));
     }
   for (const Tri& t : builtCage_.triangles)
     if (index[std::size_t(t[0])] >= 0) cage_.triangles.push_back({index[std::size_t(t[0])], index[std::size_t(t[1])], index[std::size_t(t[2])]});
