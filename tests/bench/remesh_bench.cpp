@@ -9,7 +9,7 @@
 //
 //   build/release/bench/remesh_bench                       # AM phantom, l = 8 mm
 //   VOX_REMESH_GRID=path.nii.gz VOX_REMESH_L=4.274 build/release/bench/remesh_bench
-//   VOX_REMESH_VOXELS=2 build/release/bench/remesh_bench --benchmark_filter=MMAd/2   # l = 2 voxels
+//   VOX_REMESH_VOXELS=2 build/release/bench/remesh_bench --benchmark_filter=MMAdRemesh/2   # l = 2 voxels
 //   VOX_REMESH_SYNTH=junctions:48 VOX_REMESH_L=2.5 build/release/bench/remesh_bench
 //   VOX_REMESH_CROP=60,20,100,96,64,40 build/release/bench/remesh_bench  # a box of voxels
 //
