@@ -127,12 +127,6 @@ void makeEngine(Engine& e, Source& source, const TetMesh& rest, const std::vecto
   e.cpu = std::make_unique<CpuSlabRasterizer>(*e.plan, *reader, cl);
 }
 
-std::vector<std::uint64_t> countLabels(const LabelGrid& grid) {
-  std::vector<std::uint64_t> counts(std::size_t(grid.maxLabel()) + 1, 0);
-  for (const Label l : grid.labels()) ++counts[l];
-  return counts;
-}
-
 void deform(const DeformOptions& o) {
   installStderrProgress(o.quiet);
   if (!hasGridExtension(o.output)) throw InputError(o.output, "unknown grid format for the output");
@@ -229,7 +223,7 @@ void deform(const DeformOptions& o) {
   report.stages.push_back(rasterTimer.stop());
   report.engine = engine.name;
 
-  const std::vector<std::uint64_t> before = source.grid ? countLabels(*source.grid) : source.outOfCore->labelCounts();
+  const std::vector<std::uint64_t> before = source.grid ? computeLabelStats(*source.grid).counts : source.outOfCore->labelCounts();
   const OrganTable* organs = options.organs ? &*options.organs : nullptr;
   report.labels = labelChanges(before, after, source.geometry().voxelVolume(), organs);
   report.wholeBody = wholeBodyChange(report.labels);

@@ -109,14 +109,6 @@ const Case& benchCase(const std::string& name) {
   return *c;
 }
 
-// CPU seconds of the whole process (every thread, lavapipe's included): on a
-// machine shared with other work, CPU time per run is steadier than wall time.
-double processCpuSeconds() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
-}
-
 void setCounters(benchmark::State& state, const LabelGrid& out) {
   state.counters["output_voxels"] = double(out.voxelCount());
   state.counters["voxels_per_s"] = benchmark::Counter(double(out.voxelCount()), benchmark::Counter::kIsIterationInvariantRate);
@@ -140,12 +132,12 @@ void BM_RasterizeGpu(benchmark::State& state, std::string name, int samples) {
   const Case& c = benchCase(name);
   vox::gpu::RasterizeKernel kernel(context(), c.source, c.tm, {.samples = samples});
   LabelGrid out;
-  const double cpu0 = processCpuSeconds();
+  const double cpu0 = vox::processCpuSeconds();
   for (auto _ : state) {
     out = kernel.rasterize(c.deformed);
     benchmark::DoNotOptimize(out.data());
   }
-  state.counters["process_cpu_s"] = (processCpuSeconds() - cpu0) / double(state.iterations());
+  state.counters["process_cpu_s"] = (vox::processCpuSeconds() - cpu0) / double(state.iterations());
   checkAgainstCpu(name + "/k" + std::to_string(samples), c, out, samples);
   state.counters["gpu_ms"] = kernel.gpuMs();
   state.counters["locate_ms"] = kernel.locateMs();
@@ -157,12 +149,12 @@ void BM_RasterizeGpu(benchmark::State& state, std::string name, int samples) {
 void BM_RasterizeCpu(benchmark::State& state, std::string name, int samples) {
   const Case& c = benchCase(name);
   LabelGrid out;
-  const double cpu0 = processCpuSeconds();
+  const double cpu0 = vox::processCpuSeconds();
   for (auto _ : state) {
     out = vox::rasterizeDeformedGrid(c.source, c.tm, c.deformed, {.samples = samples});
     benchmark::DoNotOptimize(out.data());
   }
-  state.counters["process_cpu_s"] = (processCpuSeconds() - cpu0) / double(state.iterations());
+  state.counters["process_cpu_s"] = (vox::processCpuSeconds() - cpu0) / double(state.iterations());
   setCounters(state, out);
 }
 

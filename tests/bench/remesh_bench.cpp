@@ -32,6 +32,8 @@
 #include <CGAL/Tetrahedral_remeshing/Remeshing_triangulation_3.h>
 #include <CGAL/tetrahedral_remeshing.h>
 
+#include "geometry/deform/pipeline.h"  // processCpuSeconds
+
 #include <benchmark/benchmark.h>
 
 #include <chrono>
@@ -57,12 +59,6 @@ struct Case {
   TetQualitySummary initialQuality;
   double decompositionSeconds = 0.0;
 };
-
-double processCpuSeconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
-}
 
 const Case& benchCase() {
   static std::unique_ptr<Case> c = [] {
@@ -147,9 +143,9 @@ void BM_MMAdRemesh(benchmark::State& state) {
     options.flipSmoothCycles = 3;
     options.threads = int(state.range(0));
     const auto wall0 = std::chrono::steady_clock::now();
-    const double cpu0 = processCpuSeconds();
+    const double cpu0 = vox::processCpuSeconds();
     const TetMesh out = remesh::remeshTetMesh(c.initial, options);
-    const double cpu = processCpuSeconds() - cpu0;
+    const double cpu = vox::processCpuSeconds() - cpu0;
     state.PauseTiming();
     std::fprintf(stderr, "M-MAd (%d threads): %.1f s wall\n", options.threads,
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count());
@@ -164,7 +160,7 @@ using CgalTriangulation = CGAL::Tetrahedral_remeshing::Remeshing_triangulation_3
 void BM_CgalRemesh(benchmark::State& state) {
   const Case& c = benchCase();
   for (auto _ : state) {
-    const double cpu0 = processCpuSeconds();
+    const double cpu0 = vox::processCpuSeconds();
     // The same tets, finite cells of a Triangulation_3; subdomain 0 (our
     // imaginary layer) is outside for CGAL, the convex hull is the box.
     CgalTriangulation tr;
@@ -182,7 +178,7 @@ void BM_CgalRemesh(benchmark::State& state) {
     if (!CGAL::build_triangulation<CgalTriangulation, true>(tr, points, cells, noPatches, handles))
       state.SkipWithError("CGAL could not build the triangulation");
     CGAL::tetrahedral_isotropic_remeshing(tr, c.targetLength, CGAL::parameters::number_of_iterations(10));
-    const double cpu = processCpuSeconds() - cpu0;
+    const double cpu = vox::processCpuSeconds() - cpu0;
     state.PauseTiming();
     TetMesh out;
     std::map<CgalTriangulation::Vertex_handle, std::int32_t> index;

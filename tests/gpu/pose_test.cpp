@@ -21,6 +21,7 @@
 #include "geometry/render/rest_transfer_mesh.h"
 #include "gpu/kernels/rasterize.h"
 #include "gpu/kernels/raycast.h"
+#include "geometry/label_stats.h"
 #include "tests/support/pose_fixtures.h"
 #include "tests/support/raster_compare.h"
 
@@ -58,7 +59,7 @@ void expectVolumesAndMassesKept(const test::PosedPhantom& p) {
   {
     const std::string& pose = p.pose;
     const std::vector<LabelChange> labels =
-        labelChanges(test::labelCounts(p.source), test::labelCounts(p.cpu), p.source.geometry().voxelVolume(), &p.organs);
+        labelChanges(computeLabelStats(p.source).counts, computeLabelStats(p.cpu).counts, p.source.geometry().voxelVolume(), &p.organs);
     const WholeBodyChange body = wholeBodyChange(labels);
     EXPECT_LE(std::abs(body.volumeChangePercent), 3.0) << pose;
     double worst = 0.0;

@@ -69,11 +69,4 @@ inline const PosedPhantom& posedPhantom(const std::string& pose) {
   return *slot;
 }
 
-// Voxels per label (index = label).
-inline std::vector<std::uint64_t> labelCounts(const LabelGrid& grid) {
-  std::vector<std::uint64_t> counts(std::size_t(grid.maxLabel()) + 1, 0);
-  for (const Label l : grid.labels()) ++counts[l];
-  return counts;
-}
-
 }  // namespace vox::test

@@ -7,6 +7,7 @@
 #include "geometry/deform/pipeline.h"
 #include "geometry/deform/rasterize.h"
 #include "geometry/io/grid_io.h"
+#include "geometry/label_stats.h"
 #include "tests/support/pose_fixtures.h"
 #include "tests/support/test_environment.h"
 
@@ -93,7 +94,7 @@ TEST(DeformationPipeline, RigidPoseMovesTheTransferMeshRigidlyAndKeepsLabelCount
   EXPECT_LE(worst, 1e-6 * g.diagonal());
 
   const LabelGrid out = rasterizeDeformedGrid(source, rest, pipeline.deformedTransferMesh());
-  const std::vector<std::uint64_t> before = test::labelCounts(source), after = test::labelCounts(out);
+  const std::vector<std::uint64_t> before = computeLabelStats(source).counts, after = computeLabelStats(out).counts;
   // Nearest-neighbour resampling of a rotated grid changes a label's count
   // by a fraction that grows with its surface-to-volume ratio: thin shells
   // and organs of a few hundred voxels move by several percent whatever the
