@@ -12,6 +12,7 @@
 #include "app/command_line.h"
 #include "geometry/deform/adaptive_refinement.h"
 #include "geometry/deform/deformation_report.h"
+#include "geometry/deform/label_volumes.h"
 #include "geometry/deform/out_of_core.h"
 #include "geometry/deform/pipeline.h"
 #include "geometry/deform/rasterize.h"
@@ -25,6 +26,7 @@
 #include "gpu/kernels/field_interpolation.h"
 #include "gpu/kernels/rasterize.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -42,6 +44,7 @@ struct DeformOptions {
   int samples = 1;
   std::int64_t maxMemoryMb = 0;
   bool cpu = false;
+  bool preserveVolumes = false;
   std::int64_t maxTets = RefinementOptions{}.maxTets;
   int refineIterations = RefinementOptions{}.maxIterations;
   bool quiet = false;
@@ -84,6 +87,29 @@ Source openSource(const DeformOptions& o) {
     s.working = downsampleLabels(slices, s.factor);
   }
   return s;
+}
+
+// G' held in memory, handed to writePosedGrid slab by slab.
+class HeldGrid : public SlabRasterizer {
+public:
+  explicit HeldGrid(LabelGrid grid) : grid_(std::move(grid)) {}
+  const GridGeometry& outputGeometry() const override { return grid_.geometry(); }
+  std::int64_t slabSlices() const override { return 64; }
+  void rasterizeSlab(std::int64_t z0, std::int64_t z1, Label* out) override {
+    const std::int64_t slice = grid_.geometry().sliceVoxels();
+    std::copy(grid_.data() + z0 * slice, grid_.data() + z1 * slice, out);
+  }
+
+private:
+  LabelGrid grid_;
+};
+
+LabelGrid rasterizeWhole(SlabRasterizer& engine) {
+  LabelGrid grid(engine.outputGeometry());
+  const std::int64_t nz = grid.dims()[2], step = std::max<std::int64_t>(1, engine.slabSlices());
+  for (std::int64_t z0 = 0; z0 < nz; z0 += step)
+    engine.rasterizeSlab(z0, std::min(nz, z0 + step), grid.data() + z0 * grid.geometry().sliceVoxels());
+  return grid;
 }
 
 // The rasterization engine of G': the GPU kernel, or the CPU reference.
@@ -132,6 +158,8 @@ void deform(const DeformOptions& o) {
   if (!hasGridExtension(o.output)) throw InputError(o.output, "unknown grid format for the output");
   if (!o.posedCage.empty() && !hasSurfaceExtension(o.posedCage))
     throw InputError(o.posedCage, "unknown surface format for --posed-cage (use .obj, .off or .ply)");
+  if (o.preserveVolumes && o.maxMemoryMb > 0)
+    throw InputError("--preserve-volumes", "needs the posed grid in memory; it cannot be combined with --max-memory");
   if (!o.posedMesh.empty() && !hasTetMeshExtension(o.posedMesh))
     throw InputError(o.posedMesh, "unknown tet mesh format for --posed-mesh (use .mesh, .meshb, .vtu or .msh)");
   // Everything the command can reject cheaply is checked before the work.
@@ -218,14 +246,32 @@ void deform(const DeformOptions& o) {
   }
   makeEngine(engine, source, rest, deformed, o, rasterBudget);
   const Label maxLabel = source.grid ? source.grid->maxLabel() : source.outOfCore->maxLabel();
-  const std::vector<std::uint64_t> after = writePosedGrid(engine.engine(), o.output, maxLabel);
-  report.posed = engine.engine().outputGeometry();
-  report.stages.push_back(rasterTimer.stop());
+  std::vector<std::uint64_t> after;
+  std::vector<double> deformedVolumes;
+  if (o.preserveVolumes) {
+    LabelGrid posed = rasterizeWhole(engine.engine());
+    report.stages.push_back(rasterTimer.stop());
+    StageTimer correctionTimer("volume correction");
+    deformedVolumes = deformedLabelVolumes(*source.grid, rest, deformed);
+    report.volumeCorrection = preserveLabelVolumes(posed, *source.grid, rest, deformed, deformedVolumes);
+    report.stages.push_back(correctionTimer.stop());
+    StageTimer writeTimer("write");
+    HeldGrid held(std::move(posed));
+    after = writePosedGrid(held, o.output, maxLabel);
+    report.posed = held.outputGeometry();
+    report.stages.push_back(writeTimer.stop());
+  } else {
+    after = writePosedGrid(engine.engine(), o.output, maxLabel);
+    report.posed = engine.engine().outputGeometry();
+    report.stages.push_back(rasterTimer.stop());
+  }
   report.engine = engine.name;
 
   const std::vector<std::uint64_t> before = source.grid ? computeLabelStats(*source.grid).counts : source.outOfCore->labelCounts();
   const OrganTable* organs = options.organs ? &*options.organs : nullptr;
   report.labels = labelChanges(before, after, source.geometry().voxelVolume(), organs);
+  for (LabelChange& c : report.labels)
+    if (c.label < deformedVolumes.size()) c.deformedVolumeVoxels = deformedVolumes[c.label];
   report.wholeBody = wholeBodyChange(report.labels);
   if (!o.report.empty()) {
     const std::string json = deformationReportJson(report);
@@ -265,6 +311,9 @@ void addDeformCommand(CLI::App& app) {
       ->check(CLI::Range(std::int64_t(256), std::int64_t(1) << 30));
   cmd->add_option("--posed-cage", o->posedCage, "Also write the posed cage (.obj .off .ply), to check a pose's handles");
   cmd->add_option("--posed-mesh", o->posedMesh, "Also write the posed transfer mesh (.mesh .vtu .msh)");
+  cmd->add_flag("--preserve-volumes", o->preserveVolumes,
+                "Relabel boundary voxels of the posed grid so that each label keeps the volume the deformation gives it "
+                "(sum of the transfer mesh's Jacobian determinants over its voxels), within about a voxel; in core only");
   cmd->add_flag("--cpu", o->cpu, "Rasterize and interpolate fields with the CPU reference instead of the GPU");
   cmd->add_option("--max-tets", o->maxTets, "Tet budget of the refined transfer mesh (default 250000)")
       ->check(CLI::Range(std::int64_t(1000), std::int64_t(1) << 30));

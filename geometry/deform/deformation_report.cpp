@@ -222,6 +222,7 @@ std::string deformationReportJson(const DeformationReport& r) {
   for (const LabelChange& c : r.labels) {
     json j = {{"label", c.label}, {"voxels_before", c.before}, {"voxels_after", c.after}, {"volume_change_pct", c.volumeChangePercent}};
     if (!c.name.empty()) j["name"] = c.name;
+    if (c.deformedVolumeVoxels >= 0) j["deformed_volume_voxels"] = c.deformedVolumeVoxels;
     if (r.withMasses) {
       j["mass_before_g"] = c.massBeforeGrams;
       j["mass_after_g"] = c.massAfterGrams;
@@ -247,6 +248,14 @@ std::string deformationReportJson(const DeformationReport& r) {
     whole["mass_change_pct"] = r.wholeBody.massChangePercent;
   }
   root["whole_body"] = whole;
+  if (const auto& c = r.volumeCorrection)
+    root["volume_correction"] = {{"boundary_voxels", c->candidates},
+                                 {"relabelled_voxels", c->relabelled},
+                                 {"sweeps", c->sweeps},
+                                 {"deviation_before_voxels", c->deviationBefore},
+                                 {"deviation_after_voxels", c->deviationAfter},
+                                 {"worst_label_pct_before", c->worstPercentBefore},
+                                 {"worst_label_pct_after", c->worstPercentAfter}};
   return root.dump(2) + "\n";
 }
 
@@ -293,6 +302,10 @@ std::string deformationSummary(const DeformationReport& r) {
     s << "  largest change of a label with >= " << kSmallOrganVoxels << " voxels: " << worst->label
       << (worst->name.empty() ? "" : " (" + worst->name + ")") << " " << fixed(worst->volumeChangePercent, 2) << " %; " << small
       << " labels under " << kSmallOrganVoxels << " voxels\n";
+  if (const auto& c = r.volumeCorrection)
+    s << "  volume correction: " << c->relabelled << " of " << c->candidates << " boundary voxels relabelled; largest gap "
+      << "between a label's voxels and its deformed volume " << fixed(c->worstPercentBefore, 2) << " % -> "
+      << fixed(c->worstPercentAfter, 2) << " %\n";
   s << "  distortion: angle mean " << fixed(r.distortion.angle.mean, 2) << " deg (rms deviation " << fixed(r.distortion.angle.rmsDeviation, 2)
     << "), stretch mean " << fixed(r.distortion.stretch.mean, 4) << " (rms deviation " << fixed(r.distortion.stretch.rmsDeviation, 4) << ")\n";
   return s.str();

@@ -8,6 +8,7 @@
 
 #include "geometry/deform/adaptive_refinement.h"
 #include "geometry/deform/deformation_metrics.h"
+#include "geometry/deform/label_volumes.h"
 #include "geometry/deform/pipeline.h"
 #include "geometry/label_grid.h"
 #include "geometry/organ_table.h"
@@ -15,6 +16,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <utility>
@@ -32,6 +34,9 @@ struct LabelChange {
   std::uint64_t before = 0, after = 0;
   double volumeChangePercent = 0;  // also the mass change: one density per label
   double massBeforeGrams = 0, massAfterGrams = 0;  // 0 without a table
+  // With --preserve-volumes: the volume the deformation gives the label, in
+  // output voxels (label_volumes.h), the count the correction aims at; else < 0.
+  double deformedVolumeVoxels = -1;
 };
 
 struct WholeBodyChange {
@@ -89,6 +94,8 @@ struct DeformationReport {
   std::vector<LabelChange> labels;
   WholeBodyChange wholeBody;
   bool withMasses = false;
+  // --preserve-volumes: the label-volume correction of G' (label_volumes.h).
+  std::optional<LabelVolumeCorrection> volumeCorrection;
 };
 
 // Fills the mesh sizes, outliers, cuts and distortion from a deformed

@@ -3,7 +3,8 @@
 // a complete report, and bad input (a pose that selects nothing, an open
 // cage, a selection by label group without the organ table, unknown
 // formats) is a one-line error with exit code 1 and no output file; a cage
-// that leaves foreground outside without limb separation is a warning.
+// that leaves foreground outside without limb separation is a warning;
+// --preserve-volumes brings every label to its deformed volume.
 
 #include "geometry/io/grid_io.h"
 #include "tests/support/test_environment.h"
@@ -107,6 +108,33 @@ TEST(DeformCommand, PosesTheArmAndWritesTheReport) {
   EXPECT_LT(std::abs(j["whole_body"]["volume_change_pct"].get<double>()), 10.0);
 }
 
+// --preserve-volumes: the report's correction brings every label to within
+// about a voxel of its deformed volume, and the written grid holds the
+// counts the report gives.
+TEST(DeformCommand, PreserveVolumesKeepsEachLabelNearItsDeformedVolume) {
+  VOX_REQUIRE_VOXMORPH();
+  const Stick s = stick();
+  const std::string pose = writeFile(s.dir + "/arm.json", kArmPose);
+  const std::string out = s.dir + "/posed.nii.gz", report = s.dir + "/report.json";
+  const auto r = test::runCommand(voxmorph("deform " + test::quote(s.grid) + " --pose " + test::quote(pose) + " --organs " +
+                                           test::quote(s.organs) + " -o " + test::quote(out) + " --report " +
+                                           test::quote(report) + " --preserve-volumes --cpu -q"));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(report));
+  ASSERT_TRUE(j.contains("volume_correction"));
+  const nlohmann::json& c = j["volume_correction"];
+  EXPECT_LE(c["deviation_after_voxels"].get<double>(), c["deviation_before_voxels"].get<double>());
+  EXPECT_LE(c["relabelled_voxels"].get<double>(), c["boundary_voxels"].get<double>());
+  EXPECT_LT(c["deviation_after_voxels"].get<double>(), 0.1 * c["deviation_before_voxels"].get<double>()) << c.dump();
+  const LabelGrid posed = readGrid(out);
+  for (const nlohmann::json& l : j["labels"]) {
+    const auto label = l["label"].get<Label>();
+    const auto n = std::count(posed.labels().begin(), posed.labels().end(), label);
+    EXPECT_EQ(n, l["voxels_after"].get<std::int64_t>()) << "label " << label;
+    EXPECT_LE(std::abs(double(n) - l["deformed_volume_voxels"].get<double>()), 1.0) << l.dump();
+  }
+}
+
 TEST(DeformCommand, BadInputIsAOneLineErrorWithoutOutput) {
   VOX_REQUIRE_VOXMORPH();
   const Stick s = stick();
@@ -124,6 +152,8 @@ TEST(DeformCommand, BadInputIsAOneLineErrorWithoutOutput) {
   expectOneLineError(test::runCommand(voxmorph("deform " + test::quote(s.grid) + " -o " + test::quote(s.dir + "/posed.xyz") +
                                                " --pose " + test::quote(identity))),
                      "posed.xyz");
+  expectOneLineError(test::runCommand(voxmorph(base + test::quote(identity) + " --preserve-volumes --max-memory 512")),
+                     "--preserve-volumes");
   EXPECT_FALSE(std::filesystem::exists(out));
   EXPECT_EQ(test::listFiles(s.dir).find("posed"), std::string::npos) << test::listFiles(s.dir);
 }

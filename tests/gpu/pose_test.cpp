@@ -2,7 +2,8 @@
 // posed grid equals the CPU reference up to float ties (at most 1e-5 of the
 // voxels, each shown to be a tie); the adult male poses keep the whole
 // body's volume within 3 % and every organ of 1000 voxels or more within
-// 10 % of its mass; on the arm pose the transfer-mesh vertices outside the
+// 10 % of its mass, and with the label-volume correction every label is
+// within a voxel or 1 % of its deformed volume; on the arm pose the transfer-mesh vertices outside the
 // cage, placed by the rigidity propagation, keep a median edge-length
 // distortion within twice that of the inside vertices around them (the
 // mean is not bounded: the shoulder joint stretches with the arm; the test
@@ -11,6 +12,7 @@
 // mesh shows, except at silhouette ties, and matches golden images.
 
 #include "geometry/deform/deformation_report.h"
+#include "geometry/deform/label_volumes.h"
 #include "gpu/context.h"
 #include "geometry/render/camera.h"
 #include "geometry/render/cutting_planes.h"
@@ -80,6 +82,25 @@ void expectVolumesAndMassesKept(const test::PosedPhantom& p) {
               << body.massChangePercent << " % mass; largest organ change " << worst << " % (" << worstName << "); "
               << small << " labels under " << kSmallOrganVoxels << " voxels exempt\n";
   }
+  // With the label-volume correction (--preserve-volumes): every label within
+  // a voxel or 1 % of the volume the deformation gives it.
+  LabelGrid kept = p.cpu;
+  const std::vector<double> volumes = deformedLabelVolumes(p.source, p.rest, p.deformed);
+  const LabelVolumeCorrection c = preserveLabelVolumes(kept, p.source, p.rest, p.deformed, volumes);
+  const std::vector<std::uint64_t> counts = computeLabelStats(kept).counts;
+  const std::vector<LabelChange> labels =
+      labelChanges(computeLabelStats(p.source).counts, counts, p.source.geometry().voxelVolume(), &p.organs);
+  double worst = 0.0;
+  for (std::size_t l = 1; l < volumes.size(); ++l) {
+    const double n = l < counts.size() ? double(counts[l]) : 0.0;
+    EXPECT_LE(std::abs(n - volumes[l]), std::max(1.0, 0.01 * volumes[l])) << p.pose << ": label " << l;
+  }
+  for (const LabelChange& l : labels)
+    if (l.before >= kSmallOrganVoxels && std::abs(l.volumeChangePercent) > std::abs(worst)) worst = l.volumeChangePercent;
+  EXPECT_LE(std::abs(wholeBodyChange(labels).volumeChangePercent), 3.0) << p.pose;
+  std::cout << "[ stats    ] " << p.pose << " with --preserve-volumes: " << c.relabelled << " voxels relabelled; whole body "
+            << wholeBodyChange(labels).volumeChangePercent << " % volume; largest organ change " << worst
+            << " %; largest gap to a deformed volume " << c.worstPercentAfter << " % (before " << c.worstPercentBefore << " %)\n";
 }
 
 void expectPropagationDistortionBounded(const test::PosedPhantom& p) {

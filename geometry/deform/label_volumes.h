@@ -1,0 +1,67 @@
+#pragma once
+// Label volumes through the deformation, and a posed grid whose per-label
+// voxel counts match them.
+//
+// Nearest-neighbour resampling (rasterize.h) is unbiased but noisy at label
+// boundaries: a rigidly rotated thin or small organ gains or loses voxels
+// (a 5-voxel label can change by 20 %), which is resampling, not
+// deformation. Its volume after the deformation is known exactly from the
+// transfer mesh: each source voxel whose centre lies in rest tet t is mapped
+// with the Jacobian determinant det J_t = |t'| / |t| of the piecewise-linear
+// map, so label l occupies
+//   V'_l = sum over its source voxels v in a tet t(v) of det J_t(v) (source voxels)
+// after the deformation (the output grid G' has the source spacing, so this
+// is a voxel count of G'). Source voxels in no tet are not carried to G' and
+// do not count. Label 0 gets the rest of G'.
+//
+// The correction then relabels boundary voxels of G' until every label's
+// count is as near its V'_l as single-voxel moves get it:
+//  - every output voxel centre located in a deformed tet is mapped back to
+//    its source point p (as the rasterizer does); the trilinear weights of
+//    the 8 source voxels around p give each label a fraction w_l there. A
+//    voxel whose 8 source voxels all carry its label is not touched;
+//  - the candidate moves (voxel: current label a -> label b with w_b > 0)
+//    are sorted by w_a - w_b (the most ambiguous voxels first; voxel index
+//    and b break ties) and swept in that order; a move is made when it
+//    lowers sum_l |count_l - V'_l| and the voxel still has label a. A voxel
+//    changes at most once. Sweeps repeat until one makes no move.
+// So only voxels where the source has both labels within one voxel of p
+// change, and the result is deterministic (independent of thread count).
+
+#include "geometry/label_grid.h"
+#include "geometry/tet_mesh.h"
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace vox {
+
+// V'_l for every label 0..maxLabel of `source` (index = label), in voxels of
+// the source spacing; entry 0 holds the source's label-0 voxels carried by a
+// tet. rest: the TM at rest (grid frame, mm); deformed: #V positions.
+// Throws InputError for a vertex count mismatch or bad connectivity.
+std::vector<double> deformedLabelVolumes(const LabelGrid& source, const TetMesh& rest,
+                                         const std::vector<Eigen::Vector3d>& deformed, int threads = 0);
+
+struct LabelVolumeCorrection {
+  std::uint64_t candidates = 0;   // voxels whose source neighbourhood holds another label
+  std::uint64_t relabelled = 0;   // voxels whose label changed
+  int sweeps = 0;
+  double deviationBefore = 0.0;   // sum over labels of |count_l - V'_l|, voxels
+  double deviationAfter = 0.0;
+  double worstPercentBefore = 0.0;  // largest |count_l / V'_l - 1| in %, labels > 0 with V'_l >= 0.5
+  double worstPercentAfter = 0.0;
+};
+
+// Relabels boundary voxels of `posed` (G' rasterized from `source` through
+// rest -> deformed, samples = 1 or more) so that label l > 0 has about
+// targets[l] voxels and label 0 the rest (see above). targets: from
+// deformedLabelVolumes (index = label). Throws InputError when posed's
+// geometry is not the output grid of this deformation.
+LabelVolumeCorrection preserveLabelVolumes(LabelGrid& posed, const LabelGrid& source, const TetMesh& rest,
+                                           const std::vector<Eigen::Vector3d>& deformed, std::span<const double> targets,
+                                           int threads = 0);
+
+}  // namespace vox
