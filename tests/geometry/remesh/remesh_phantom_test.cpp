@@ -1,9 +1,10 @@
 // The remesher on real anatomy: cropped regions of the ICRP 110 adult male
 // phantom (many labels, thin structures, 1- and 0-junctions everywhere)
-// meshed at l = 2 voxels. The whole phantom at l = 2 voxels takes longer
-// than the test budget; it runs in tests/bench/remesh_bench
-// (VOX_REMESH_VOXELS=2), which checks the same properties, and its result
-// is in docs/BENCHMARKS.md.
+// meshed at l = 2 voxels. The whole phantom at l = 2 voxels takes about
+// 50 minutes on 2 cores, far beyond the CI budget: its test skips unless
+// VOX_SLOW_TESTS=1, and runs outside ctest's per-test timeout as
+//   VOX_SLOW_TESTS=1 build/release/tests/vox_tests_remesh --gtest_filter='RemeshPhantom.WholeAdultMale*'
+// (its result is in docs/BENCHMARKS.md).
 
 #include "geometry/io/grid_io.h"
 #include "geometry/mesh_quality.h"
@@ -16,6 +17,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdlib>
+#include <iostream>
 #include <limits>
 #include <string>
 
@@ -92,6 +95,39 @@ TEST(RemeshPhantom, AdultMaleTorsoKeepsEveryLabelAndJunction) {
   RecordProperty("junction_point_sets", int(input.junctionPoints.size()));
   RecordProperty("tets", int(q.tets));
   RecordProperty("min_dihedral", std::to_string(q.minDihedral));
+}
+
+TEST(RemeshPhantom, WholeAdultMaleAtTwoVoxelsKeepsEveryLabelAndJunction) {
+  const char* slow = std::getenv("VOX_SLOW_TESTS");
+  if (!slow || std::string(slow) != "1") GTEST_SKIP() << "about 50 minutes on 2 cores; set VOX_SLOW_TESTS=1 to run it";
+  const LabelGrid grid = readGrid(test::assetPath("icrp110_am.nii.gz"));
+  const MeshTopology input = computeGridTopology(grid);
+  ASSERT_GE(input.labels.size(), 130u);
+
+  const double l = 2.0 * grid.spacing().minCoeff();
+  const TetMesh initial = tetrahedralizeVoxelsAdaptive(grid, adaptiveOptionsForTarget(grid.geometry(), l));
+  RemeshOptions options;
+  options.targetLength = l;
+  options.iterations = 5;  // the low end of the 5-10 the schedule allows; 3 flip-smooth cycles
+  const TetMesh output = remeshTetMesh(initial, options);
+
+  const MeshTopology outputTopology = computeMeshTopology(output);
+  const auto differences = compareTopology(input, outputTopology);
+  std::string listed;
+  for (std::size_t i = 0; i < differences.size() && i < 20; ++i) listed += differences[i] + "\n";
+  EXPECT_EQ(differences.size(), 0u) << listed;
+  EXPECT_EQ(outputTopology.labels.size(), input.labels.size());
+  double minVolume = std::numeric_limits<double>::infinity();
+  for (const Tet& t : output.tets) minVolume = std::min(minVolume, signedVolume(output.positions, t));
+  EXPECT_GT(minVolume, 0.0);
+  const TetQualitySummary q = summarizeTetQuality(output);
+  EXPECT_EQ(q.inverted, 0u);
+  EXPECT_GT(q.minDihedral, 5.0);
+  std::cout << "[ stats    ] whole AM, l = " << l << " mm: " << input.labels.size() << " labels, "
+            << input.junctionCurves.size() << " 1-junction and " << input.junctionPoints.size()
+            << " 0-junction label sets; " << q.tets << " tets, min dihedral " << q.minDihedral << " deg, " << q.under15
+            << " under 15 deg, smallest volume " << minVolume << " mm^3, " << differences.size()
+            << " topology differences\n";
 }
 
 }  // namespace
