@@ -104,14 +104,6 @@ private:
   LabelGrid grid_;
 };
 
-LabelGrid rasterizeWhole(SlabRasterizer& engine) {
-  LabelGrid grid(engine.outputGeometry());
-  const std::int64_t nz = grid.dims()[2], step = std::max<std::int64_t>(1, engine.slabSlices());
-  for (std::int64_t z0 = 0; z0 < nz; z0 += step)
-    engine.rasterizeSlab(z0, std::min(nz, z0 + step), grid.data() + z0 * grid.geometry().sliceVoxels());
-  return grid;
-}
-
 // The rasterization engine of G': the GPU kernel, or the CPU reference.
 struct Engine {
   std::unique_ptr<gpu::Context> context;
@@ -249,7 +241,7 @@ void deform(const DeformOptions& o) {
   std::vector<std::uint64_t> after;
   std::vector<double> deformedVolumes;
   if (o.preserveVolumes) {
-    LabelGrid posed = rasterizeWhole(engine.engine());
+    LabelGrid posed = rasterizeAllSlabs(engine.engine());
     report.stages.push_back(rasterTimer.stop());
     StageTimer correctionTimer("volume correction");
     deformedVolumes = deformedLabelVolumes(*source.grid, rest, deformed);

@@ -169,8 +169,8 @@ private:
   void recordStage(StageTime time);
 
   PipelineOptions options_;
-  std::vector<Label> cageGroups_;
-  std::vector<std::int32_t> cageSource_;  // per cage_ vertex: its built-cage vertex  // per built-cage vertex: nearest label group (selections by group)
+  std::vector<Label> cageGroups_;          // per built-cage vertex: nearest label group (selections by group)
+  std::vector<std::int32_t> cageSource_;  // per cage_ vertex: its built-cage vertex
   LabelGrid groups_, meshGroups_;  // meshGroups_: S reduced to the separated groups (empty without separations)
   TriMesh builtCage_, cage_, envelope_;
   ScalarGrid sizing_;

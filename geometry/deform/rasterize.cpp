@@ -212,6 +212,19 @@ std::vector<SliceRange> sourceWindows(const SliceRange& needed, const SliceRange
   return windows;
 }
 
+LabelGrid rasterizeAllSlabs(SlabRasterizer& engine) {
+  LabelGrid out(engine.outputGeometry());
+  const std::int64_t nz = out.dims()[2], step = std::max<std::int64_t>(1, engine.slabSlices());
+  ProgressCounter progress("rasterize", double(nz));
+  for (std::int64_t z0 = 0; z0 < nz; z0 += step) {
+    const std::int64_t z1 = std::min(nz, z0 + step);
+    engine.rasterizeSlab(z0, z1, out.data() + z0 * out.geometry().sliceVoxels());
+    progress.advance(double(z1 - z0));
+  }
+  progress.finish();
+  return out;
+}
+
 void LabelGridSlices::readSlices(std::int64_t k0, std::int64_t count, Label* out) {
   const std::int64_t slice = grid_.geometry().sliceVoxels();
   std::copy(grid_.data() + k0 * slice, grid_.data() + (k0 + count) * slice, out);

@@ -136,6 +136,9 @@ public:
   virtual void rasterizeSlab(std::int64_t z0, std::int64_t z1, Label* out) = 0;
 };
 
+// The whole of G' from `engine`, slab by slab (reports "rasterize" progress).
+LabelGrid rasterizeAllSlabs(SlabRasterizer& engine);
+
 // A GridSliceReader over an in-memory grid (which must outlive it).
 class LabelGridSlices : public GridSliceReader {
 public:

@@ -1,7 +1,6 @@
 #include "gpu/kernels/rasterize.h"
 
 #include "geometry/error.h"
-#include "geometry/progress.h"
 #include "shaders/shared/interface.h"
 
 #include <algorithm>
@@ -119,16 +118,7 @@ std::int64_t RasterizeKernel::slabSlices() const {
 
 LabelGrid RasterizeKernel::rasterize(const std::vector<Eigen::Vector3d>& deformed) {
   setDeformedPositions(deformed);
-  LabelGrid out(plan_->output());
-  const std::int64_t nz = out.dims()[2], step = slabSlices();
-  ProgressCounter progress("rasterize", double(nz));
-  for (std::int64_t z0 = 0; z0 < nz; z0 += step) {
-    const std::int64_t z1 = std::min(nz, z0 + step);
-    rasterizeSlab(z0, z1, out.data() + z0 * out.geometry().sliceVoxels());
-    progress.advance(double(z1 - z0));
-  }
-  progress.finish();
-  return out;
+  return rasterizeAllSlabs(*this);
 }
 
 Binding RasterizeKernel::sourcePart(int part) const {

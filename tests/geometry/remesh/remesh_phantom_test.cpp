@@ -38,6 +38,32 @@ LabelGrid cropAdultMale(std::int64_t x0, std::int64_t y0, std::int64_t z0, std::
   return crop;
 }
 
+// The checks of the larger cases: the output's topology equals the grid's
+// (the first 20 differences listed), every tet has a positive volume, no
+// tet is inverted and the smallest dihedral angle is over 5 degrees.
+struct CheckedOutput {
+  TetQualitySummary quality;
+  double minVolume = 0.0;
+  std::size_t differences = 0;
+};
+CheckedOutput expectTopologyAndPositiveTets(const MeshTopology& input, const TetMesh& output) {
+  CheckedOutput r;
+  const MeshTopology outputTopology = computeMeshTopology(output);
+  const auto differences = compareTopology(input, outputTopology);
+  std::string listed;
+  for (std::size_t i = 0; i < differences.size() && i < 20; ++i) listed += differences[i] + "\n";
+  EXPECT_EQ(differences.size(), 0u) << listed;
+  EXPECT_EQ(outputTopology.labels.size(), input.labels.size());
+  r.differences = differences.size();
+  r.minVolume = std::numeric_limits<double>::infinity();
+  for (const Tet& t : output.tets) r.minVolume = std::min(r.minVolume, signedVolume(output.positions, t));
+  EXPECT_GT(r.minVolume, 0.0);
+  r.quality = summarizeTetQuality(output);
+  EXPECT_EQ(r.quality.inverted, 0u);
+  EXPECT_GT(r.quality.minDihedral, 5.0);
+  return r;
+}
+
 TEST(RemeshPhantom, AdultMaleCropKeepsEveryLabelAndJunction) {
   // The head: brain, skull, eyes, lenses, sinuses, teeth, skin... (30 labels).
   const LabelGrid grid = cropAdultMale(128, 54, 186, 32, 28, 10);
@@ -77,19 +103,7 @@ TEST(RemeshPhantom, AdultMaleTorsoKeepsEveryLabelAndJunction) {
   const TetMesh initial = tetrahedralizeVoxelsAdaptive(grid, adaptiveOptionsForTarget(grid.geometry(), l));
   RemeshOptions options;
   options.targetLength = l;
-  const TetMesh output = remeshTetMesh(initial, options);
-
-  const MeshTopology outputTopology = computeMeshTopology(output);
-  std::string differences;
-  for (const std::string& d : compareTopology(input, outputTopology)) differences += d + "\n";
-  EXPECT_EQ(differences, "");
-  EXPECT_EQ(outputTopology.labels.size(), input.labels.size());
-  double minVolume = std::numeric_limits<double>::infinity();
-  for (const Tet& t : output.tets) minVolume = std::min(minVolume, signedVolume(output.positions, t));
-  EXPECT_GT(minVolume, 0.0);
-  const TetQualitySummary q = summarizeTetQuality(output);
-  EXPECT_EQ(q.inverted, 0u);
-  EXPECT_GT(q.minDihedral, 5.0);
+  const TetQualitySummary q = expectTopologyAndPositiveTets(input, remeshTetMesh(initial, options)).quality;
   RecordProperty("labels", int(input.labels.size()));
   RecordProperty("junction_curve_sets", int(input.junctionCurves.size()));
   RecordProperty("junction_point_sets", int(input.junctionPoints.size()));
@@ -109,24 +123,12 @@ TEST(RemeshPhantom, WholeAdultMaleAtTwoVoxelsKeepsEveryLabelAndJunction) {
   RemeshOptions options;
   options.targetLength = l;
   options.iterations = 5;  // the low end of the 5-10 the schedule allows; 3 flip-smooth cycles
-  const TetMesh output = remeshTetMesh(initial, options);
-
-  const MeshTopology outputTopology = computeMeshTopology(output);
-  const auto differences = compareTopology(input, outputTopology);
-  std::string listed;
-  for (std::size_t i = 0; i < differences.size() && i < 20; ++i) listed += differences[i] + "\n";
-  EXPECT_EQ(differences.size(), 0u) << listed;
-  EXPECT_EQ(outputTopology.labels.size(), input.labels.size());
-  double minVolume = std::numeric_limits<double>::infinity();
-  for (const Tet& t : output.tets) minVolume = std::min(minVolume, signedVolume(output.positions, t));
-  EXPECT_GT(minVolume, 0.0);
-  const TetQualitySummary q = summarizeTetQuality(output);
-  EXPECT_EQ(q.inverted, 0u);
-  EXPECT_GT(q.minDihedral, 5.0);
+  const CheckedOutput r = expectTopologyAndPositiveTets(input, remeshTetMesh(initial, options));
+  const TetQualitySummary& q = r.quality;
   std::cout << "[ stats    ] whole AM, l = " << l << " mm: " << input.labels.size() << " labels, "
             << input.junctionCurves.size() << " 1-junction and " << input.junctionPoints.size()
             << " 0-junction label sets; " << q.tets << " tets, min dihedral " << q.minDihedral << " deg, " << q.under15
-            << " under 15 deg, smallest volume " << minVolume << " mm^3, " << differences.size()
+            << " under 15 deg, smallest volume " << r.minVolume << " mm^3, " << r.differences
             << " topology differences\n";
 }
 
