@@ -73,6 +73,24 @@ Eigen::Matrix3d restEdgeInverse(const std::vector<Eigen::Vector3d>& rest, const 
   return edgeMatrix(rest, t).inverse();
 }
 
+Eigen::Matrix3d polarRotation(const Eigen::Matrix3d& b) {
+  const double det = b.determinant();
+  if (det > 1e-12 * std::max(1.0, b.squaredNorm() * b.norm())) {
+    Eigen::Matrix3d x = b;
+    for (int iteration = 0; iteration < 30; ++iteration) {
+      const double g = std::cbrt(1.0 / std::abs(x.determinant()));
+      const Eigen::Matrix3d next = 0.5 * (g * x + x.inverse().transpose() / g);
+      const double change = (next - x).norm();
+      x = next;
+      if (change <= 1e-14 * std::sqrt(3.0)) return x;
+    }
+  }
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(b, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d u = svd.matrixU();
+  if ((u * svd.matrixV().transpose()).determinant() < 0) u.col(2) = -u.col(2);
+  return u * svd.matrixV().transpose();
+}
+
 Eigen::Matrix3d basisChange(const Eigen::Matrix3d& restEdgeInv, std::span<const Eigen::Vector3d> deformed, const Tet& t) {
   return edgeMatrix(deformed, t) * restEdgeInv;
 }

@@ -167,6 +167,11 @@ LabelVolumeCorrection preserveLabelVolumes(LabelGrid& posed, const LabelGrid& so
     return d;
   };
 
+  // Each label's deviation counts relative to its volume, so that a voxel
+  // moves from a large label on target to a small one short of it.
+  std::vector<double> scale(labelCount);
+  for (std::size_t l = 0; l < labelCount; ++l) scale[l] = 1.0 / std::max(goal[l], 1.0);
+
   LabelVolumeCorrection result;
   result.candidates = candidates;
   result.deviationBefore = deviation();
@@ -178,8 +183,8 @@ LabelVolumeCorrection preserveLabelVolumes(LabelGrid& posed, const LabelGrid& so
     for (const Move& m : moves) {
       if (labels[m.voxel] != m.from) continue;
       const double cf = double(counts[m.from]) - goal[m.from], ct = double(counts[m.to]) - goal[m.to];
-      const double gain = std::abs(cf) - std::abs(cf - 1.0) + std::abs(ct) - std::abs(ct + 1.0);
-      if (!(gain > 1e-9)) continue;
+      const double gain = (std::abs(cf) - std::abs(cf - 1.0)) * scale[m.from] + (std::abs(ct) - std::abs(ct + 1.0)) * scale[m.to];
+      if (!(gain > 1e-9 * (scale[m.from] + scale[m.to]))) continue;
       labels[m.voxel] = m.to;
       --counts[m.from];
       ++counts[m.to];

@@ -23,8 +23,11 @@
 //  - the candidate moves (voxel: current label a -> label b with w_b > 0)
 //    are sorted by w_a - w_b (the most ambiguous voxels first; voxel index
 //    and b break ties) and swept in that order; a move is made when it
-//    lowers sum_l |count_l - V'_l| and the voxel still has label a. A voxel
-//    changes at most once. Sweeps repeat until one makes no move.
+//    lowers sum_l |count_l - V'_l| / max(V'_l, 1) and the voxel still has
+//    label a. Relative deviations let a voxel go from a large label on its
+//    target to a small label short of it (one voxel is 0.1 % of a 1000-voxel
+//    organ, nothing to a muscle). A voxel changes at most once. Sweeps
+//    repeat until one makes no move.
 // So only voxels where the source has both labels within one voxel of p
 // change, and the result is deterministic (independent of thread count).
 

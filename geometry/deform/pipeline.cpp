@@ -257,6 +257,13 @@ std::vector<std::uint8_t> DeformationPipeline::acrossSeparation() const {
       }
   });
 
+  // The cut surface: the groups' interface inside the region, which the
+  // inset cage follows least well (its erosion leaves the interface in a
+  // shallow crease where Green coordinates blend both sides). Its vertices,
+  // on either side, are placed from their own side's tets.
+  for (const CutReport& cut : stats_.cuts)
+    for (const std::int32_t v : cut.splitVertices) out[std::size_t(v)] = 1;
+
   // Islands: inside vertices of a separated group joined (through edges of
   // their group's tets) to less than 5 % of the group's largest inside
   // region, e.g. fingertips inside the part of the cage around the thigh

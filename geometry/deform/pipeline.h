@@ -22,10 +22,11 @@
 //    between each separated pair inside its region;
 //  - the frame deformer's precomputation (Green coordinates, ARAP and
 //    propagation factorizations) once the pose gives the handles. With
-//    separations, TM vertices of a separated group that the inset cage
-//    would move with the other group (nearest cage vertex of that group,
-//    small inside islands, or "torn": most of their edges stretched past e
-//    in the full pose) are placed by the propagation from their own group.
+//    separations, the TM vertices on a cut, and those of a separated group
+//    that the inset cage would move with the other group (nearest cage
+//    vertex of that group, small inside islands, or "torn": most of their
+//    edges stretched past e in the full pose), are placed by the
+//    propagation from their own group's tets.
 //
 // An identity pose gives the rest positions bit for bit (FrameDeformer), so
 // rasterizing it reproduces the source voxel for voxel wherever the TM

@@ -298,6 +298,8 @@ void RigidityPropagation::propagate(std::span<Eigen::Vector3d> positions) {
     else
       entries = known.row(-1 - slot);
     tuBasis_[k] = Eigen::Map<const Eigen::Matrix3d>(entries.data());
+    // The smooth blend of the constraints, made rigid (see the header).
+    if (slot >= 0) tuBasis_[k] = polarRotation(tuBasis_[k]);
   }
 
   // Pinned representatives follow the affine map of their source tet.

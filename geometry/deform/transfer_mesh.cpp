@@ -282,11 +282,16 @@ CutReport cutTransferMesh(TetMesh& mesh, std::int32_t groupA, std::int32_t group
       const std::int32_t copy = std::int32_t(mesh.positions.size());
       mesh.positions.push_back(mesh.positions[v]);
       ++report.duplicatedVertices;
+      report.splitVertices.push_back(v);
+      report.splitVertices.push_back(copy);
       for (const std::int32_t b : members)
         for (std::int32_t& x : mesh.tets[btets[b]])
           if (x == v) x = copy;
     }
   }
+
+  std::sort(report.splitVertices.begin(), report.splitVertices.end());
+  report.splitVertices.erase(std::unique(report.splitVertices.begin(), report.splitVertices.end()), report.splitVertices.end());
 
   // Faces opened besides the cut faces: originally shared, now not.
   std::size_t opened = 0;

@@ -12,6 +12,7 @@
 
 #include <Eigen/Geometry>
 #include <optional>
+#include <vector>
 
 namespace vox {
 
@@ -50,6 +51,8 @@ struct CutReport {
   std::size_t duplicatedVertices = 0;  // vertices added
   std::size_t openedRimFaces = 0;      // other faces opened where the cut meets the region's rim
   std::size_t contactVertices = 0;     // vertices where the groups meet without a shared face, split too
+  // The vertices on either side of the cut: each split vertex and its copies, ascending.
+  std::vector<std::int32_t> splitVertices;
 };
 
 // Cuts `mesh` between tets of groupA and groupB (thesis 4.2.2): every face

@@ -8,6 +8,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <numbers>
 #include <set>
 
 namespace vox {
@@ -136,6 +138,59 @@ TEST(Propagation, BentBarOutsideDistortionBoundedByInside) {
     if (bar.positions[std::size_t(t[0])].x() > 28.0) farAngle = std::max(farAngle, std::atan2(basis[k](1, 0), basis[k](0, 0)));
   }
   EXPECT_GT(farAngle, 0.7 * 20.0 / rho);
+}
+
+// The two ends of a bar inside, one fixed, the other turned 45 degrees about
+// the bar's axis: the outside middle twists. Its transforms are rotations
+// (a linear blend of the ends' would not be: half-way, (R + I) / 2 is a
+// rotation by 22.5 degrees scaled by 0.92 across the axis), and no tet
+// loses more than a fifth of its volume.
+TEST(Propagation, TwistBetweenTwoRotationsPropagatesRotations) {
+  const TetMesh bar = block(30, 6, 6);
+  const Eigen::Vector3d axisPoint(0, 2.5, 2.5);
+  const Eigen::Matrix3d r = Eigen::AngleAxisd(std::numbers::pi / 4, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  const auto inside = insideWhere(bar, [](const Eigen::Vector3d& p) { return p.x() < 6.0 || p.x() > 22.0; });
+  std::vector<Eigen::Vector3d> positions(bar.vertexCount(), Eigen::Vector3d::Zero());
+  for (std::size_t v = 0; v < bar.vertexCount(); ++v)
+    if (inside[v]) positions[v] = bar.positions[v].x() < 6.0 ? bar.positions[v] : axisPoint + r * (bar.positions[v] - axisPoint);
+  RigidityPropagation propagation;
+  propagation.precompute(bar, inside);
+  propagation.propagate(positions);
+  for (const Eigen::Matrix3d& b : propagation.unknownTetBasis()) {
+    EXPECT_LT((b.transpose() * b - Eigen::Matrix3d::Identity()).norm(), 1e-9);
+    EXPECT_NEAR(b.determinant(), 1.0, 1e-9);
+  }
+  double restVolume = 0, volume = 0, smallest = std::numeric_limits<double>::infinity();
+  for (const std::int32_t t : propagation.unknownTets()) {
+    const Tet& tet = bar.tets[std::size_t(t)];
+    const double before = signedVolume(bar.positions, tet), after = signedVolume(positions, tet);
+    restVolume += before;
+    volume += after;
+    smallest = std::min(smallest, after / before);
+  }
+  RecordProperty("outside_volume_ratio", sci(volume / restVolume));
+  RecordProperty("smallest_tet_volume_ratio", sci(smallest));
+  EXPECT_NEAR(volume / restVolume, 1.0, 0.01);
+  EXPECT_GT(smallest, 0.8);
+}
+
+TEST(DeformationMetrics, PolarRotation) {
+  EXPECT_EQ(polarRotation(Eigen::Matrix3d::Identity()), Eigen::Matrix3d::Identity());
+  const Eigen::Matrix3d r = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, -2, 3).normalized()).toRotationMatrix();
+  EXPECT_LT((polarRotation(r) - r).norm(), 1e-14);
+  // Half-way between the identity and a rotation: the half rotation.
+  const Eigen::Matrix3d half = Eigen::AngleAxisd(0.35, Eigen::Vector3d(1, -2, 3).normalized()).toRotationMatrix();
+  EXPECT_LT((polarRotation(0.5 * (r + Eigen::Matrix3d::Identity())) - half).norm(), 1e-12);
+  // B = R S with S symmetric positive definite gives R back.
+  Eigen::Matrix3d s;
+  s << 1.3, 0.2, -0.1, 0.2, 0.8, 0.3, -0.1, 0.3, 1.1;
+  EXPECT_LT((polarRotation(r * s) - r).norm(), 1e-12);
+  // A reflection or a degenerate matrix still gives a rotation.
+  for (const Eigen::Matrix3d& b : {Eigen::Matrix3d(Eigen::Vector3d(1, 1, -1).asDiagonal()), Eigen::Matrix3d(Eigen::Vector3d(2, 1, 0).asDiagonal())}) {
+    const Eigen::Matrix3d q = polarRotation(b);
+    EXPECT_LT((q.transpose() * q - Eigen::Matrix3d::Identity()).norm(), 1e-12);
+    EXPECT_NEAR(q.determinant(), 1.0, 1e-12);
+  }
 }
 
 TEST(Propagation, DetachedComponentFollowsItsNearestConstrainedTet) {

@@ -167,6 +167,22 @@ TEST(TransferMesh, CutOpensTheInterfaceInsideTheRegionOnly) {
   for (std::size_t t = 0; t < mesh.tetCount(); ++t) EXPECT_DOUBLE_EQ(signedVolume(mesh.positions, mesh.tets[t]), volumes[t]);
   EXPECT_EQ(sharedFaces(mesh, 2, 1, region), 0u);
   EXPECT_EQ(sharedFaces(mesh, 1, 2, region), 0u);
+  // splitVertices: every copy, and each original it copies (same position).
+  ASSERT_TRUE(std::is_sorted(r.splitVertices.begin(), r.splitVertices.end()));
+  std::size_t copies = 0, originals = 0;
+  for (const std::int32_t v : r.splitVertices) {
+    if (std::size_t(v) >= vertices) {
+      ++copies;
+      continue;
+    }
+    ++originals;
+    bool copied = false;
+    for (std::size_t c = vertices; c < mesh.vertexCount(); ++c) copied = copied || mesh.positions[c] == mesh.positions[std::size_t(v)];
+    EXPECT_TRUE(copied) << v;
+  }
+  EXPECT_EQ(copies, r.duplicatedVertices);
+  EXPECT_GT(originals, 0u);
+  EXPECT_LE(originals, copies);
   // Outside the region (away from its rim) the groups stay glued.
   EXPECT_EQ(sharedFaces(mesh, 2, 1, std::nullopt) + r.cutFaces + r.openedRimFaces, before);
   EXPECT_GT(sharedFaces(mesh, 2, 1, std::nullopt), 0u);
