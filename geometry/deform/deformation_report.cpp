@@ -145,6 +145,17 @@ void describePipeline(DeformationReport& report, const DeformationPipeline& pipe
   const auto& deformed = pipeline.deformedTransferMesh();
   report.distortion = distortionHistograms(tm, deformed);
   report.outlierDistortion = outlierEdgeDistortion(tm, deformed, pipeline.transferMeshInside());
+  report.tmInverted = 0;
+  double inverted = 0.0, total = 0.0;
+  for (const Tet& t : tm.tets) {
+    const double rest = signedVolume(tm.positions, t);
+    total += rest;
+    if (!(signedVolume(deformed, t) > 0.0)) {
+      ++report.tmInverted;
+      inverted += rest;
+    }
+  }
+  report.tmInvertedVolumeFraction = total > 0.0 ? inverted / total : 0.0;
 }
 
 std::string deformationReportJson(const DeformationReport& r) {
@@ -191,6 +202,8 @@ std::string deformationReportJson(const DeformationReport& r) {
                            {"vertices_inside_cage", r.tmInside},
                            {"vertices_outside_cage", r.tmOutside},
                            {"uncovered_foreground_voxels", r.uncoveredVoxels},
+                           {"tets_inverted_by_deformation", r.tmInverted},
+                           {"inverted_rest_volume_fraction", r.tmInvertedVolumeFraction},
                            {"cuts", cuts}};
   root["outliers"] = {{"transfer_mesh_vertices_outside_cage", r.tmOutside},
                       {"foreground_voxels_outside_cage", r.foregroundOutsideCage},
@@ -278,7 +291,8 @@ std::string deformationSummary(const DeformationReport& r) {
   s << "\n  handles:";
   for (const auto& [name, vertices] : r.selections) s << " " << name << " " << vertices << ";";
   s << "\n";
-  s << "  outliers: " << r.tmOutside << " TM vertices and " << r.foregroundOutsideCage << " foreground voxels outside the cage\n";
+  s << "  outliers: " << r.tmOutside << " TM vertices and " << r.foregroundOutsideCage << " foreground voxels outside the cage; "
+    << r.tmInverted << " TM tets inverted by the deformation\n";
   if (!r.refinement.steps.empty()) {
     s << "  refinement (" << r.refinement.stopReason << "):";
     for (const RefinementStep& st : r.refinement.steps)

@@ -85,6 +85,10 @@ struct DeformationReport {
   std::int64_t foregroundOutsideCage = 0;  // working-grid voxels
   std::size_t envelopeVertices = 0, envelopeFaces = 0, envelopeOutside = 0;
   std::size_t tmVertices = 0, tmTets = 0, tmInside = 0, tmOutside = 0;
+  // Deformed TM tets with volume <= 0 (the map folds there: output voxels in
+  // the overlap take the tie rule's tet), and their share of the rest volume.
+  std::size_t tmInverted = 0;
+  double tmInvertedVolumeFraction = 0.0;
   std::int64_t uncoveredVoxels = 0;  // working-grid foreground voxels in no tet
   std::vector<CutReport> cuts;
   RefinementResult refinement;

@@ -105,6 +105,9 @@ TEST(DeformCommand, PosesTheArmAndWritesTheReport) {
   EXPECT_EQ(j["cage"]["valid"], true);
   EXPECT_GT(j["selections"][1]["cage_vertices"].get<int>(), 0);
   EXPECT_EQ(j["transfer_mesh"]["cuts"].size(), 1u);
+  // The arm swings clear of the cut trunk: no transfer-mesh tet folds.
+  EXPECT_EQ(j["transfer_mesh"]["tets_inverted_by_deformation"], 0);
+  EXPECT_EQ(j["transfer_mesh"]["inverted_rest_volume_fraction"], 0.0);
   EXPECT_LT(std::abs(j["whole_body"]["volume_change_pct"].get<double>()), 10.0);
 }
 

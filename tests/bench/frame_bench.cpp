@@ -34,6 +34,8 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
+#include <utility>
 #include <memory>
 #include <string>
 
@@ -179,6 +181,7 @@ void BM_FrameUpdate(benchmark::State& state) {
   const FrameDeformerStats& st = deformer.stats();
   state.counters["arap_ms"] = sum.arap / n;
   state.counters["gc_envelope_ms"] = sum.greenEnvelope / n;
+  state.counters["propagation_ms"] = sum.propagation / n;
   state.counters["gc_tm_ms"] = sum.greenTransferMesh / n;
   state.counters["propagation_ms"] = sum.propagation / n;
   state.counters["envelope_outside_ms"] = sum.envelopeOutside / n;
@@ -211,16 +214,21 @@ BENCHMARK(BM_FrameUpdate)
 
 // The same update on what `voxmorph deform` builds for the adult male:
 // the automatic cage (300 vertices), the envelope, the CGAL transfer mesh,
-// and the head-turn pose of assets/poses, applied by a fraction oscillating
-// from frame to frame. Arguments: ARAP iterations, precision.
+// and a pose of assets/poses applied by a fraction oscillating from frame to
+// frame: the head turn (one TM vertex outside the cage) or the arm raise
+// (inset cage, cut TM, thousands of vertices placed by the propagation).
+// Arguments: ARAP iterations, precision, pose (0 head, 1 arm).
 void BM_FrameUpdatePipeline(benchmark::State& state) {
-  static std::map<int, std::unique_ptr<DeformationPipeline>> pipelines;
+  static std::map<std::pair<int, int>, std::unique_ptr<DeformationPipeline>> pipelines;
   const auto precision = GreenPrecision(state.range(1));
-  std::unique_ptr<DeformationPipeline>& pipeline = pipelines[int(precision)];
+  const bool arm = state.range(2) == 1;
+  std::unique_ptr<DeformationPipeline>& pipeline = pipelines[{int(precision), int(arm)}];
+  static const OrganTable organs = OrganTable::read(std::string(VOX_ASSETS_DIR) + "/icrp110_am_organs.dat");
   if (!pipeline) {
     const LabelGrid grid = readGrid(std::string(VOX_ASSETS_DIR) + "/icrp110_am.nii.gz");
-    const std::string path = std::string(VOX_ASSETS_DIR) + "/poses/am_head_turned_20.json";
-    PipelineOptions options = poseOptions(readPose(path), path, std::nullopt);
+    const std::string path =
+        std::string(VOX_ASSETS_DIR) + (arm ? "/poses/am_right_arm_raised_45.json" : "/poses/am_head_turned_20.json");
+    PipelineOptions options = poseOptions(readPose(path), path, arm ? std::optional<OrganTable>(organs) : std::nullopt);
     options.frame.precision = precision;
     pipeline = std::make_unique<DeformationPipeline>(grid, options);
   }
@@ -236,6 +244,7 @@ void BM_FrameUpdatePipeline(benchmark::State& state) {
     sum.arap += f.arap;
     sum.greenTransferMesh += f.greenTransferMesh;
     sum.greenEnvelope += f.greenEnvelope;
+    sum.propagation += f.propagation;
     sum.total += f.total;
     fastest = std::min(fastest, f.total);
   }
@@ -244,6 +253,7 @@ void BM_FrameUpdatePipeline(benchmark::State& state) {
   state.counters["arap_ms"] = sum.arap / n;
   state.counters["gc_tm_ms"] = sum.greenTransferMesh / n;
   state.counters["gc_envelope_ms"] = sum.greenEnvelope / n;
+  state.counters["propagation_ms"] = sum.propagation / n;
   state.counters["total_ms"] = sum.total / n;
   state.counters["total_min_ms"] = fastest;
   state.counters["cage_vertices"] = double(pipeline->cage().vertexCount());
@@ -251,10 +261,13 @@ void BM_FrameUpdatePipeline(benchmark::State& state) {
   state.counters["tm_vertices"] = double(pipeline->transferMesh().vertexCount());
   state.counters["tm_out"] = double(st.transferMeshOutside);
   const char* names[] = {"double", "float", "half"};
-  state.SetLabel(std::string(names[state.range(1)]) + " coordinates, " + SparseCholesky::backendName());
+  state.SetLabel(std::string(arm ? "arm pose, " : "head pose, ") + names[state.range(1)] + " coordinates, " +
+                 SparseCholesky::backendName());
 }
 BENCHMARK(BM_FrameUpdatePipeline)
-    ->ArgsProduct({{1, 5, 10}, {1, 2}})
+    ->ArgsProduct({{1, 5, 10}, {1, 2}, {0}})
+    ->Args({10, 2, 1})
+    ->Args({10, 1, 1})
     ->Unit(benchmark::kMillisecond)
     ->MinTime(2.0)
     ->UseRealTime();
