@@ -29,9 +29,9 @@ Eigen::Matrix3d basisChange(const Eigen::Matrix3d& restEdgeInv, std::span<const 
 // The rotation factor R of the polar decomposition B = R S (S symmetric
 // positive semi-definite): the rotation nearest to B in the Frobenius norm.
 // Scaled Newton iteration (X <- (g X + X^-T / g) / 2, g = |det X|^-1/3),
-// which returns a rotation unchanged (to rounding; the identity exactly); an SVD, with the reflection removed
-// through the smallest singular value, when det B <= 0 or Newton does not
-// settle. Deterministic.
+// which returns a rotation unchanged (to rounding; the identity exactly);
+// an SVD, with the reflection removed through the smallest singular value,
+// when det B <= 0 or Newton does not settle. Deterministic.
 Eigen::Matrix3d polarRotation(const Eigen::Matrix3d& b);
 
 // B_t of every tet: #T matrices. deformed: #V positions. Throws

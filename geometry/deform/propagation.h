@@ -14,16 +14,16 @@
 // factorization, 9 right-hand sides). With the constraints eliminated the
 // system is square with a zero-residual solution, which is computed from the
 // equivalent symmetric form sum_n |t||n| (B_t - B_n) = 0 (see the .cpp).
-// Each solved B_t is then replaced by its polar rotation (deformation_
-// metrics.h): the transforms are blended linearly, and a linear blend of
-// rotations shrinks (half-way between a 45 degree rotation and the
+// Each solved B_t is then replaced by its polar rotation
+// (deformation_metrics.h): the transforms are blended linearly, and a linear
+// blend of rotations shrinks (half-way between a 45 degree rotation and the
 // identity, (R + I)/2 scales the plane of the rotation by cos 22.5 degrees:
 // -15 % volume), while the outside parts should move rigidly. This is the
 // local step of as-rigid-as-possible; step 2 is its global step. On the AM
-// arm pose (assets/poses, no refinement) it keeps the upper humerus' deformed volume within 0.1 % (the
-// linear blend: -0.7 %) and lowers the outside edges' 95th-percentile
-// length distortion from 0.038 to 0.030. A rigid or identity motion of the
-// inside is unchanged by it.
+// arm pose (assets/poses, no refinement) it keeps the upper humerus'
+// deformed volume within 0.1 % (the linear blend: -0.7 %) and lowers the
+// outside edges' 95th-percentile length distortion from 0.038 to 0.030. A
+// rigid or identity motion of the inside is unchanged by it.
 // Step 2 (eq. 4.4): unknowns the outside vertex positions. Rows
 //   sqrt(W_e) (v_i - v_j) = sum_{t in T1(e)} |t| B_t (v_i^0 - v_j^0) / sqrt(W_e),
 // W_e = sum_{t in T1(e)} |t|, for every edge with an outside end; the inside
