@@ -7,7 +7,7 @@
 // transfer-mesh vertices outside the cage, placed by the rigidity propagation, keep a median edge-length
 // distortion within twice that of the inside vertices around them (the
 // mean is not bounded: the shoulder joint stretches with the arm; the test
-// prints it). Ray casting a pose through its transfer
+// prints it), and every vertex on the cut is among them. Ray casting a pose through its transfer
 // mesh shows what ray casting the rasterized posed grid through an identity
 // mesh shows, except at silhouette ties, and matches golden images.
 
@@ -30,6 +30,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <map>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
@@ -116,6 +118,20 @@ void expectPropagationDistortionBounded(const test::PosedPhantom& p) {
   // edge around it. The mean and the 95th percentile are larger (the shoulder
   // joint the outside vertices form; printed above).
   EXPECT_LE(d.outside.median, 2.0 * d.insideNearby.median);
+  // The vertices on the cut (a rest position two TM vertices share) are
+  // placed from their own side's tets, never by Green coordinates.
+  std::map<std::array<double, 3>, std::vector<std::size_t>> at;
+  for (std::size_t v = 0; v < p.rest.vertexCount(); ++v)
+    at[{p.rest.positions[v].x(), p.rest.positions[v].y(), p.rest.positions[v].z()}].push_back(v);
+  std::size_t onCut = 0, byGreen = 0;
+  for (const auto& [position, vertices] : at)
+    if (vertices.size() > 1)
+      for (const std::size_t v : vertices) {
+        ++onCut;
+        byGreen += p.inside[v];
+      }
+  EXPECT_GT(onCut, 0u);
+  EXPECT_EQ(byGreen, 0u) << "of " << onCut << " vertices on the cut";
 }
 
 // Ray casts the source through the posed TM, and the CPU rasterization of
