@@ -60,6 +60,19 @@ FaceKey sortedKey(Tri f) {
 }
 }  // namespace
 
+VertexTets vertexTets(std::span<const Tet> tets, std::size_t vertexCount) {
+  VertexTets out;
+  out.start.assign(vertexCount + 1, 0);
+  for (const Tet& t : tets)
+    for (const std::int32_t v : t) ++out.start[std::size_t(v) + 1];
+  for (std::size_t v = 0; v < vertexCount; ++v) out.start[v + 1] += out.start[v];
+  out.tets.resize(std::size_t(out.start.back()));
+  std::vector<std::int64_t> fill(out.start.begin(), out.start.end() - 1);
+  for (std::size_t t = 0; t < tets.size(); ++t)
+    for (const std::int32_t v : tets[t]) out.tets[std::size_t(fill[std::size_t(v)]++)] = std::int32_t(t);
+  return out;
+}
+
 std::vector<std::array<std::int32_t, 4>> faceNeighbors(const TetMesh& mesh, const std::string& source) {
   std::vector<std::array<std::int32_t, 4>> nb(mesh.tets.size(), {-1, -1, -1, -1});
   std::unordered_map<FaceKey, std::int64_t, FaceKeyHash> open;  // face -> 4*tet + k

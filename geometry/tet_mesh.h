@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -44,6 +45,17 @@ Tri tetFace(const Tet& t, int k);
 // opposite vertex k), or -1 on the boundary. Faces shared by more than two
 // tets are a topology error and throw InputError(source, ...).
 std::vector<std::array<std::int32_t, 4>> faceNeighbors(const TetMesh& mesh, const std::string& source = "mesh");
+
+// Tets around each vertex (compressed rows): the tets holding vertex v are
+// tets[start[v] .. start[v + 1]), in increasing order.
+struct VertexTets {
+  std::vector<std::int64_t> start;  // #V + 1
+  std::vector<std::int32_t> tets;
+  std::span<const std::int32_t> of(std::int32_t v) const {
+    return {tets.data() + start[std::size_t(v)], tets.data() + start[std::size_t(v) + 1]};
+  }
+};
+VertexTets vertexTets(std::span<const Tet> tets, std::size_t vertexCount);
 
 // Swap two vertices of every negatively oriented tet. Returns how many flipped.
 std::size_t orientPositively(TetMesh& mesh);

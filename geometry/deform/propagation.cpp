@@ -106,17 +106,8 @@ void RigidityPropagation::precompute(const TetMesh& rest, std::span<const std::u
   auto centroidOfTet = [&](std::int32_t t) { return tetCentroid(rest_, tets_[std::size_t(t)]); };
   const auto neighbors = faceNeighbors(rest, source);
 
-  // Tets around each vertex (CSR), for the neighbourhoods of unconstrained groups.
-  std::vector<std::int32_t> tetsAtStart(vertexCount_ + 1, 0), tetsAt;
-  for (const Tet& t : tets_)
-    for (std::int32_t v : t) ++tetsAtStart[std::size_t(v) + 1];
-  for (std::size_t v = 0; v < vertexCount_; ++v) tetsAtStart[v + 1] += tetsAtStart[v];
-  tetsAt.resize(std::size_t(tetsAtStart.back()));
-  {
-    std::vector<std::int32_t> fill(tetsAtStart.begin(), tetsAtStart.end() - 1);
-    for (std::size_t t = 0; t < nt; ++t)
-      for (std::int32_t v : tets_[t]) tetsAt[std::size_t(fill[std::size_t(v)]++)] = std::int32_t(t);
-  }
+  // Tets around each vertex, for the neighbourhoods of unconstrained groups.
+  const VertexTets around = vertexTets(tets_, vertexCount_);
 
   // ---- Step 1 (eq. 4.3): unknown B_t of T_u tets.
   std::vector<std::int32_t> tuIndex(nt, -1);
@@ -154,8 +145,8 @@ void RigidityPropagation::precompute(const TetMesh& rest, std::span<const std::u
         std::vector<std::int32_t> adjacent;
         for (std::int32_t t : group)
           for (std::int32_t v : tets_[std::size_t(t)])
-            for (std::int32_t k = tetsAtStart[std::size_t(v)]; k < tetsAtStart[std::size_t(v) + 1]; ++k)
-              if (inTc[std::size_t(tetsAt[std::size_t(k)])]) adjacent.push_back(tetsAt[std::size_t(k)]);
+            for (const std::int32_t n : around.of(v))
+              if (inTc[std::size_t(n)]) adjacent.push_back(n);
         const std::int32_t sourceTet =
             nearestOf(adjacent.empty() ? tcTets : adjacent, centroidOfTet(representative), centroidOfTet);
         tuSlot_[std::size_t(tuIndex[std::size_t(representative)])] = -1 - knownSlot(representative, sourceTet);

@@ -8,7 +8,6 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 #include <unordered_map>
 
 namespace vox {
@@ -199,17 +198,7 @@ CutReport cutTransferMesh(TetMesh& mesh, std::int32_t groupA, std::int32_t group
     }
   }
 
-  // Tets around each vertex (CSR).
-  std::vector<std::int32_t> start(mesh.vertexCount() + 1, 0), around;
-  for (const Tet& t : mesh.tets)
-    for (const std::int32_t v : t) ++start[v + 1];
-  std::partial_sum(start.begin(), start.end(), start.begin());
-  around.resize(std::size_t(start.back()));
-  {
-    std::vector<std::int32_t> fill(start.begin(), start.end() - 1);
-    for (std::size_t t = 0; t < nt; ++t)
-      for (const std::int32_t v : mesh.tets[t]) around[std::size_t(fill[v]++)] = std::int32_t(t);
-  }
+  const VertexTets around = vertexTets(mesh.tets, mesh.vertexCount());
 
   // Contacts: vertices in the region where groupA and groupB tets meet
   // without a cut face (through an edge or the vertex alone). Left shared,
@@ -219,9 +208,9 @@ CutReport cutTransferMesh(TetMesh& mesh, std::int32_t groupA, std::int32_t group
   for (std::int32_t v = 0; v < std::int32_t(mesh.vertexCount()); ++v) {
     if (vertexOnCut[v] || (region && !region->contains(mesh.positions[v]))) continue;
     bool a = false, b = false;
-    for (std::int32_t s = start[v]; s < start[v + 1]; ++s) {
-      a = a || mesh.labels[around[s]] == groupA;
-      b = b || mesh.labels[around[s]] == groupB;
+    for (const std::int32_t t : around.of(v)) {
+      a = a || mesh.labels[t] == groupA;
+      b = b || mesh.labels[t] == groupB;
     }
     if (a && b) {
       contact[v] = 1;
@@ -241,10 +230,10 @@ CutReport cutTransferMesh(TetMesh& mesh, std::int32_t groupA, std::int32_t group
     // containing v (the faces opposite the tets' other vertices).
     local.clear();
     std::vector<std::int32_t> btets;
-    for (std::int32_t s = start[v]; s < start[v + 1]; ++s)
-      if (mesh.labels[around[s]] == groupB) {
-        local[around[s]] = std::int32_t(btets.size());
-        btets.push_back(around[s]);
+    for (const std::int32_t t : around.of(v))
+      if (mesh.labels[t] == groupB) {
+        local[t] = std::int32_t(btets.size());
+        btets.push_back(t);
       }
     fanOf.assign(btets.size(), -1);
     std::vector<std::int32_t> stack;

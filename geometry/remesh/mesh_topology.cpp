@@ -99,16 +99,9 @@ MeshTopology computeMeshTopology(const TetMesh& input) {
   }
 
   // Vertex -> tets, and which vertices/edges lie on the domain boundary.
-  std::vector<std::int64_t> start(std::size_t(nv) + 1, 0);
-  for (const Tet& q : tets)
-    for (std::int32_t v : q) ++start[std::size_t(v) + 1];
-  for (std::size_t v = 0; v < std::size_t(nv); ++v) start[v + 1] += start[v];
-  std::vector<std::int32_t> incident(std::size_t(start.back()));
-  {
-    std::vector<std::int64_t> fill(start.begin(), start.end() - 1);
-    for (std::size_t t = 0; t < nt; ++t)
-      for (std::int32_t v : tets[t]) incident[std::size_t(fill[std::size_t(v)]++)] = std::int32_t(t);
-  }
+  const VertexTets around = vertexTets(tets, std::size_t(nv));
+  const std::vector<std::int64_t>& start = around.start;
+  const std::vector<std::int32_t>& incident = around.tets;
 
   std::vector<std::pair<std::vector<std::int32_t>, std::pair<std::int64_t, std::int64_t>>> featureEdges;
   std::vector<std::int32_t> nbr;
