@@ -30,17 +30,13 @@ ScalarGrid interpolateVertexField(const TetMesh& mesh, const std::vector<double>
 
   const std::vector<LatticeTet> tets = latticeTets(target, mesh.positions, mesh.tets);
   ScalarGrid out(target, options.fill);
-  const std::int64_t nx = target.dims[0], ny = target.dims[1], nz = target.dims[2];
+  const std::int64_t nx = target.dims[0], ny = target.dims[1];
   const std::int64_t slabSlices = std::max<std::int64_t>(1, kSlabPoints / target.sliceVoxels());
-  std::vector<std::uint32_t> state;
-  for (std::int64_t z0 = 0; z0 < nz; z0 += slabSlices) {
-    const std::int64_t z1 = std::min(nz, z0 + slabSlices);
-    const SlabTets slab = slabTets(tets, std::int32_t(z0), std::int32_t(z1));
-    state.resize(std::size_t((z1 - z0) * target.sliceVoxels()));
-    locateLatticePoints(tets, slab, target, state.data(), options.threads);
-    parallelFor((z1 - z0) * ny, options.threads, [&](std::int64_t r) {
+  forEachLocatedSlab(tets, target, slabSlices, options.threads, [&](const SlabTets& slab, const std::uint32_t* state) {
+    const std::int64_t z0 = slab.z0;
+    parallelFor((slab.z1 - z0) * ny, options.threads, [&](std::int64_t r) {
       const std::int32_t y = std::int32_t(r % ny), z = std::int32_t(z0 + r / ny);
-      const std::uint32_t* in = state.data() + r * nx;
+      const std::uint32_t* in = state + r * nx;
       float* row = out.values.data() + (z0 * ny + r) * nx;
       for (std::int32_t x = 0; x < nx; ++x) {
         if (in[x] == kNoTet) continue;
@@ -52,7 +48,7 @@ ScalarGrid interpolateVertexField(const TetMesh& mesh, const std::vector<double>
         row[x] = float(v);
       }
     });
-  }
+  });
   return out;
 }
 

@@ -16,6 +16,7 @@ namespace {
 
 constexpr std::int64_t kSlabPoints = std::int64_t(1) << 23;
 
+// Slices per located slab of `lattice` (forEachLocatedSlab).
 std::int64_t slabSlicesFor(const GridGeometry& lattice) {
   return std::max<std::int64_t>(1, kSlabPoints / std::max<std::int64_t>(1, lattice.sliceVoxels()));
 }
@@ -73,18 +74,13 @@ std::vector<double> deformedLabelVolumes(const LabelGrid& source, const TetMesh&
   const GridGeometry& lattice = source.geometry();
   const std::vector<LatticeTet> tets = latticeTets(lattice, rest.positions, rest.tets);
   std::vector<double> volumes(std::size_t(source.maxLabel()) + 1, 0.0);
-  const std::int64_t nz = lattice.dims[2], slice = lattice.sliceVoxels();
-  const std::int64_t step = slabSlicesFor(lattice);
-  std::vector<std::uint32_t> state;
-  for (std::int64_t z0 = 0; z0 < nz; z0 += step) {
-    const std::int64_t z1 = std::min(nz, z0 + step);
-    const SlabTets slab = slabTets(tets, std::int32_t(z0), std::int32_t(z1));
-    state.resize(std::size_t((z1 - z0) * slice));
-    locateLatticePoints(tets, slab, lattice, state.data(), threads);
-    const Label* labels = source.data() + z0 * slice;
-    for (std::size_t i = 0; i < state.size(); ++i)
+  const std::int64_t slice = lattice.sliceVoxels();
+  forEachLocatedSlab(tets, lattice, slabSlicesFor(lattice), threads, [&](const SlabTets& slab, const std::uint32_t* state) {
+    const Label* labels = source.data() + slab.z0 * slice;
+    const std::int64_t points = (slab.z1 - slab.z0) * slice;
+    for (std::int64_t i = 0; i < points; ++i)
       if (state[i] != kNoTet) volumes[labels[i]] += jacobian[std::size_t(slab.tets[state[i]])];
-  }
+  });
   return volumes;
 }
 
@@ -98,18 +94,14 @@ LabelVolumeCorrection preserveLabelVolumes(LabelGrid& posed, const LabelGrid& so
     throw InputError("posed grid", "its geometry is not the output grid of this deformation");
 
   // Candidate moves, per output row so that the order is independent of the threads.
-  const std::int64_t nx = out.dims[0], ny = out.dims[1], nz = out.dims[2], slice = out.sliceVoxels();
+  // (The plan samples once per voxel: its lattice is the output grid.)
+  const std::int64_t nx = out.dims[0], ny = out.dims[1];
   std::vector<Move> moves;
   std::uint64_t candidates = 0;
-  std::vector<std::uint32_t> state;
   std::vector<std::vector<Move>> rowMoves;
   std::vector<std::uint64_t> rowCandidates;
-  const std::int64_t step = slabSlicesFor(out);
-  for (std::int64_t z0 = 0; z0 < nz; z0 += step) {
-    const std::int64_t z1 = std::min(nz, z0 + step);
-    const SlabTets slab = plan.slab(z0, z1);
-    state.resize(std::size_t((z1 - z0) * slice));
-    locateLatticePoints(plan.tets(), slab, plan.lattice(), state.data(), threads);
+  forEachLocatedSlab(plan.tets(), plan.lattice(), slabSlicesFor(out), threads, [&](const SlabTets& slab, const std::uint32_t* state) {
+    const std::int64_t z0 = slab.z0, z1 = slab.z1;
     rowMoves.assign(std::size_t((z1 - z0) * ny), {});
     rowCandidates.assign(std::size_t((z1 - z0) * ny), 0);
     parallelFor((z1 - z0) * ny, threads, [&](std::int64_t r) {
@@ -118,7 +110,7 @@ LabelVolumeCorrection preserveLabelVolumes(LabelGrid& posed, const LabelGrid& so
       std::array<Label, 8> labels;
       std::array<float, 8> weights;
       for (std::int32_t x = 0; x < nx; ++x) {
-        const std::uint32_t s = state[std::size_t(r * nx + x)];
+        const std::uint32_t s = state[r * nx + x];
         if (s == kNoTet) continue;
         const std::int32_t t = slab.tets[s];
         const Eigen::Vector4d lambda = plan.tets()[std::size_t(t)].barycentric(x, y, z);
@@ -141,7 +133,7 @@ LabelVolumeCorrection preserveLabelVolumes(LabelGrid& posed, const LabelGrid& so
       moves.insert(moves.end(), rowMoves[r].begin(), rowMoves[r].end());
       candidates += rowCandidates[r];
     }
-  }
+  });
   std::sort(moves.begin(), moves.end(), [](const Move& a, const Move& b) {
     if (a.cost != b.cost) return a.cost < b.cost;
     if (a.voxel != b.voxel) return a.voxel < b.voxel;

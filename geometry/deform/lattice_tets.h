@@ -126,4 +126,21 @@ inline constexpr std::uint32_t kNoTet = 0xFFFFFFFFu;
 void locateLatticePoints(const std::vector<LatticeTet>& tets, const SlabTets& slab, const GridGeometry& lattice,
                          std::uint32_t* state, int threads);
 
+// Every slice of `lattice`, in slabs of `slicesPerSlab` slices (at least 1),
+// bottom to top: each slab is binned (slabTets), its points located
+// (locateLatticePoints), then handed to body(slab, state).
+template <class Body>
+void forEachLocatedSlab(const std::vector<LatticeTet>& tets, const GridGeometry& lattice, std::int64_t slicesPerSlab,
+                        int threads, Body&& body) {
+  const std::int64_t nz = lattice.dims[2], step = slicesPerSlab > 1 ? slicesPerSlab : 1;
+  std::vector<std::uint32_t> state;
+  for (std::int64_t z0 = 0; z0 < nz; z0 += step) {
+    const std::int64_t z1 = z0 + step < nz ? z0 + step : nz;
+    const SlabTets slab = slabTets(tets, std::int32_t(z0), std::int32_t(z1));
+    state.resize(std::size_t((z1 - z0) * lattice.sliceVoxels()));
+    locateLatticePoints(tets, slab, lattice, state.data(), threads);
+    body(slab, state.data());
+  }
+}
+
 }  // namespace vox

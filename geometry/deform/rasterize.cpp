@@ -259,19 +259,17 @@ LabelGrid rasterizeDeformedGrid(const LabelGrid& source, const TetMesh& rest, co
                                 const RasterizeOptions& options) {
   const RasterizationPlan plan(source.geometry(), rest, deformed, options.samples);
   LabelGrid out(plan.output());
-  const std::int64_t nz = plan.output().dims[2];
+  // Slabs of whole output slices: `samples` lattice slices each.
+  const std::int64_t samples = plan.samples();
   const std::int64_t slabSlices = std::max<std::int64_t>(1, kSlabSamples / plan.samplesPerOutputSlice());
-  std::vector<std::uint32_t> state;
-  ProgressCounter progress("rasterize", double(nz));
-  for (std::int64_t z0 = 0; z0 < nz; z0 += slabSlices) {
-    const std::int64_t z1 = std::min(nz, z0 + slabSlices);
-    const SlabTets slab = plan.slab(z0, z1);
-    state.resize(std::size_t((z1 - z0) * plan.samplesPerOutputSlice()));
-    locateLatticePoints(plan.tets(), slab, plan.lattice(), state.data(), options.threads);
-    resolveSamples(plan, slab, source.data(), 0, source.dims()[2], state.data(), options.threads);
-    reduceSamples(plan, slab, state.data(), out.data() + z0 * plan.output().sliceVoxels(), options.threads);
-    progress.advance(double(z1 - z0));
-  }
+  ProgressCounter progress("rasterize", double(plan.output().dims[2]));
+  forEachLocatedSlab(plan.tets(), plan.lattice(), slabSlices * samples, options.threads,
+                     [&](const SlabTets& slab, std::uint32_t* state) {
+                       const std::int64_t z0 = slab.z0 / samples, z1 = slab.z1 / samples;
+                       resolveSamples(plan, slab, source.data(), 0, source.dims()[2], state, options.threads);
+                       reduceSamples(plan, slab, state, out.data() + z0 * plan.output().sliceVoxels(), options.threads);
+                       progress.advance(double(z1 - z0));
+                     });
   progress.finish();
   return out;
 }
