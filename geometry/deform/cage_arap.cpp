@@ -133,6 +133,17 @@ void CageArap::precompute(const TriMesh& restCage, std::span<const std::int32_t>
       freeIndex_[std::size_t(v)] = std::int32_t(freeVertices_.size());
       freeVertices_.push_back(v);
     }
+  // The global step reads R_i of the free vertices and of their neighbours
+  // only; a handle whose neighbours are all handles needs no rotation.
+  std::vector<std::uint8_t> needsRotation(std::size_t(nv), 0);
+  for (const std::int32_t v : freeVertices_) {
+    needsRotation[std::size_t(v)] = 1;
+    for (std::int32_t k = offsets_[std::size_t(v)]; k < offsets_[std::size_t(v) + 1]; ++k)
+      needsRotation[std::size_t(adjacency_[std::size_t(k)])] = 1;
+  }
+  rotationVertices_.clear();
+  for (std::int32_t v = 0; v < nv; ++v)
+    if (needsRotation[std::size_t(v)]) rotationVertices_.push_back(v);
   std::vector<std::int32_t> handleSlot(std::size_t(nv), -1);
   for (std::size_t k = 0; k < handles_.size(); ++k) handleSlot[std::size_t(handles_[k])] = std::int32_t(k);
 
@@ -170,7 +181,8 @@ void CageArap::resetWarmStart() {
 }
 
 void CageArap::fitRotations(std::span<const Eigen::Vector3d> positions) {
-  for (std::size_t i = 0; i < rest_.size(); ++i) {
+  for (const std::int32_t v : rotationVertices_) {
+    const auto i = std::size_t(v);
     Eigen::Matrix3d s = Eigen::Matrix3d::Zero();
     for (std::int32_t k = offsets_[i]; k < offsets_[i + 1]; ++k) {
       const auto j = std::size_t(adjacency_[std::size_t(k)]);

@@ -5,9 +5,11 @@
 // Energy: E = sum_i sum_{j in N(i)} w_ij |(v'_i - v'_j) - R_i (v_i - v_j)|^2
 // with cotangent weights w_ij = (cot alpha_ij + cot beta_ij) / 2 on the cage's
 // triangles. Local step: R_i from the SVD of the weighted edge covariance
-// (reflections removed). Global step (eq. 3.2): L v' = b with the handles
-// eliminated from the system (hard constraints), L factorized once per handle
-// set (SparseCholesky, CHOLMOD).
+// (reflections removed), for the free vertices and their neighbours only:
+// the global step reads no other R_i (a pose that holds most of the cage fits
+// a few dozen rotations, not one per vertex). Global step (eq. 3.2): L v' = b
+// with the handles eliminated from the system (hard constraints), L
+// factorized once per handle set (SparseCholesky, CHOLMOD).
 //
 // Negative cotangent weights. An edge whose two opposite angles sum to more
 // than pi gets a negative cotangent weight; QEM-simplified cages have many
@@ -69,6 +71,8 @@ public:
   double energy(std::span<const Eigen::Vector3d> positions) const;
 
 private:
+  // Local step: R_i fitted to `positions` for rotationVertices_ (the others are
+  // never read).
   void fitRotations(std::span<const Eigen::Vector3d> positions);
 
   std::vector<Eigen::Vector3d> rest_;
@@ -84,6 +88,7 @@ private:
   std::vector<std::int32_t> handles_;
   std::vector<std::int32_t> freeIndex_;  // #V: index among free vertices, or -1 for handles
   std::vector<std::int32_t> freeVertices_;
+  std::vector<std::int32_t> rotationVertices_;  // free vertices and their neighbours, increasing
   // L restricted to (free, handle) pairs: rows of the free block's right-hand
   // side that the handle positions feed: (free row, handle slot, weight).
   struct Coupling {

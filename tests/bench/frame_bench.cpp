@@ -183,7 +183,6 @@ void BM_FrameUpdate(benchmark::State& state) {
   state.counters["gc_envelope_ms"] = sum.greenEnvelope / n;
   state.counters["propagation_ms"] = sum.propagation / n;
   state.counters["gc_tm_ms"] = sum.greenTransferMesh / n;
-  state.counters["propagation_ms"] = sum.propagation / n;
   state.counters["envelope_outside_ms"] = sum.envelopeOutside / n;
   state.counters["total_ms"] = sum.total / n;
   // The fastest frame: what the machine does when nothing else competes for
