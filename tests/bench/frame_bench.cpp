@@ -34,10 +34,10 @@
 #include <cmath>
 #include <limits>
 #include <map>
-#include <optional>
-#include <utility>
 #include <memory>
+#include <optional>
 #include <string>
+#include <utility>
 
 namespace vox {
 namespace {

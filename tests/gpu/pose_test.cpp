@@ -4,12 +4,14 @@
 // body's volume within 3 % and every organ of 1000 voxels or more within
 // 10 % of its mass, and with the label-volume correction every label is
 // within a voxel or 1 % of its deformed volume; on the arm pose the
-// transfer-mesh vertices outside the cage, placed by the rigidity propagation, keep a median edge-length
-// distortion within twice that of the inside vertices around them (the
-// mean is not bounded: the shoulder joint stretches with the arm; the test
-// prints it), and every vertex on the cut is among them. Ray casting a pose through its transfer
-// mesh shows what ray casting the rasterized posed grid through an identity
-// mesh shows, except at silhouette ties, and matches golden images.
+// transfer-mesh vertices outside the cage, placed by the rigidity
+// propagation, keep a median edge-length distortion within twice that of the
+// inside vertices around them (the mean is not bounded: the armpit, where
+// the cut ends below the shoulder, stretches with the arm; the test prints
+// it), and every vertex on the cut is among them. Ray casting a pose through
+// its transfer mesh shows what ray casting the rasterized posed grid through
+// an identity mesh shows, except at silhouette ties, and matches golden
+// images.
 
 #include "geometry/deform/deformation_report.h"
 #include "geometry/deform/label_volumes.h"
@@ -115,8 +117,9 @@ void expectPropagationDistortionBounded(const test::PosedPhantom& p) {
   ASSERT_GT(d.outside.edges, 0u);
   ASSERT_GT(d.insideNearby.edges, 0u);
   // The typical (median) outside edge stays within twice the typical inside
-  // edge around it. The mean and the 95th percentile are larger (the shoulder
-  // joint the outside vertices form; printed above).
+  // edge around it. The mean and the 95th percentile are larger (the armpit
+  // at the end of the cut, 50 mm below the shoulder's centre of rotation;
+  // printed above).
   EXPECT_LE(d.outside.median, 2.0 * d.insideNearby.median);
   // The vertices on the cut (a rest position two TM vertices share) are
   // placed from their own side's tets, never by Green coordinates.
