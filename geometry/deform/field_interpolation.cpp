@@ -10,10 +10,6 @@
 
 namespace vox {
 
-namespace {
-constexpr std::int64_t kSlabPoints = std::int64_t(1) << 24;
-}  // namespace
-
 void validateVertexField(const TetMesh& mesh, const std::vector<double>& values) {
   mesh.validate("field mesh");
   if (values.size() != mesh.positions.size())
@@ -31,7 +27,7 @@ ScalarGrid interpolateVertexField(const TetMesh& mesh, const std::vector<double>
   const std::vector<LatticeTet> tets = latticeTets(target, mesh.positions, mesh.tets);
   ScalarGrid out(target, options.fill);
   const std::int64_t nx = target.dims[0], ny = target.dims[1];
-  const std::int64_t slabSlices = std::max<std::int64_t>(1, kSlabPoints / target.sliceVoxels());
+  const std::int64_t slabSlices = slabSlicesHolding(kSlabPoints, target.sliceVoxels());
   forEachLocatedSlab(tets, target, slabSlices, options.threads, [&](const SlabTets& slab, const std::uint32_t* state) {
     const std::int64_t z0 = slab.z0;
     parallelFor((slab.z1 - z0) * ny, options.threads, [&](std::int64_t r) {

@@ -14,12 +14,9 @@ namespace vox {
 
 namespace {
 
-constexpr std::int64_t kSlabPoints = std::int64_t(1) << 23;
-
-// Slices per located slab of `lattice` (forEachLocatedSlab).
-std::int64_t slabSlicesFor(const GridGeometry& lattice) {
-  return std::max<std::int64_t>(1, kSlabPoints / std::max<std::int64_t>(1, lattice.sliceVoxels()));
-}
+// Slices per located slab of `lattice`: half the default slab, since the
+// correction keeps its candidate moves beside the point states.
+std::int64_t slabSlicesFor(const GridGeometry& lattice) { return slabSlicesHolding(kSlabPoints / 2, lattice.sliceVoxels()); }
 
 struct Move {
   std::int64_t voxel;

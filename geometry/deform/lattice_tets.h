@@ -28,6 +28,7 @@
 #include "geometry/tet_mesh.h"
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -125,6 +126,15 @@ inline constexpr std::uint32_t kNoTet = 0xFFFFFFFFu;
 // the slab's points, x fastest (nx * ny * (z1 - z0) values).
 void locateLatticePoints(const std::vector<LatticeTet>& tets, const SlabTets& slab, const GridGeometry& lattice,
                          std::uint32_t* state, int threads);
+
+// Lattice points a located slab holds by default (64 MiB of point states).
+inline constexpr std::int64_t kSlabPoints = std::int64_t(1) << 24;
+
+// Slices per slab when a slab may hold `points` points and a slice has
+// `pointsPerSlice` of them: at least one slice.
+inline std::int64_t slabSlicesHolding(std::int64_t points, std::int64_t pointsPerSlice) {
+  return std::max<std::int64_t>(1, points / std::max<std::int64_t>(1, pointsPerSlice));
+}
 
 // Every slice of `lattice`, in slabs of `slicesPerSlab` slices (at least 1),
 // bottom to top: each slab is binned (slabTets), its points located

@@ -15,8 +15,6 @@ namespace {
 // Widening of a tet's source slice range, in source voxels: the GPU maps
 // samples in float and may land a hair outside the tet's rest box.
 constexpr double kSourceRangeMargin = 1e-3;
-// Output slabs of the in-core reference hold at most this many samples.
-constexpr std::int64_t kSlabSamples = std::int64_t(1) << 24;
 
 void requireFinite(const std::vector<Eigen::Vector3d>& positions, const std::string& what) {
   for (std::size_t i = 0; i < positions.size(); ++i)
@@ -235,7 +233,7 @@ CpuSlabRasterizer::CpuSlabRasterizer(const RasterizationPlan& plan, GridSliceRea
     : plan_(plan), source_(source), limits_(limits), threads_(threads) {}
 
 std::int64_t CpuSlabRasterizer::slabSlices() const {
-  return std::max<std::int64_t>(1, limits_.slabSamples / plan_.samplesPerOutputSlice());
+  return slabSlicesHolding(limits_.slabSamples, plan_.samplesPerOutputSlice());
 }
 
 void CpuSlabRasterizer::rasterizeSlab(std::int64_t z0, std::int64_t z1, Label* out) {
@@ -261,7 +259,7 @@ LabelGrid rasterizeDeformedGrid(const LabelGrid& source, const TetMesh& rest, co
   LabelGrid out(plan.output());
   // Slabs of whole output slices: `samples` lattice slices each.
   const std::int64_t samples = plan.samples();
-  const std::int64_t slabSlices = std::max<std::int64_t>(1, kSlabSamples / plan.samplesPerOutputSlice());
+  const std::int64_t slabSlices = slabSlicesHolding(kSlabPoints, plan.samplesPerOutputSlice());
   ProgressCounter progress("rasterize", double(plan.output().dims[2]));
   forEachLocatedSlab(plan.tets(), plan.lattice(), slabSlices * samples, options.threads,
                      [&](const SlabTets& slab, std::uint32_t* state) {

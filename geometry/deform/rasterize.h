@@ -152,7 +152,7 @@ private:
 };
 
 struct CpuRasterizerLimits {
-  std::int64_t slabSamples = std::int64_t(1) << 24;   // sample states held at once
+  std::int64_t slabSamples = kSlabPoints;             // sample states held at once
   std::int64_t windowVoxels = std::int64_t(1) << 28;  // source labels held at once
 };
 
