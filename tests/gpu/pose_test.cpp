@@ -6,9 +6,10 @@
 // within a voxel or 1 % of its deformed volume; on the arm pose the
 // transfer-mesh vertices outside the cage, placed by the rigidity
 // propagation, keep a median edge-length distortion within twice that of the
-// inside vertices around them (the mean is not bounded: the armpit, where
-// the cut ends below the shoulder, stretches with the arm; the test prints
-// it), and every vertex on the cut is among them. Ray casting a pose through
+// inside vertices around them (the mean is not bounded: the upper humerus,
+// cut free of the trunk muscle around it up to 50 mm below the shoulder's
+// centre of rotation, stretches where the cut ends; the test prints it), and
+// every vertex on the cut is among them. Ray casting a pose through
 // its transfer mesh shows what ray casting the rasterized posed grid through
 // an identity mesh shows, except at silhouette ties, and matches golden
 // images.
@@ -117,9 +118,9 @@ void expectPropagationDistortionBounded(const test::PosedPhantom& p) {
   ASSERT_GT(d.outside.edges, 0u);
   ASSERT_GT(d.insideNearby.edges, 0u);
   // The typical (median) outside edge stays within twice the typical inside
-  // edge around it. The mean and the 95th percentile are larger (the armpit
-  // at the end of the cut, 50 mm below the shoulder's centre of rotation;
-  // printed above).
+  // edge around it. The mean and the 95th percentile are larger (the upper
+  // humerus where the cut ends, 50 mm below the shoulder's centre of
+  // rotation; docs/POSES.md; printed above).
   EXPECT_LE(d.outside.median, 2.0 * d.insideNearby.median);
   // The vertices on the cut (a rest position two TM vertices share) are
   // placed from their own side's tets, never by Green coordinates.
