@@ -1,9 +1,9 @@
 #include "geometry/deform/cage_arap.h"
 
+#include "geometry/deform/deformation_metrics.h"
 #include "geometry/error.h"
 
 #include <Eigen/Geometry>
-#include <Eigen/SVD>
 #include <algorithm>
 #include <map>
 #include <string>
@@ -12,20 +12,9 @@ namespace vox {
 
 namespace {
 
-// Rotation closest to the covariance S = sum w e e'^T (Procrustes): R = V U^T
-// from S = U Sigma V^T, with the column of U of the smallest singular value
-// negated when that would be a reflection.
-Eigen::Matrix3d closestRotation(const Eigen::Matrix3d& s) {
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(s, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d u = svd.matrixU();
-  const Eigen::Matrix3d& v = svd.matrixV();
-  Eigen::Matrix3d r = v * u.transpose();
-  if (r.determinant() < 0) {
-    u.col(2) = -u.col(2);  // singular values are sorted: column 2 is the smallest
-    r = v * u.transpose();
-  }
-  return r;
-}
+// Rotation for the covariance S = sum w e e'^T (Procrustes): R = V U^T from
+// S = U Sigma V^T, the transpose of the rotation nearest S.
+Eigen::Matrix3d closestRotation(const Eigen::Matrix3d& s) { return svdRotation(s).transpose(); }
 
 double cotangent(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   const double cross = a.cross(b).norm();

@@ -85,10 +85,19 @@ Eigen::Matrix3d polarRotation(const Eigen::Matrix3d& b) {
       if (change <= 1e-14 * std::sqrt(3.0)) return x;
     }
   }
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(b, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  return svdRotation(b);
+}
+
+Eigen::Matrix3d svdRotation(const Eigen::Matrix3d& m) {
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(m, Eigen::ComputeFullU | Eigen::ComputeFullV);
   Eigen::Matrix3d u = svd.matrixU();
-  if ((u * svd.matrixV().transpose()).determinant() < 0) u.col(2) = -u.col(2);
-  return u * svd.matrixV().transpose();
+  const Eigen::Matrix3d& v = svd.matrixV();
+  Eigen::Matrix3d r = u * v.transpose();
+  if (r.determinant() < 0) {
+    u.col(2) = -u.col(2);  // singular values are sorted: column 2 is the smallest
+    r = u * v.transpose();
+  }
+  return r;
 }
 
 Eigen::Matrix3d basisChange(const Eigen::Matrix3d& restEdgeInv, std::span<const Eigen::Vector3d> deformed, const Tet& t) {

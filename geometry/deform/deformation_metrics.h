@@ -30,9 +30,13 @@ Eigen::Matrix3d basisChange(const Eigen::Matrix3d& restEdgeInv, std::span<const 
 // positive semi-definite): the rotation nearest to B in the Frobenius norm.
 // Scaled Newton iteration (X <- (g X + X^-T / g) / 2, g = |det X|^-1/3),
 // which returns a rotation unchanged (to rounding; the identity exactly);
-// an SVD, with the reflection removed through the smallest singular value,
-// when det B <= 0 or Newton does not settle. Deterministic.
+// svdRotation (below) when det B <= 0 or Newton does not settle.
+// Deterministic.
 Eigen::Matrix3d polarRotation(const Eigen::Matrix3d& b);
+// The rotation nearest to m by its SVD m = U Sigma V^T: U V^T, with the
+// column of U of the smallest singular value negated when that would be a
+// reflection.
+Eigen::Matrix3d svdRotation(const Eigen::Matrix3d& m);
 
 // B_t of every tet: #T matrices. deformed: #V positions. Throws
 // InputError("transfer mesh", ...) for a degenerate rest tet.
