@@ -134,13 +134,37 @@ void CommandBatch::copy(const Image3D& src, Buffer& dst) {
   barrier();
 }
 
+void CommandBatch::copy(const Buffer& src, Image2D& dst, std::uint64_t srcOffset) {
+  begin();
+  VkBufferImageCopy r{};
+  r.bufferOffset = srcOffset;
+  r.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+  r.imageExtent = {dst.width(), dst.height(), 1};
+  vkCmdCopyBufferToImage(cmd_, src.handle(), dst.handle(), VK_IMAGE_LAYOUT_GENERAL, 1, &r);
+  barrier();
+}
+
+void CommandBatch::copy(const Image2D& src, Buffer& dst) {
+  begin();
+  VkBufferImageCopy r{};
+  r.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+  r.imageExtent = {src.width(), src.height(), 1};
+  vkCmdCopyImageToBuffer(cmd_, src.handle(), VK_IMAGE_LAYOUT_GENERAL, dst.handle(), 1, &r);
+  barrier();
+}
+
+void CommandBatch::record(const std::function<void(VkCommandBuffer)>& commands) {
+  begin();
+  commands(cmd_);
+}
+
 void CommandBatch::fill(Buffer& dst, std::uint32_t value, std::uint64_t offset, std::uint64_t bytes) {
   begin();
   vkCmdFillBuffer(cmd_, dst.handle(), offset, bytes, value);
   barrier();
 }
 
-void CommandBatch::transitionToGeneral(Image3D& image) {
+void CommandBatch::transitionToGeneral(VkImage image) {
   begin();
   VkImageMemoryBarrier ib{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER};
   ib.srcAccessMask = 0;
@@ -148,7 +172,7 @@ void CommandBatch::transitionToGeneral(Image3D& image) {
   ib.oldLayout = VK_IMAGE_LAYOUT_UNDEFINED;
   ib.newLayout = VK_IMAGE_LAYOUT_GENERAL;
   ib.srcQueueFamilyIndex = ib.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-  ib.image = image.handle();
+  ib.image = image;
   ib.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
   vkCmdPipelineBarrier(cmd_, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
                        0, 0, nullptr, 0, nullptr, 1, &ib);

@@ -8,6 +8,7 @@
 #include "gpu/pipeline.h"
 
 #include <cstdint>
+#include <functional>
 #include <initializer_list>
 #include <string>
 #include <utility>
@@ -57,8 +58,14 @@ public:
   void copy(const Buffer& src, Buffer& dst, std::uint64_t bytes, std::uint64_t srcOffset = 0, std::uint64_t dstOffset = 0);
   void copy(const Buffer& src, Image3D& dst);
   void copy(const Image3D& src, Buffer& dst);
+  // Tightly packed RGBA8 rows (x fastest) to and from a 2D image.
+  void copy(const Buffer& src, Image2D& dst, std::uint64_t srcOffset = 0);
+  void copy(const Image2D& src, Buffer& dst);
   void fill(Buffer& dst, std::uint32_t value, std::uint64_t offset = 0, std::uint64_t bytes = VK_WHOLE_SIZE);
-  void transitionToGeneral(Image3D& image);
+  // From an undefined layout (contents discarded) to VK_IMAGE_LAYOUT_GENERAL.
+  void transitionToGeneral(VkImage image);
+  // Records arbitrary commands (e.g. a UI library's uploads) into the batch.
+  void record(const std::function<void(VkCommandBuffer)>& commands);
   // Records a GPU timestamp (ignored when the queue has none).
   void timestamp(std::string label);
 

@@ -1,6 +1,8 @@
 #pragma once
-// 3D images (storage / sampled) kept in VK_IMAGE_LAYOUT_GENERAL.
+// 3D images (storage / sampled) and 2D colour images, kept in
+// VK_IMAGE_LAYOUT_GENERAL.
 
+#include "geometry/rgb_image.h"
 #include "gpu/context.h"
 
 #include <array>
@@ -38,6 +40,39 @@ private:
   VkDeviceMemory memory_ = VK_NULL_HANDLE;
   std::array<std::uint32_t, 3> extent_{0, 0, 0};
   VkFormat format_ = VK_FORMAT_UNDEFINED;
+};
+
+// An RGBA8 2D image: kernels write it through a buffer copy, the swapchain
+// blits it to the screen (scaled), nothing reads it back unless asked.
+class Image2D {
+public:
+  static constexpr VkFormat kFormat = VK_FORMAT_R8G8B8A8_UNORM;
+
+  Image2D() = default;
+  // Throws RuntimeFailure for a side of 0 or over 16384 pixels.
+  Image2D(Context& context, std::uint32_t width, std::uint32_t height);
+  ~Image2D();
+  Image2D(Image2D&& other) noexcept;
+  Image2D& operator=(Image2D&& other) noexcept;
+  Image2D(const Image2D&) = delete;
+  Image2D& operator=(const Image2D&) = delete;
+
+  std::uint32_t width() const { return width_; }
+  std::uint32_t height() const { return height_; }
+  bool valid() const { return image_ != VK_NULL_HANDLE; }
+  VkImage handle() const { return image_; }
+  VkImageView view() const { return view_; }
+
+  // Reads the image back (screenshots, tests); waits for the GPU.
+  RgbImage download() const;
+
+private:
+  void release();
+  Context* context_ = nullptr;
+  VkImage image_ = VK_NULL_HANDLE;
+  VkImageView view_ = VK_NULL_HANDLE;
+  VkDeviceMemory memory_ = VK_NULL_HANDLE;
+  std::uint32_t width_ = 0, height_ = 0;
 };
 
 }  // namespace vox::gpu

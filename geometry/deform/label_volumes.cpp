@@ -81,6 +81,54 @@ std::vector<double> deformedLabelVolumes(const LabelGrid& source, const TetMesh&
   return volumes;
 }
 
+TetLabelVoxels tetLabelVoxels(const LabelGrid& source, const TetMesh& rest, int threads) {
+  rest.validate("transfer mesh");
+  const GridGeometry& lattice = source.geometry();
+  const std::vector<LatticeTet> tets = latticeTets(lattice, rest.positions, rest.tets);
+  // (tet, label) keys of every located voxel, slab by slab, then counted.
+  std::vector<std::uint64_t> keys;
+  const std::int64_t slice = lattice.sliceVoxels();
+  forEachLocatedSlab(tets, lattice, slabSlicesFor(lattice), threads, [&](const SlabTets& slab, const std::uint32_t* state) {
+    const Label* labels = source.data() + slab.z0 * slice;
+    const std::int64_t points = (slab.z1 - slab.z0) * slice;
+    for (std::int64_t i = 0; i < points; ++i)
+      if (state[i] != kNoTet) keys.push_back((std::uint64_t(slab.tets[state[i]]) << 16) | labels[i]);
+  });
+  std::sort(keys.begin(), keys.end());
+  TetLabelVoxels out;
+  out.start.assign(rest.tets.size() + 1, 0);
+  for (std::size_t i = 0; i < keys.size();) {
+    std::size_t j = i;
+    while (j < keys.size() && keys[j] == keys[i]) ++j;
+    const std::size_t t = std::size_t(keys[i] >> 16);
+    const Label l = Label(keys[i] & 0xFFFF);
+    out.labels.push_back(l);
+    out.counts.push_back(std::uint32_t(j - i));
+    ++out.start[t + 1];
+    out.maxLabel = std::max(out.maxLabel, l);
+    i = j;
+  }
+  for (std::size_t t = 0; t < rest.tets.size(); ++t) out.start[t + 1] += out.start[t];
+  out.maxLabel = std::max(out.maxLabel, source.maxLabel());
+  return out;
+}
+
+std::vector<double> deformedLabelVolumes(const TetLabelVoxels& voxels, const TetMesh& rest,
+                                         const std::vector<Eigen::Vector3d>& deformed) {
+  if (deformed.size() != rest.positions.size() || voxels.start.size() != rest.tets.size() + 1)
+    throw InputError("deformed positions", "they do not belong to the transfer mesh the voxels were counted in");
+  std::vector<double> volumes(std::size_t(voxels.maxLabel) + 1, 0.0);
+  for (std::size_t t = 0; t < rest.tets.size(); ++t) {
+    if (voxels.start[t] == voxels.start[t + 1]) continue;
+    const double v0 = signedVolume(rest.positions, rest.tets[t]);
+    if (!(v0 > 0.0)) continue;
+    const double jacobian = signedVolume(deformed, rest.tets[t]) / v0;
+    for (std::int64_t k = voxels.start[t]; k < voxels.start[t + 1]; ++k)
+      volumes[voxels.labels[std::size_t(k)]] += jacobian * double(voxels.counts[std::size_t(k)]);
+  }
+  return volumes;
+}
+
 LabelVolumeCorrection preserveLabelVolumes(LabelGrid& posed, const LabelGrid& source, const TetMesh& rest,
                                            const std::vector<Eigen::Vector3d>& deformed, std::span<const double> targets,
                                            int threads) {

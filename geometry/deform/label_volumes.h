@@ -48,6 +48,21 @@ namespace vox {
 std::vector<double> deformedLabelVolumes(const LabelGrid& source, const TetMesh& rest,
                                          const std::vector<Eigen::Vector3d>& deformed, int threads = 0);
 
+// The source voxels of each rest tet, per label: what V'_l needs besides the
+// Jacobians, computed once so that V'_l costs one pass over the tets per
+// frame (the viewer's live volume panel). CSR over tets: the voxels of tet t
+// are labels / counts [start[t], start[t + 1]).
+struct TetLabelVoxels {
+  std::vector<std::int64_t> start;  // #T + 1
+  std::vector<Label> labels;
+  std::vector<std::uint32_t> counts;
+  Label maxLabel = 0;
+};
+TetLabelVoxels tetLabelVoxels(const LabelGrid& source, const TetMesh& rest, int threads = 0);
+// V'_l as deformedLabelVolumes computes it, from the voxels of each tet.
+std::vector<double> deformedLabelVolumes(const TetLabelVoxels& voxels, const TetMesh& rest,
+                                         const std::vector<Eigen::Vector3d>& deformed);
+
 struct LabelVolumeCorrection {
   std::uint64_t candidates = 0;   // voxels whose source neighbourhood holds another label
   std::uint64_t relabelled = 0;   // voxels whose label changed

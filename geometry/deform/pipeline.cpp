@@ -338,6 +338,15 @@ void DeformationPipeline::deform(double fraction) {
   recordStage(timer.stop());
 }
 
+void DeformationPipeline::deformTo(const Eigen::MatrixX3d& handleTargets, int arapIterations) {
+  if (handles_.vertices.empty()) throw RuntimeFailure("DeformationPipeline::deformTo: no pose set");
+  if (std::size_t(handleTargets.rows()) != handles_.vertices.size())
+    throw RuntimeFailure("DeformationPipeline::deformTo: " + std::to_string(handleTargets.rows()) + " targets for " +
+                         std::to_string(handles_.vertices.size()) + " handles");
+  deformer_.update(handleTargets, arapIterations);
+  if (deformer_.envelopePositions().size() == envelope_.vertexCount()) deformedEnvelope_ = deformer_.envelopePositions();
+}
+
 RefinementResult DeformationPipeline::refine(const RefinementOptions& options, const VertexFieldInterpolation& interpolate) {
   if (handles_.vertices.empty()) throw RuntimeFailure("DeformationPipeline::refine: no pose set");
   StageTimer timer("refinement");

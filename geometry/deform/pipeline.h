@@ -139,6 +139,11 @@ public:
   void setPose(const Pose& pose, const std::string& source);
   // One frame: the pose applied by `fraction` in [0, 1].
   void deform(double fraction = 1.0);
+  // One frame from explicit handle targets (#handles by 3, in handles()
+  // order), the interactive entry point: ARAP, Green coordinates and the
+  // propagation run on what setPose precomputed; nothing is refactorized.
+  // Returns the deformed TM (deformedTransferMesh) and envelope.
+  void deformTo(const Eigen::MatrixX3d& handleTargets, int arapIterations);
   // Post-process: refines the TM under the current pose (eq. 4.5-4.7).
   RefinementResult refine(const RefinementOptions& options, const VertexFieldInterpolation& interpolate);
 
@@ -156,6 +161,10 @@ public:
   // #TM vertices: 1 inside the cage (Green coordinates), 0 outside (propagation).
   const std::vector<std::uint8_t>& transferMeshInside() const { return deformer_.transferMeshInside(); }
   const FrameDeformer& deformer() const { return deformer_; }
+  // Per cage() vertex: its vertex in builtCage().
+  const std::vector<std::int32_t>& cageSource() const { return cageSource_; }
+  // Per builtCage() vertex: the label group nearest it (empty without groups).
+  const std::vector<Label>& cageGroups() const { return cageGroups_; }
   const Pose& pose() const { return pose_; }
   const PoseHandles& handles() const { return handles_; }
   // Vertices of the built cage left out because their part has no handle.

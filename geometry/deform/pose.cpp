@@ -92,9 +92,15 @@ private:
     PoseSelection s;
     s.name = j.contains("name") ? text(j["name"], fallback + " 'name'") : fallback;
     const std::string what = "selection '" + s.name + "'";
-    allowKeys(j, what, {"name", "box", "sphere", "part", "group", "fixed", "transform"});
-    if (j.contains("box") == j.contains("sphere")) fail(what + " needs exactly one of 'box' and 'sphere'");
-    if (j.contains("box")) {
+    allowKeys(j, what, {"name", "box", "sphere", "points", "part", "group", "fixed", "transform"});
+    if (int(j.contains("box")) + int(j.contains("sphere")) + int(j.contains("points")) != 1)
+      fail(what + " needs exactly one of 'box', 'sphere' and 'points'");
+    if (j.contains("points")) {
+      const json& points = j["points"];
+      if (!points.is_array() || points.empty()) fail(what + " 'points' must be a non-empty array of [x, y, z]");
+      s.shape = SelectionShape::Points;
+      for (const json& q : points) s.points.push_back(vector3(q, what + " 'points'"));
+    } else if (j.contains("box")) {
       const json& box = j["box"];
       requireObject(box, what + " 'box'");
       allowKeys(box, what + " 'box'", {"min", "max"});
@@ -180,6 +186,7 @@ Eigen::Vector3d PoseTransform::apply(const Eigen::Vector3d& x, double fraction) 
 }
 
 bool PoseSelection::contains(const Eigen::Vector3d& p) const {
+  if (shape == SelectionShape::Points) return std::find(points.begin(), points.end(), p) != points.end();
   if (shape == SelectionShape::Box) return (p.array() >= boxMin.array()).all() && (p.array() <= boxMax.array()).all();
   return (p - center).squaredNorm() <= radius * radius;
 }
@@ -203,7 +210,11 @@ std::string poseToJson(const Pose& pose) {
   for (const PoseSelection& s : pose.selections) {
     json j;
     j["name"] = s.name;
-    if (s.shape == SelectionShape::Box)
+    if (s.shape == SelectionShape::Points) {
+      json points = json::array();
+      for (const Eigen::Vector3d& q : s.points) points.push_back(toJson(q));
+      j["points"] = points;
+    } else if (s.shape == SelectionShape::Box)
       j["box"] = {{"min", toJson(s.boxMin)}, {"max", toJson(s.boxMax)}};
     else
       j["sphere"] = {{"center", toJson(s.center)}, {"radius", s.radius}};
@@ -269,11 +280,28 @@ PoseHandles selectHandles(const Pose& pose, const TriMesh& cage, const std::stri
     if (s.group && vertexGroups.size() != cage.vertexCount())
       throw InputError(source, "selection '" + s.name + "' selects by label group, which needs the grid's organ table (--organs)");
     bool any = false;
-    for (std::size_t v = 0; v < cage.vertexCount(); ++v)
-      if (s.contains(cage.positions[v]) && (part < 0 || parts[v] == part) && (!s.group || vertexGroups[v] == *s.group)) {
-        owner[v] = std::int32_t(k);
-        any = true;
+    const auto eligible = [&](std::size_t v) { return (part < 0 || parts[v] == part) && (!s.group || vertexGroups[v] == *s.group); };
+    if (s.shape == SelectionShape::Points) {
+      for (const Eigen::Vector3d& q : s.points) {
+        std::int32_t nearest = -1;
+        double best = std::numeric_limits<double>::infinity();
+        for (std::size_t v = 0; v < cage.vertexCount(); ++v)
+          if (const double d = (cage.positions[v] - q).squaredNorm(); d < best && eligible(v)) {
+            best = d;
+            nearest = std::int32_t(v);
+          }
+        if (nearest >= 0) {
+          owner[std::size_t(nearest)] = std::int32_t(k);
+          any = true;
+        }
       }
+    } else {
+      for (std::size_t v = 0; v < cage.vertexCount(); ++v)
+        if (s.contains(cage.positions[v]) && eligible(v)) {
+          owner[v] = std::int32_t(k);
+          any = true;
+        }
+    }
     if (!any) throw InputError(source, "selection '" + s.name + "' selects no cage vertex");
   }
   PoseHandles handles;

@@ -9,6 +9,9 @@
 //       { "name": "trunk",                             optional string
 //         "box": {"min": [x, y, z], "max": [x, y, z]}, exactly one of box / sphere
 //         "fixed": true },                             exactly one of fixed / transform
+//       { "name": "picked",
+//         "points": [[x, y, z], ...],                  or: the cage vertex nearest each point
+//         "fixed": true },
 //       { "name": "right arm",
 //         "sphere": {"center": [x, y, z], "radius": r},
 //         "part": [x, y, z],                               optional: only the cage part nearest this point
@@ -26,7 +29,7 @@
 // Coordinates are millimetres in the grid frame (origin + spacing .* ijk is
 // the centre of voxel ijk), so a pose survives regenerating the cage.
 // A selection takes the cage vertices inside its box (bounds included) or
-// sphere (distance <= radius). A transform maps x to
+// sphere (distance <= radius), or the vertex nearest each of its points. A transform maps x to
 //   R(axis, angle) (x - center) + center + translation.
 // Selections apply in file order and a vertex selected more than once
 // belongs to the LAST selection that selects it (so "fix everything, then
@@ -64,7 +67,7 @@ struct PoseTransform {
   Eigen::Vector3d apply(const Eigen::Vector3d& x, double fraction = 1.0) const;
 };
 
-enum class SelectionShape { Box, Sphere };
+enum class SelectionShape { Box, Sphere, Points };
 
 struct PoseSelection {
   std::string name;
@@ -73,6 +76,9 @@ struct PoseSelection {
   Eigen::Vector3d boxMax = Eigen::Vector3d::Zero();
   Eigen::Vector3d center = Eigen::Vector3d::Zero();  // sphere
   double radius = 0.0;                               // sphere
+  // Points: the cage vertex nearest each point (among those the part and
+  // group restrictions leave); the viewer saves picked vertices this way.
+  std::vector<Eigen::Vector3d> points;
   bool fixed = false;                                // else `transform` moves it
   PoseTransform transform;
   // Restricts the selection to one connected part of the cage: the part of

@@ -186,6 +186,37 @@ RaycastKernel::RaycastKernel(Context& context, const LabelGrid& source, const Ra
 RgbImage RaycastKernel::render(const RaycastFrame& frame, const RaycastView& view, const Palette& palette, const RaycastShading& shading,
                                const RaycastLimits& limits) {
   const auto t0 = std::chrono::steady_clock::now();
+  castRays(frame, view, palette, shading, limits);
+  const int w = view.camera.width, h = view.camera.height;
+  batch_.copy(image_, imageReadback_, 4 * std::uint64_t(w) * std::uint64_t(h));
+  finishFrame();
+  RgbImage image(w, h);
+  const auto* px = static_cast<const std::uint32_t*>(imageReadback_.mapped());
+  for (std::size_t i = 0; i < image.pixels.size(); ++i)
+    image.pixels[i] = {std::uint8_t(px[i] & 0xFF), std::uint8_t((px[i] >> 8) & 0xFF), std::uint8_t((px[i] >> 16) & 0xFF)};
+  times_.totalMs = msSince(t0);
+  return image;
+}
+
+void RaycastKernel::renderTo(Image2D& target, const RaycastFrame& frame, const RaycastView& view, const Palette& palette,
+                             const RaycastShading& shading, const RaycastLimits& limits) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (std::int64_t(target.width()) != view.camera.width || std::int64_t(target.height()) != view.camera.height)
+    throw RuntimeFailure("ray caster: the target image's size differs from the camera's");
+  castRays(frame, view, palette, shading, limits);
+  batch_.copy(image_, target);
+  finishFrame();
+  times_.totalMs = msSince(t0);
+}
+
+void RaycastKernel::finishFrame() {
+  batch_.submitAndWait();
+  if (batch_.timings().size() == 2) times_.raycastGpuMs = batch_.timings()[1].ms;
+}
+
+void RaycastKernel::castRays(const RaycastFrame& frame, const RaycastView& view, const Palette& palette, const RaycastShading& shading,
+                             const RaycastLimits& limits) {
+  const auto t0 = std::chrono::steady_clock::now();
   if (frame.positions.size() != vertexCount_ || frame.bvh.size() != nodeCount_)
     throw RuntimeFailure("ray caster: the frame does not belong to the mesh the kernel was built for");
   const int w = view.camera.width, h = view.camera.height;
@@ -311,17 +342,7 @@ RgbImage RaycastKernel::render(const RaycastFrame& frame, const RaycastView& vie
                   RaycastPush{active, 0, 0, 0}, std::min(active, maxGroups), (active + maxGroups - 1) / maxGroups);
   batch_.barrier();
   batch_.timestamp("raycast");
-  batch_.copy(image_, imageReadback_, imageBytes);
-  batch_.submitAndWait();
-  if (batch_.timings().size() == 2) times_.raycastGpuMs = batch_.timings()[1].ms;
   times_.activeTiles = active;
-
-  RgbImage image(w, h);
-  const auto* px = static_cast<const std::uint32_t*>(imageReadback_.mapped());
-  for (std::size_t i = 0; i < image.pixels.size(); ++i)
-    image.pixels[i] = {std::uint8_t(px[i] & 0xFF), std::uint8_t((px[i] >> 8) & 0xFF), std::uint8_t((px[i] >> 16) & 0xFF)};
-  times_.totalMs = msSince(t0);
-  return image;
 }
 
 }  // namespace vox::gpu

@@ -27,6 +27,7 @@
 #include "gpu/buffer.h"
 #include "gpu/command.h"
 #include "gpu/context.h"
+#include "gpu/image.h"
 #include "gpu/pipeline.h"
 
 #include <cstdint>
@@ -60,12 +61,22 @@ public:
 
   RgbImage render(const RaycastFrame& frame, const RaycastView& view, const Palette& palette, const RaycastShading& shading = {},
                   const RaycastLimits& limits = {});
+  // The same frame into a GPU image of the camera's size, not read back (the
+  // viewer blits it to the screen). Waits for the GPU.
+  void renderTo(Image2D& target, const RaycastFrame& frame, const RaycastView& view, const Palette& palette,
+                const RaycastShading& shading = {}, const RaycastLimits& limits = {});
 
   const RaycastFrameTimes& lastTimes() const { return times_; }
   std::size_t slabCount() const { return slabs_.size(); }
   std::uint64_t gridUploadBytes() const { return gridBytes_; }
 
 private:
+  // Records and runs everything up to the ray pass, whose dispatch stays
+  // recorded for the caller to append its copy and call finishFrame().
+  void castRays(const RaycastFrame& frame, const RaycastView& view, const Palette& palette, const RaycastShading& shading,
+                const RaycastLimits& limits);
+  void finishFrame();
+
   Context& context_;
   GridGeometry source_;
   Index3 sourceShift_{0, 0, 0};

@@ -127,7 +127,7 @@ TEST(Pose, RejectsMalformedFiles) {
   EXPECT_NE(expectInputError(R"({"selections": []})").find("non-empty"), std::string::npos);
   EXPECT_NE(expectInputError(R"({"selections": [{"box": {"min": [0,0,0], "max": [1,1,1]}}]})").find("exactly one of 'fixed'"),
             std::string::npos);
-  EXPECT_NE(expectInputError(R"({"selections": [{"fixed": true}]})").find("exactly one of 'box' and 'sphere'"), std::string::npos);
+  EXPECT_NE(expectInputError(R"({"selections": [{"fixed": true}]})").find("exactly one of 'box', 'sphere' and 'points'"), std::string::npos);
   EXPECT_NE(expectInputError(R"({"selections": [{"name": "a", "box": {"min": [0,0,0], "max": [1,1]}, "fixed": true}]})")
                 .find("selection 'a' box 'max' must be an array of 3 numbers"),
             std::string::npos);

@@ -1,0 +1,31 @@
+#pragma once
+// The interactive posing application (`voxmorph view`): a GLFW window with a
+// Vulkan swapchain and Dear ImGui panels around the TM-guided ray casting of
+// the full-resolution grid (gpu::RaycastKernel::renderTo, blitted to the
+// screen). The posing state is a PoseEditor (geometry/deform/pose_editor.h);
+// the export runs gpu::deformGrid, the function `voxmorph deform` runs.
+
+#include <string>
+#include <vector>
+
+namespace vox::app {
+
+struct ViewerOptions {
+  std::string grid;
+  std::string organs;
+  std::string pose;                      // setup pose: separations and first selections
+  std::vector<std::string> separations;  // --separate, as `deform` takes them
+  std::string cage;                      // a cage file instead of the automatic one (not yet: refused)
+  std::string script;                    // scripted session (viewer_script.h)
+  std::string screenshotDir;
+  std::string frameLog;                  // CSV of per-frame times
+  int width = 1280, height = 720;
+  bool vsync = true;
+};
+
+// Runs the application until its window closes or its script quits. Throws
+// RuntimeFailure when no display is available (one line), InputError for bad
+// input.
+void runViewer(const ViewerOptions& options);
+
+}  // namespace vox::app

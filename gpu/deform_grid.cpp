@@ -1,0 +1,256 @@
+#include "gpu/deform_grid.h"
+
+#include "geometry/deform/label_volumes.h"
+#include "geometry/deform/out_of_core.h"
+#include "geometry/deform/pipeline.h"
+#include "geometry/deform/rasterize.h"
+#include "geometry/error.h"
+#include "geometry/io/atomic_file.h"
+#include "geometry/io/grid_io.h"
+#include "geometry/io/mesh_io.h"
+#include "geometry/label_stats.h"
+#include "gpu/context.h"
+#include "gpu/kernels/field_interpolation.h"
+#include "gpu/kernels/rasterize.h"
+
+#include <algorithm>
+#include <filesystem>
+#include <memory>
+#include <optional>
+
+namespace vox::gpu {
+
+namespace {
+
+// Memory the driver, the Vulkan device and the allocator keep beside the
+// rasterization buffers under --max-memory.
+constexpr std::int64_t kRasterOverheadBytes = std::int64_t(256) << 20;
+
+// The source: whole in memory, or opened out of core.
+struct Source {
+  std::optional<LabelGrid> grid;
+  std::unique_ptr<OutOfCoreSource> outOfCore;
+  LabelGrid working;  // the pipeline's grid when downsampled (empty otherwise)
+  int factor = 1;
+
+  const GridGeometry& geometry() const { return grid ? grid->geometry() : outOfCore->geometry(); }
+  const LabelGrid& workingGrid() const {
+    if (outOfCore) return outOfCore->downsampled();
+    return factor > 1 ? working : *grid;
+  }
+};
+
+Source openSource(const DeformGridRequest& o) {
+  Source s;
+  if (o.maxMemoryMb > 0) {
+    // Half the budget for the pre-processing's peak, the rest for the mesher,
+    // the transfer mesh and its coordinates.
+    const std::int64_t budget = o.maxMemoryMb << 20;
+    const std::int64_t maxWorking = std::min(kDefaultWorkingVoxels, budget / 2 / kPreprocessBytesPerVoxel);
+    const std::string temp = std::filesystem::path(o.output).parent_path().string();
+    s.outOfCore = std::make_unique<OutOfCoreSource>(o.input, maxWorking, temp);
+    s.factor = s.outOfCore->downsampleFactor();
+    return s;
+  }
+  s.grid = readGrid(o.input);
+  s.factor = downsampleFactor(s.grid->geometry(), kDefaultWorkingVoxels);
+  if (s.factor > 1) {
+    LabelGridSlices slices(*s.grid);
+    s.working = downsampleLabels(slices, s.factor);
+  }
+  return s;
+}
+
+// G' held in memory, handed to writePosedGrid slab by slab.
+class HeldGrid : public SlabRasterizer {
+public:
+  explicit HeldGrid(LabelGrid grid) : grid_(std::move(grid)) {}
+  const GridGeometry& outputGeometry() const override { return grid_.geometry(); }
+  std::int64_t slabSlices() const override { return 64; }
+  void rasterizeSlab(std::int64_t z0, std::int64_t z1, Label* out) override {
+    const std::int64_t slice = grid_.geometry().sliceVoxels();
+    std::copy(grid_.data() + z0 * slice, grid_.data() + z1 * slice, out);
+  }
+
+private:
+  LabelGrid grid_;
+};
+
+// The rasterization engine of G': the GPU kernel, or the CPU reference.
+struct Engine {
+  std::unique_ptr<Context> context;
+  std::unique_ptr<RasterizeKernel> kernel;
+  std::unique_ptr<RasterizationPlan> plan;
+  std::unique_ptr<LabelGridSlices> gridSlices;
+  std::unique_ptr<CpuSlabRasterizer> cpu;
+  std::string name;
+
+  SlabRasterizer& engine() { return kernel ? static_cast<SlabRasterizer&>(*kernel) : *cpu; }
+};
+
+void makeEngine(Engine& e, Source& source, const TetMesh& rest, const std::vector<Eigen::Vector3d>& deformed, const DeformGridRequest& o,
+                std::int64_t rasterBudget) {
+  // Without a budget the engines keep their own slab and window sizes (in core).
+  const RasterMemoryLimits limits = rasterBudget > 0 ? rasterMemoryLimits(rasterBudget, o.samples) : RasterMemoryLimits{};
+  const bool limited = rasterBudget > 0;
+  if (e.context) {
+    RasterizeKernelOptions ko{.samples = o.samples};
+    if (limited) {
+      ko.maxSlabSamples = std::uint64_t(limits.slabSamples);
+      ko.maxWindowVoxels = std::uint64_t(limits.windowVoxels);
+    }
+    e.kernel = source.grid ? std::make_unique<RasterizeKernel>(*e.context, *source.grid, rest, ko)
+                           : std::make_unique<RasterizeKernel>(*e.context, source.outOfCore->slices(), rest, ko);
+    e.kernel->setDeformedPositions(deformed);
+    return;
+  }
+  e.plan = std::make_unique<RasterizationPlan>(source.geometry(), rest, deformed, o.samples);
+  GridSliceReader* reader = nullptr;
+  if (source.grid) {
+    e.gridSlices = std::make_unique<LabelGridSlices>(*source.grid);
+    reader = e.gridSlices.get();
+  } else {
+    reader = &source.outOfCore->slices();
+  }
+  CpuRasterizerLimits cl;
+  if (limited) cl = {.slabSamples = limits.slabSamples, .windowVoxels = limits.windowVoxels};
+  e.cpu = std::make_unique<CpuSlabRasterizer>(*e.plan, *reader, cl);
+}
+
+void warn(const DeformGridRequest& o, const std::string& message) {
+  if (o.warn) o.warn(message);
+}
+
+PipelineOptions pipelineOptions(const DeformGridRequest& o) {
+  PipelineOptions options = poseOptions(o.pose, o.poseSource, o.organs);
+  options.cage.dilationMm = o.dilationMm;
+  options.cage.targetVertices = o.vertices;
+  for (const LimbSeparation& s : o.extraSeparations) {
+    options.cage.separations.push_back(s);
+    options.cuts->push_back(s);
+  }
+  if (o.cage) options.userCage = *o.cage;
+  return options;
+}
+
+}  // namespace
+
+void checkDeformGridRequest(const DeformGridRequest& o) {
+  if (!hasGridExtension(o.output)) throw InputError(o.output, "unknown grid format for the output");
+  if (!o.posedCage.empty() && !hasSurfaceExtension(o.posedCage))
+    throw InputError(o.posedCage, "unknown surface format for --posed-cage (use .obj, .off or .ply)");
+  if (o.preserveVolumes && o.maxMemoryMb > 0)
+    throw InputError("--preserve-volumes", "needs the posed grid in memory; it cannot be combined with --max-memory");
+  if (!o.posedMesh.empty() && !hasTetMeshExtension(o.posedMesh))
+    throw InputError(o.posedMesh, "unknown tet mesh format for --posed-mesh (use .mesh, .meshb, .vtu or .msh)");
+  if ((!o.pose.separations.empty() || !o.extraSeparations.empty()) && !o.organs)
+    throw InputError(o.poseSource, "limb separation needs the grid's organ table (--organs) to find the label groups");
+  if (usesLabelGroups(o.pose) && !o.organs)
+    throw InputError(o.poseSource, "a selection by label group needs the grid's organ table (--organs)");
+}
+
+DeformationReport deformGrid(const DeformGridRequest& o) {
+  checkDeformGridRequest(o);
+  const PipelineOptions options = pipelineOptions(o);
+  const bool separated = !options.cage.separations.empty();
+
+  Engine engine;
+  if (!o.cpu) {
+    try {
+      engine.context = std::make_unique<Context>();
+      engine.name = "GPU (" + engine.context->info().name + ")";
+    } catch (const RuntimeFailure& e) {
+      warn(o, std::string(e.what()) + "; using the CPU");
+    }
+  }
+  if (!engine.context) engine.name = "CPU";
+
+  DeformationReport report;
+  report.input = o.input;
+  report.output = o.output;
+  report.pose = o.poseSource;
+  report.samples = o.samples;
+  report.maxMemoryBytes = o.maxMemoryMb << 20;
+  report.withMasses = options.organs.has_value();
+
+  StageTimer readTimer("read source");
+  Source source = openSource(o);
+  report.stages.push_back(readTimer.stop());
+  report.source = source.geometry();
+  report.workingFactor = source.factor;
+  report.workingVoxels = source.workingGrid().voxelCount();
+
+  auto pipeline = std::make_unique<DeformationPipeline>(source.workingGrid(), options);
+  if (pipeline->stats().foregroundOutsideCage > 0 && !separated)
+    warn(o, std::to_string(pipeline->stats().foregroundOutsideCage) +
+                " foreground voxels lie outside the cage without limb separation; the propagation solve places them, but a "
+                "larger --dilation (or --separate where limbs touch) keeps them inside");
+  pipeline->deform();
+
+  std::unique_ptr<FieldInterpolationKernel> interpolationKernel;
+  VertexFieldInterpolation interpolate = cpuFieldInterpolation();
+  if (engine.context) {
+    interpolationKernel = std::make_unique<FieldInterpolationKernel>(*engine.context);
+    interpolate = [k = interpolationKernel.get()](const TetMesh& mesh, const std::vector<double>& values, const GridGeometry& target,
+                                                  float fill) { return k->run(mesh, values, target, fill); };
+  }
+  report.refinement = pipeline->refine({.maxIterations = o.refineIterations, .maxTets = o.maxTets}, interpolate);
+  describePipeline(report, *pipeline);
+  if (!o.posedCage.empty()) {
+    TriMesh posed = pipeline->cage();
+    posed.positions = pipeline->deformedCage();
+    writeSurface(o.posedCage, posed);
+  }
+  if (!o.posedMesh.empty()) {
+    TetMesh posed = pipeline->transferMesh();
+    posed.positions = pipeline->deformedTransferMesh();
+    writeTetMesh(o.posedMesh, posed);
+  }
+  for (const StageTime& t : pipeline->stats().stages) report.stages.push_back(t);
+
+  // The pipeline's grids and coordinates go before the rasterization buffers.
+  const TetMesh rest = pipeline->transferMesh();
+  const std::vector<Eigen::Vector3d> deformed = pipeline->deformedTransferMesh();
+  pipeline.reset();
+  interpolationKernel.reset();
+
+  StageTimer rasterTimer("rasterization");
+  std::int64_t rasterBudget = 0;
+  if (source.outOfCore) {
+    const std::int64_t resident = source.outOfCore->downsampled().voxelCount() * std::int64_t(sizeof(Label)) +
+                                  std::int64_t(rest.vertexCount()) * 48 + std::int64_t(rest.tetCount()) * 32;
+    rasterBudget = std::max<std::int64_t>(std::int64_t(64) << 20, report.maxMemoryBytes - resident - kRasterOverheadBytes);
+  }
+  makeEngine(engine, source, rest, deformed, o, rasterBudget);
+  const Label maxLabel = source.grid ? source.grid->maxLabel() : source.outOfCore->maxLabel();
+  std::vector<std::uint64_t> after;
+  std::vector<double> deformedVolumes;
+  if (o.preserveVolumes) {
+    LabelGrid posed = rasterizeAllSlabs(engine.engine());
+    report.stages.push_back(rasterTimer.stop());
+    StageTimer correctionTimer("volume correction");
+    deformedVolumes = deformedLabelVolumes(*source.grid, rest, deformed);
+    report.volumeCorrection = preserveLabelVolumes(posed, *source.grid, rest, deformed, deformedVolumes);
+    report.stages.push_back(correctionTimer.stop());
+    StageTimer writeTimer("write");
+    HeldGrid held(std::move(posed));
+    after = writePosedGrid(held, o.output, maxLabel);
+    report.posed = held.outputGeometry();
+    report.stages.push_back(writeTimer.stop());
+  } else {
+    after = writePosedGrid(engine.engine(), o.output, maxLabel);
+    report.posed = engine.engine().outputGeometry();
+    report.stages.push_back(rasterTimer.stop());
+  }
+  report.engine = engine.name;
+
+  const std::vector<std::uint64_t> before = source.grid ? computeLabelStats(*source.grid).counts : source.outOfCore->labelCounts();
+  const OrganTable* organs = options.organs ? &*options.organs : nullptr;
+  report.labels = labelChanges(before, after, source.geometry().voxelVolume(), organs);
+  for (LabelChange& c : report.labels)
+    if (c.label < deformedVolumes.size()) c.deformedVolumeVoxels = deformedVolumes[c.label];
+  report.wholeBody = wholeBodyChange(report.labels);
+  return report;
+}
+
+}  // namespace vox::gpu

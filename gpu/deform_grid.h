@@ -1,0 +1,61 @@
+#pragma once
+// deformGrid: re-poses a label grid file and writes the posed full-resolution
+// grid (thesis chapters 3 and 4), as `voxmorph deform` and the viewer's export
+// both run it:
+//   pre-process (label groups, envelope, cage, transfer mesh, embedding) ->
+//   deformation (ARAP -> Green coordinates -> propagation) ->
+//   deformation-adaptive refinement (eq. 4.5-4.7; field interpolation on the
+//   GPU) -> rasterization of G' (GPU, or the CPU reference), streamed slab by
+//   slab to the output file (held in memory and corrected with
+//   preserveVolumes) -> report.
+// The engine choice (GPU, else the CPU with a warning), the memory budgets of
+// the out-of-core path and the report's assembly live here, not in the
+// callers. With maxMemoryMb the source is read once (downsampled for the
+// pipeline, spooled to an unlinked raw temporary when compressed) and G' is
+// rasterized from source windows under the budget.
+
+#include "geometry/deform/adaptive_refinement.h"
+#include "geometry/deform/deformation_report.h"
+#include "geometry/deform/pose.h"
+#include "geometry/organ_table.h"
+#include "geometry/tri_mesh.h"
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace vox::gpu {
+
+struct DeformGridRequest {
+  std::string input;          // label grid file
+  std::string output;         // posed grid file (any grid format in core)
+  Pose pose;
+  std::string poseSource = "pose";  // names the pose in errors and the report
+  std::optional<OrganTable> organs;
+  std::vector<LimbSeparation> extraSeparations;  // beside the pose's own
+  std::optional<TriMesh> cage;                   // instead of the automatic cage
+  double dilationMm = 20.0;
+  int vertices = 300;
+  int samples = 1;
+  std::int64_t maxMemoryMb = 0;  // 0: in core
+  bool cpu = false;
+  bool preserveVolumes = false;
+  std::int64_t maxTets = RefinementOptions{}.maxTets;
+  int refineIterations = RefinementOptions{}.maxIterations;
+  std::string posedCage, posedMesh;  // optional extra outputs
+  // Warnings (a GPU that could not be used, foreground outside the cage).
+  std::function<void(const std::string&)> warn;
+};
+
+// Checks what can be checked cheaply (options that exclude each other, output
+// extensions, separations and label groups without an organ table): throws
+// InputError naming the file or option.
+void checkDeformGridRequest(const DeformGridRequest& request);
+
+// Runs the whole deformation and writes request.output (and the optional
+// outputs); the returned report has every field of the JSON report.
+DeformationReport deformGrid(const DeformGridRequest& request);
+
+}  // namespace vox::gpu
