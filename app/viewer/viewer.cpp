@@ -214,6 +214,8 @@ private:
   void panels();
   void applyView();
   void runScriptStep(const ScriptStep& step);
+  // Scripted gizmo drags: a pointer path played one point per frame
+  // through the same input handling as the mouse (press, moves, release).
   void gizmoRotate(int axis, double degrees, int steps);
   void gizmoTranslate(int axis, double mm, int steps);
   void startExport(const std::string& path, const std::string& report, const std::string& png, bool preserve);
@@ -265,6 +267,9 @@ private:
 
   InputState input_;
   DragKind drag_ = DragKind::None;
+  std::vector<std::pair<double, double>> dragPath_;
+  std::size_t dragIndex_ = 0;
+  DragKind dragExpected_ = DragKind::None;
   int dragAxis_ = -1;
   double dragX0_ = 0, dragY0_ = 0, lastX_ = 0, lastY_ = 0, dragAngle_ = 0;
   Frame frame_;
@@ -805,24 +810,10 @@ void Viewer::gizmoRotate(int axis, double degrees, int steps) {
     project(rays, c + r * (std::cos(t) * u + std::sin(t) * v), x, y);
     return std::pair<double, double>(x, y);
   };
-  auto [x0, y0] = at(start);
-  input_.x = x0;
-  input_.y = y0;
-  input_.down[0] = true;
-  handleMouse(rays, true);
-  if (drag_ != DragKind::GizmoRotate) {
-    input_.down[0] = false;
-    handleMouse(rays, true);
-    throw InputError("script", "gizmo_rotate: the ring is not under the pointer (is a moving selection active?)");
-  }
-  for (int k = 1; k <= steps; ++k) {
-    auto [x, y] = at(start + degrees * kPi / 180.0 * k / steps);
-    input_.x = x;
-    input_.y = y;
-    handleMouse(rays, true);
-  }
-  input_.down[0] = false;
-  handleMouse(rays, true);
+  dragPath_.clear();
+  for (int k = 0; k <= steps; ++k) dragPath_.push_back(at(start + degrees * kPi / 180.0 * k / steps));
+  dragIndex_ = 0;
+  dragExpected_ = DragKind::GizmoRotate;
 }
 
 void Viewer::gizmoTranslate(int axis, double mm, int steps) {
@@ -834,24 +825,14 @@ void Viewer::gizmoTranslate(int axis, double mm, int steps) {
   float x0, y0, x1, y1;
   project(rays, c, x0, y0);
   project(rays, c + 1.4 * r * Eigen::Vector3d::Unit(axis), x1, y1);
-  input_.x = x1;
-  input_.y = y1;
-  input_.down[0] = true;
-  handleMouse(rays, true);
-  if (drag_ != DragKind::GizmoTranslate) {
-    input_.down[0] = false;
-    handleMouse(rays, true);
-    throw InputError("script", "gizmo_translate: the arrow is not under the pointer (is a moving selection active?)");
-  }
   const double pxPerMm = std::hypot(x1 - x0, y1 - y0) / (1.4 * r);
-  for (int k = 1; k <= steps; ++k) {
+  dragPath_.clear();
+  for (int k = 0; k <= steps; ++k) {
     const double f = mm * pxPerMm * k / steps / std::hypot(x1 - x0, y1 - y0);
-    input_.x = x1 + f * (x1 - x0);
-    input_.y = y1 + f * (y1 - y0);
-    handleMouse(rays, true);
+    dragPath_.emplace_back(x1 + f * (x1 - x0), y1 + f * (y1 - y0));
   }
-  input_.down[0] = false;
-  handleMouse(rays, true);
+  dragIndex_ = 0;
+  dragExpected_ = DragKind::GizmoTranslate;
 }
 
 void Viewer::runScriptStep(const ScriptStep& s) {
@@ -1069,8 +1050,9 @@ void Viewer::panels() {
                 restMass > 0 ? 100.0 * (nowMass / restMass - 1.0) : 0.0);
     ImGui::Text("TM vertices outside the cage: %zu", f.tmOutsideCage);
     ImGui::Text("inverted TM tets: %zu", f.tmInverted);
-    ImGui::Text("frame %.1f ms: deform %.1f, ray cast %.1f (%dx%d), UI %.1f, present %.1f", frame_.totalMs, frame_.deformMs,
-                frame_.raycastMs, frame_.renderWidth, frame_.renderHeight, frame_.uiMs, frame_.presentMs);
+    ImGui::Text("frame %.1f ms, UI %.1f, present %.1f", frame_.totalMs, frame_.uiMs, frame_.presentMs);
+    ImGui::Text("last deformation %.1f ms, ray cast %.1f ms (%dx%d)", frame_.deformMs, frame_.raycastMs, frame_.renderWidth,
+                frame_.renderHeight);
   }
   if (ImGui::CollapsingHeader("Organs", ImGuiTreeNodeFlags_DefaultOpen)) {
     ImGui::InputText("search", organFilter_, sizeof organFilter_);
@@ -1152,7 +1134,16 @@ void Viewer::run() {
       glfwGetCursorPos(window_, &input_.x, &input_.y);
       for (int b = 0; b < 3; ++b) input_.down[b] = glfwGetMouseButton(window_, b) == GLFW_PRESS;
     }
-    if (script_) {
+    const bool playing = script_ && !dragPath_.empty();
+    if (playing) {
+      if (dragIndex_ < dragPath_.size()) {
+        input_.x = dragPath_[dragIndex_].first;
+        input_.y = dragPath_[dragIndex_].second;
+        input_.down[0] = true;
+      } else {
+        input_.down[0] = false;
+      }
+    } else if (script_) {
       if (nextStep >= script_->steps.size()) {
         quit_ = true;
       } else if (wait <= 0) {
@@ -1197,23 +1188,33 @@ void Viewer::run() {
       if (ImGui::IsKeyPressed(GLFW_KEY_F)) { fitCamera(); viewDirty_ = true; }
       if (ImGui::IsKeyPressed(GLFW_KEY_R)) { orbit_ = home_; viewDirty_ = true; }
     }
-    handleMouse(rays);
+    handleMouse(rays, !dragPath_.empty());
+    if (playing) {
+      if (dragIndex_ == 0 && drag_ != dragExpected_) {
+        input_.down[0] = false;
+        handleMouse(rays, true);
+        throw InputError("script", "gizmo drag: the gizmo handle is not under the pointer (is a moving selection active?)");
+      }
+      if (dragIndex_ >= dragPath_.size()) dragPath_.clear();
+      else ++dragIndex_;
+    }
     panels();
     frame_.uiMs = msSince(tUi);
 
     // Deformation, then the ray casting when anything it shows changed.
     const auto tDeform = std::chrono::steady_clock::now();
     const bool moved = editor_->update();
-    frame_.deformMs = moved ? msSince(tDeform) : 0.0;
+    if (moved) frame_.deformMs = msSince(tDeform);
     const bool dragging = drag_ != DragKind::None;
     if (!(editor_->state() == lastState)) {
       lastState = editor_->state();
       viewDirty_ = true;
     }
-    frame_.raycastMs = 0.0;
+    bool rendered = false;
     if (moved || viewDirty_ || (lastDragging && !dragging)) {
       renderView(dragging && interactiveScale_ < 1.0f);
       viewDirty_ = false;
+      rendered = true;
     }
     lastDragging = dragging;
 
@@ -1236,9 +1237,9 @@ void Viewer::run() {
     if (!swapchain_->endFrame(*frame)) swapchain_->resize(std::uint32_t(fw), std::uint32_t(fh));
     frame_.presentMs = msSince(tPresent);
     frame_.totalMs = msSince(t0);
-    if (frameLog_ && frame_.raycastMs > 0.0)
-      *frameLog_ << frameCount_ << ',' << frame_.renderWidth << ',' << frame_.renderHeight << ',' << frame_.deformMs << ','
-                 << frame_.raycastMs << ',' << frame_.uiMs << ',' << frame_.presentMs << ',' << frame_.totalMs << '\n';
+    if (frameLog_ && rendered)
+      *frameLog_ << frameCount_ << ',' << frame_.renderWidth << ',' << frame_.renderHeight << ',' << (moved ? frame_.deformMs : 0.0)
+                 << ',' << frame_.raycastMs << ',' << frame_.uiMs << ',' << frame_.presentMs << ',' << frame_.totalMs << '\n';
     ++frameCount_;
   }
 }

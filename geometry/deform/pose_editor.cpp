@@ -90,7 +90,7 @@ int PoseEditor::addPickedSelection(const std::string& name, bool fixed) {
     centre += s.points.back();
   }
   s.fixed = fixed;
-  s.transform.center = centre / double(picked_.size());
+  if (!fixed) s.transform.center = centre / double(picked_.size());
   push();
   state_.pose.selections.push_back(std::move(s));
   const int index = int(state_.pose.selections.size()) - 1;
@@ -112,7 +112,7 @@ int PoseEditor::addGroupSelection(const std::string& group, bool fixed) {
   s.fixed = fixed;
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   for (std::int32_t v : vertices) centre += pipeline_->builtCage().positions[std::size_t(v)];
-  s.transform.center = centre / double(vertices.size());
+  if (!fixed) s.transform.center = centre / double(vertices.size());
   push();
   state_.pose.selections.push_back(std::move(s));
   const int index = int(state_.pose.selections.size()) - 1;

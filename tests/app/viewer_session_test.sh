@@ -10,7 +10,7 @@ bin=$1 src=$2 work=$3
 rm -rf "$work" && mkdir -p "$work"
 cd "$work"
 xvfb-run -a -s "-screen 0 1280x800x24" "$bin" view "$src/assets/icrp110_am.nii.gz" --organs "$src/assets/icrp110_am_organs.dat" \
-  --pose "$src/assets/poses/am_right_arm_free.json" --script "$src/tests/app/data/viewer_session.json" --screenshot-dir "$work"
+  --pose "$src/assets/viewer/am_right_arm_free.json" --script "$src/tests/app/data/viewer_session.json" --screenshot-dir "$work"
 cmp rest.png undone.png
 cmp posed_cut.png redone.png
 "$bin" deform "$src/assets/icrp110_am.nii.gz" --organs "$src/assets/icrp110_am_organs.dat" --pose pose.json -o cli.nii.gz \

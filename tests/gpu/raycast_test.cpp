@@ -12,6 +12,7 @@
 #include "geometry/render/rest_transfer_mesh.h"
 #include "geometry/synth.h"
 #include "gpu/context.h"
+#include "gpu/image.h"
 #include "gpu/kernels/raycast.h"
 #include "tests/geometry/render_fixtures.h"
 #include "tests/support/test_environment.h"
@@ -95,6 +96,26 @@ TEST(RaycastGpu, FacesCoveringTheWholeImageEqualTheCpuReference) {
     EXPECT_LE(diff.differingFraction(), kFraction) << camera << ": " << diff.differing << " pixels differ";
     EXPECT_GT(countNotBackground(cpuImage, RaycastShading{}.background), 5000u) << camera;
   }
+}
+
+TEST(RaycastGpu, RenderingIntoAGpuImageGivesTheReadBackImage) {
+  // The viewer's path (renderTo a 2D image, blitted to the screen) and the
+  // PNG path (render, read back) give the same pixels.
+  const LabelGrid grid = stickFigure();
+  const TetMesh rest = coarseVoxelTransferMesh(grid, 3);
+  const RaycastMesh mesh = buildRaycastMesh(rest, grid.geometry());
+  gpu::RaycastKernel kernel(context(), grid, mesh);
+  const Palette palette(grid.maxLabel());
+  const Frame f = makeFrame(mesh, test::deform(rest.positions, grid.geometry(), test::Deformation::Bend), "azimuth=40,elevation=10",
+                            "y<14", 200, 150);
+  const RgbImage readBack = kernel.render(f.frame, f.view, palette);
+  gpu::Image2D target(context(), 200, 150);
+  kernel.renderTo(target, f.frame, f.view, palette);
+  const RgbImage onGpu = target.download();
+  EXPECT_EQ(compareImages(readBack, onGpu, 0).differing, 0u);
+  EXPECT_GT(countNotBackground(onGpu, RaycastShading{}.background), 300u);
+  gpu::Image2D wrongSize(context(), 100, 150);
+  EXPECT_THROW(kernel.renderTo(wrongSize, f.frame, f.view, palette), RuntimeFailure);
 }
 
 TEST(RaycastGpu, ManySlabsGiveTheSameImage) {

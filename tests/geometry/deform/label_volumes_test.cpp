@@ -52,6 +52,34 @@ TEST(LabelVolumes, IdentityGivesTheSourceCountsAndScalingTheirMultiple) {
   }
 }
 
+TEST(LabelVolumes, PrecountedTetVoxelsGiveTheSameVolumes) {
+  // The viewer's live figures: voxels per (tet, label) counted once, then
+  // one pass over the tets per frame.
+  const Scene& s = junctionSphere();
+  const Eigen::Vector3d c = gridCentre(s.source.geometry());
+  const std::vector<Eigen::Vector3d> twisted = deformPositions(s.rest.positions, [&](const Eigen::Vector3d& p) {
+    const double a = 0.01 * (p.z() - c.z());
+    const Eigen::Vector3d d = p - c;
+    return Eigen::Vector3d(c.x() + std::cos(a) * d.x() - std::sin(a) * d.y(), c.y() + std::sin(a) * d.x() + std::cos(a) * d.y(),
+                           p.z() + 0.05 * d.z());
+  });
+  const TetLabelVoxels voxels = tetLabelVoxels(s.source, s.rest);
+  std::uint64_t counted = 0;
+  for (std::uint32_t n : voxels.counts) counted += n;
+  const std::vector<double> direct = deformedLabelVolumes(s.source, s.rest, twisted);
+  const std::vector<double> precounted = deformedLabelVolumes(voxels, s.rest, twisted);
+  const std::vector<double> rest = deformedLabelVolumes(voxels, s.rest, s.rest.positions);
+  ASSERT_EQ(direct.size(), precounted.size());
+  double restTotal = 0.0;
+  for (std::size_t l = 0; l < direct.size(); ++l) {
+    EXPECT_NEAR(precounted[l], direct[l], 1e-9 * std::max(1.0, direct[l])) << "label " << l;
+    restTotal += rest[l];
+  }
+  EXPECT_NEAR(restTotal, double(counted), 1e-6);
+  EXPECT_GT(counted, 0u);
+  EXPECT_THROW(deformedLabelVolumes(voxels, s.rest, std::vector<Eigen::Vector3d>(3)), InputError);
+}
+
 // Rasterizes, corrects with `threads` threads, checks every label is within one
 // voxel of its volume; returns the corrected grid.
 LabelGrid correctedGrid(const Scene& s, const std::vector<Eigen::Vector3d>& deformed, int threads, const char* what) {
