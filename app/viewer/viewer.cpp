@@ -912,9 +912,15 @@ void Viewer::runScriptStep(const ScriptStep& s) {
     loadPose(s.path);
   } else if (k == "export") {
     startExport(s.path, s.report, s.png, s.flag);
+    if (!s.background) {
+      export_.wait();
+      status(export_.message());
+      if (export_.message().rfind("exported", 0) != 0) throw RuntimeFailure("view: " + export_.message());
+    }
+  } else if (k == "cancel_export") {
+    export_.cancel();
     export_.wait();
     status(export_.message());
-    if (export_.message().rfind("exported", 0) != 0) throw RuntimeFailure("view: " + export_.message());
   } else if (k == "screenshot") {
     screenshot(scriptPath(s.path), s.flag);
   } else if (k == "camera") {

@@ -16,7 +16,7 @@ using nlohmann::json;
 
 const std::set<std::string> kSteps = {"mouse_move", "mouse_down", "mouse_up", "scroll",      "key",       "select_group", "pick_rect",
                                       "pick_clear", "fix",        "move",     "gizmo_rotate", "gizmo_translate", "toggle", "cut",
-                                      "hide",       "arap",       "undo",     "redo",        "save_pose", "load_pose",    "export",
+                                      "hide",       "arap",       "undo",     "redo",        "save_pose", "load_pose",    "export",       "cancel_export",
                                       "screenshot", "camera",     "wait",     "quit"};
 
 struct Reader {
@@ -67,6 +67,9 @@ struct Reader {
       else if (key == "add" || key == "ctrl" || key == "window" || key == "preserve_volumes" || key == "on") {
         if (!v.is_boolean()) fail(k + " must be true or false");
         s.flag = v.get<bool>();
+      } else if (key == "background") {
+        if (!v.is_boolean()) fail(k + " must be true or false");
+        s.background = v.get<bool>();
       } else if (key == "shift") {
         if (!v.is_boolean()) fail(k + " must be true or false");
         s.shift = v.get<bool>();

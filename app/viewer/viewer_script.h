@@ -23,7 +23,9 @@
 // "ctrl"/"shift"); high-level steps call what the panels call (select_group,
 // pick_rect, pick_clear, fix, move, gizmo_rotate and gizmo_translate through
 // the gizmo's drag code, toggle, cut, hide, arap, undo, redo, save_pose,
-// load_pose, export, screenshot, camera, wait, quit). Paths are relative to
+// load_pose, export, cancel_export, screenshot, camera, wait, quit). An
+// export waits for its end unless "background": true; cancel_export cancels
+// the running export and waits until it has stopped. Paths are relative to
 // the working directory; screenshot paths to --screenshot-dir when given.
 
 #include <Eigen/Core>
@@ -42,6 +44,7 @@ struct ScriptStep {
   int count = 1, button = 0, substeps = 10;
   bool flag = false;                    // add / ctrl / window / preserve_volumes
   bool shift = false;
+  bool background = false;  // export: return at once (cancel_export then ends it)
 };
 
 struct ViewerScript {

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Scripted viewer session on the AM phantom under Xvfb + lavapipe: select the
 # right arm, turn it 45 degrees with the gizmo, cut, undo back to rest, redo,
-# save the pose and export. Checks: the screenshots match the golden images
+# save the pose, start an export and cancel it, export. Checks: the screenshots match the golden images
 # (the ray caster's tolerance), the screenshot after undo equals the rest
 # one and the one after redo the cut one, byte for byte, and `voxmorph deform
 # --pose` on the saved pose writes a grid byte-identical to the export.
@@ -10,7 +10,11 @@ bin=$1 src=$2 work=$3
 rm -rf "$work" && mkdir -p "$work"
 cd "$work"
 xvfb-run -a -s "-screen 0 1280x800x24" "$bin" view "$src/assets/icrp110_am.nii.gz" --organs "$src/assets/icrp110_am_organs.dat" \
-  --pose "$src/assets/viewer/am_right_arm_free.json" --script "$src/tests/app/data/viewer_session.json" --screenshot-dir "$work"
+  --pose "$src/assets/viewer/am_right_arm_free.json" --script "$src/tests/app/data/viewer_session.json" --screenshot-dir "$work" 2> >(tee session.log >&2)
+grep -q "export cancelled; nothing written" session.log
+# The export cancelled at once left nothing behind.
+test ! -e cancelled.nii.gz && test ! -e cancelled.json
+if ls -a | grep -q '^\.tmp-'; then echo "temporary files left behind"; ls -a; exit 1; fi
 cmp rest.png undone.png
 cmp posed_cut.png redone.png
 "$bin" deform "$src/assets/icrp110_am.nii.gz" --organs "$src/assets/icrp110_am_organs.dat" --pose pose.json -o cli.nii.gz \
