@@ -93,6 +93,8 @@ struct Scene {
 };
 
 Scene& scene(const std::string& name) {
+  // The context first, so that it outlives the scenes' kernels at exit.
+  context();
   static std::map<std::string, std::unique_ptr<Scene>> cache;
   auto& s = cache[name];
   if (s) return *s;

@@ -3,10 +3,11 @@
 # 1280x720 (the view is the window less the 360-pixel panel: 920x720), the
 # head turned 40 degrees about z with the gizmo over 40 frames, under Xvfb.
 # Prints the per-frame split (deformation, ray casting, UI, present) of the
-# dragging frames, then the peer measured in the same run: `voxmorph render`
-# of the same phantom at the drag resolution (the CLI's ray cast with a read
-# back, timed by the command itself).
-# Usage: tests/bench/viewer_frames.sh [build dir]   (default build/release)
+# dragging frames. The peer measured in the same run is
+# raycast_bench's AF rest frame at the drag resolution (the ray caster alone:
+# positions to image, read back).
+# Usage: tests/bench/viewer_frames.sh [build dir]   (default build/release;
+# builds raycast_bench there first)
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 bin=${1:-build/release}/voxmorph
@@ -26,5 +27,6 @@ for k in ('deform_ms', 'raycast_ms', 'ui_ms', 'present_ms', 'total_ms'):
 print(f"  frames per second (median frame): {1000.0 / med(drag, 'total_ms'):.1f}")
 if still: print(f"still frames: {len(still)} at 920x720, median ray cast {med(still, 'raycast_ms'):.1f} ms, total {med(still, 'total_ms'):.1f} ms")
 PY
-"$bin" render assets/icrp110_af.nii.gz --organs assets/icrp110_af_organs.dat --camera azimuth=20,elevation=10 --size 460x360 \
-  -o "$work/peer.png" 2>&1 | sed 's/^/peer: /'
+cmake --build "${1:-build/release}" --target raycast_bench >/dev/null
+VOXMORPH_BENCH_SIZE=460x360 "${1:-build/release}/bench/raycast_bench" --benchmark_filter='Raycast/af/rest/iter' 2>/dev/null |
+  grep Raycast | sed 's/^/peer: /'
