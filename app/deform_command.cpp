@@ -11,7 +11,7 @@
 #include "app/command_line.h"
 #include "geometry/deform/deformation_report.h"
 #include "geometry/deform/pose.h"
-#include "geometry/deform/rasterize.h"
+#include "geometry/raster/rasterize.h"
 #include "geometry/deform/surface_checks.h"
 #include "geometry/error.h"
 #include "geometry/io/atomic_file.h"

@@ -3,7 +3,7 @@
 #include "geometry/deform/label_volumes.h"
 #include "geometry/deform/out_of_core.h"
 #include "geometry/deform/pipeline.h"
-#include "geometry/deform/rasterize.h"
+#include "geometry/raster/rasterize.h"
 #include "geometry/error.h"
 #include "geometry/io/atomic_file.h"
 #include "geometry/io/grid_io.h"

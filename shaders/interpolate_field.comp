@@ -1,6 +1,6 @@
 #version 460
 // Field interpolation after the locate stage (CPU reference:
-// geometry/deform/field_interpolation.cpp): each task walks its tet's spans
+// geometry/raster/field_interpolation.cpp): each task walks its tet's spans
 // and writes, at the points its tet won, the tet's barycentric interpolation
 // of the per-vertex values (an affine map around an anchor lattice point).
 // Points no tet won keep the fill value the host wrote.

@@ -1,6 +1,6 @@
 #version 460
 // Locate stage (CPU reference: locateLatticePoints in
-// geometry/deform/lattice_tets.cpp): each task walks its tet's scanline spans
+// geometry/raster/lattice_tets.cpp): each task walks its tet's scanline spans
 // and claims their points by atomicMin of the slab-local tet index. Local
 // indices ascend with the TM index, so every sample ends with the
 // lowest-index tet whose closed test it passes, whatever the execution order.

@@ -1,5 +1,5 @@
 #version 460
-// Reduce stage (CPU reference: reduceSamples in geometry/deform/rasterize.cpp):
+// Reduce stage (CPU reference: reduceSamples in geometry/raster/rasterize.cpp):
 // one invocation per run of VOX_RASTER_REDUCE_RUN consecutive output voxels
 // of the slab. A voxel takes the most frequent label of its k^3 resolved
 // samples (ties to the lowest; no tet or still pending: 0), and pairs of

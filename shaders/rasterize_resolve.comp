@@ -1,6 +1,6 @@
 #version 460
 // Resolve stage, once per source window (CPU reference: resolveSamples in
-// geometry/deform/rasterize.cpp): each task walks its tet's spans again and
+// geometry/raster/rasterize.cpp): each task walks its tet's spans again and
 // labels the samples its tet won: the source voxel nearest the sample's rest
 // position (the tet's affine map, evaluated around its anchor so float keeps
 // its precision), resolved to 0 off the source grid, left pending while its

@@ -1,7 +1,7 @@
 #include "geometry/deform/adaptive_refinement.h"
 
 #include "geometry/deform/deformation_metrics.h"
-#include "geometry/deform/field_interpolation.h"
+#include "geometry/raster/field_interpolation.h"
 #include "geometry/progress.h"
 
 #include <algorithm>

@@ -1,7 +1,7 @@
 #include "geometry/deform/label_volumes.h"
 
-#include "geometry/deform/lattice_tets.h"
-#include "geometry/deform/rasterize.h"
+#include "geometry/raster/lattice_tets.h"
+#include "geometry/raster/rasterize.h"
 #include "geometry/error.h"
 #include "geometry/parallel.h"
 

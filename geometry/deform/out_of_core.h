@@ -12,7 +12,7 @@
 // The downsampled grid keeps the source's grid frame (its voxel corners are
 // source voxel corners), so a transfer mesh built on it applies to the source.
 
-#include "geometry/deform/rasterize.h"
+#include "geometry/raster/rasterize.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/label_grid.h"
 #include "geometry/tet_mesh.h"

@@ -37,7 +37,7 @@
 #include "geometry/deform/envelope.h"
 #include "geometry/deform/frame_deformer.h"
 #include "geometry/deform/pose.h"
-#include "geometry/deform/rasterize.h"
+#include "geometry/raster/rasterize.h"
 #include "geometry/deform/transfer_mesh.h"
 #include "geometry/label_grid.h"
 #include "geometry/organ_table.h"

@@ -1,7 +1,7 @@
 #include "geometry/render/raycast_scene.h"
 
 #include "geometry/error.h"
-#include "geometry/deform/rasterize.h"
+#include "geometry/raster/rasterize.h"
 
 #include <Eigen/Geometry>
 

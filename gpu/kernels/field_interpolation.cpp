@@ -1,7 +1,7 @@
 #include "gpu/kernels/field_interpolation.h"
 
-#include "geometry/deform/field_interpolation.h"
-#include "geometry/deform/lattice_tets.h"
+#include "geometry/raster/field_interpolation.h"
+#include "geometry/raster/lattice_tets.h"
 #include "geometry/error.h"
 #include "shaders/shared/interface.h"
 

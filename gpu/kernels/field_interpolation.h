@@ -2,7 +2,7 @@
 // GPU field interpolation (shaders/rasterize_locate.comp then
 // shaders/interpolate_field.comp): a per-vertex scalar of a tet mesh
 // interpolated onto a grid through the containing tet, for the refinement's
-// error and sizing fields. CPU reference: geometry/deform/field_interpolation.h
+// error and sizing fields. CPU reference: geometry/raster/field_interpolation.h
 // (same tie rule; float evaluation on the GPU).
 
 #include "geometry/label_grid.h"

@@ -3,7 +3,7 @@
 // rasterization and field interpolation kernels: for every lattice point of a
 // slab, the slab-local index of the lowest-index tet whose closed test it
 // passes (VOX_RASTER_NO_TET where none). CPU reference: locateLatticePoints
-// in geometry/deform/lattice_tets.h.
+// in geometry/raster/lattice_tets.h.
 //
 // Work is one task per (tet, lattice slice, block of VOX_RASTER_ROWS_PER_TASK
 // rows): the task walks the tet's scanline spans and claims their points by
@@ -12,7 +12,7 @@
 // field) reuse the uploaded tets and tasks: each task then handles the points
 // its tet won, loading the tet's data once.
 
-#include "geometry/deform/lattice_tets.h"
+#include "geometry/raster/lattice_tets.h"
 #include "gpu/buffer.h"
 #include "gpu/command.h"
 #include "gpu/context.h"

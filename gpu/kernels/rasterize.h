@@ -1,6 +1,6 @@
 #pragma once
 // GPU rasterization of the deformed grid (shaders/rasterize_*.comp). CPU
-// reference: geometry/deform/rasterize.h, whose contract, tie rule and
+// reference: geometry/raster/rasterize.h, whose contract, tie rule and
 // supersampling this kernel follows; planes and maps are computed in double
 // on the host and evaluated in float on the GPU, so the two can differ only
 // where a voxel centre lies within float rounding of a tet face (or its
@@ -17,7 +17,7 @@
 // maxBindingBytes / (4 k^3) voxels.
 
 #include "geometry/deform/out_of_core.h"
-#include "geometry/deform/rasterize.h"
+#include "geometry/raster/rasterize.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/label_grid.h"
 #include "geometry/tet_mesh.h"

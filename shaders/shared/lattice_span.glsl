@@ -1,5 +1,5 @@
 // Scanline span of a tet on a lattice row, in float: the GPU twin of rowSpan()
-// in geometry/deform/lattice_tets.cpp. Each face bounds the span at the root
+// in geometry/raster/lattice_tets.cpp. Each face bounds the span at the root
 // of its plane value along the row. The two tets of a shared face hold
 // negated planes; with `precise` (no contraction) their plane values, and so
 // their roots (a quotient of two negated numbers), are bitwise equal: one

@@ -10,9 +10,9 @@
 //   build/release/bench/rasterize_bench [--benchmark_filter=...]
 //   VOXMORPH_BENCH_TM_CUBE=8 (voxels per transfer-mesh cube edge, default 12)
 
-#include "geometry/deform/field_interpolation.h"
+#include "geometry/raster/field_interpolation.h"
 #include "geometry/deform/pipeline.h"
-#include "geometry/deform/rasterize.h"
+#include "geometry/raster/rasterize.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/synth.h"
 #include "gpu/context.h"

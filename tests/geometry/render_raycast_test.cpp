@@ -9,7 +9,7 @@
 #include "geometry/organ_table.h"
 #include "geometry/render/boundary_bvh.h"
 #include "geometry/deform/label_groups.h"
-#include "geometry/deform/rasterize.h"
+#include "geometry/raster/rasterize.h"
 #include "geometry/deform/transfer_mesh.h"
 #include "geometry/render/raycast_reference.h"
 #include "geometry/render/raycast_scene.h"

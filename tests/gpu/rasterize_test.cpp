@@ -4,9 +4,9 @@
 // float rounding of a source voxel boundary). Chunking (slabs, source
 // windows) does not change the GPU output.
 
-#include "geometry/deform/field_interpolation.h"
+#include "geometry/raster/field_interpolation.h"
 #include "geometry/deform/out_of_core.h"
-#include "geometry/deform/rasterize.h"
+#include "geometry/raster/rasterize.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/synth.h"
 #include "geometry/voxel_tetrahedralization.h"

@@ -7,7 +7,7 @@
 // non-rigid maps (bend, twist) or a rotation.
 
 #include "geometry/deform/out_of_core.h"
-#include "geometry/deform/rasterize.h"
+#include "geometry/raster/rasterize.h"
 #include "geometry/label_grid.h"
 #include "geometry/tet_mesh.h"
 #include "geometry/voxel_tetrahedralization.h"

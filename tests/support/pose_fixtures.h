@@ -6,7 +6,7 @@
 // the posed grid. Computed once per process and pose.
 
 #include "geometry/deform/pipeline.h"
-#include "geometry/deform/rasterize.h"
+#include "geometry/raster/rasterize.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/organ_table.h"
 #include "tests/support/test_environment.h"

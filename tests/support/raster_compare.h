@@ -4,7 +4,7 @@
 // barycentric of a tet face, or a source position within float rounding of
 // a source voxel boundary), and at most 1e-5 of the voxels may differ.
 
-#include "geometry/deform/rasterize.h"
+#include "geometry/raster/rasterize.h"
 #include "geometry/label_grid.h"
 
 #include <gtest/gtest.h>

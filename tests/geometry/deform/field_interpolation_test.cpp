@@ -1,7 +1,7 @@
 // CPU field interpolation: linear fields are reproduced exactly, voxels
 // outside the mesh get the fill value, slab boundaries do not show.
 
-#include "geometry/deform/field_interpolation.h"
+#include "geometry/raster/field_interpolation.h"
 #include "geometry/error.h"
 #include "geometry/synth.h"
 #include "tests/support/deformation_fixtures.h"

@@ -6,7 +6,7 @@
 // thread count; a grid of another geometry is rejected.
 
 #include "geometry/deform/label_volumes.h"
-#include "geometry/deform/rasterize.h"
+#include "geometry/raster/rasterize.h"
 #include "geometry/error.h"
 #include "geometry/label_stats.h"
 #include "geometry/synth.h"

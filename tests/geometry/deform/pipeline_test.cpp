@@ -8,7 +8,7 @@
 
 #include "geometry/deform/label_volumes.h"
 #include "geometry/deform/pipeline.h"
-#include "geometry/deform/rasterize.h"
+#include "geometry/raster/rasterize.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/label_stats.h"
 #include "tests/support/pose_fixtures.h"

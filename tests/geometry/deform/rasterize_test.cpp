@@ -2,8 +2,8 @@
 // an independent per-voxel check, identity reproduces the input, slab and
 // window independence, supersampling's tie rule, bad input.
 
-#include "geometry/deform/lattice_tets.h"
-#include "geometry/deform/rasterize.h"
+#include "geometry/raster/lattice_tets.h"
+#include "geometry/raster/rasterize.h"
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/label_stats.h"

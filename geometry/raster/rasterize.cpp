@@ -1,4 +1,4 @@
-#include "geometry/deform/rasterize.h"
+#include "geometry/raster/rasterize.h"
 
 #include "geometry/error.h"
 #include "geometry/parallel.h"

@@ -22,7 +22,7 @@
 // voxel -> label, for the source slices held in memory) and reduce (samples
 // -> voxel label).
 
-#include "geometry/deform/lattice_tets.h"
+#include "geometry/raster/lattice_tets.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/label_grid.h"
 #include "geometry/tet_mesh.h"

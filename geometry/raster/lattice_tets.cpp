@@ -1,4 +1,4 @@
-#include "geometry/deform/lattice_tets.h"
+#include "geometry/raster/lattice_tets.h"
 
 #include "geometry/parallel.h"
 

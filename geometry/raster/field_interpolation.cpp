@@ -1,6 +1,6 @@
-#include "geometry/deform/field_interpolation.h"
+#include "geometry/raster/field_interpolation.h"
 
-#include "geometry/deform/lattice_tets.h"
+#include "geometry/raster/lattice_tets.h"
 #include "geometry/error.h"
 #include "geometry/parallel.h"
 
