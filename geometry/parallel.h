@@ -1,6 +1,17 @@
 #pragma once
-// A minimal parallel loop for the CPU reference kernels (slabs, rows, sample
-// ranges). Items are handed out dynamically, so uneven items balance.
+// The project's one parallel loop: a process-wide pool of worker threads,
+// started on first use and kept, that runs the loops of the CPU kernels,
+// the remesher and the deformation's per-frame products.
+//
+// Two shapes of loop:
+//  - parallelFor: one call per item, items handed out dynamically (uneven
+//    items balance);
+//  - parallelRanges: a static partition of [0, n) into one range per thread
+//    (per-thread scratch is built once per range, and which thread handles
+//    an index never depends on scheduling).
+// A loop started inside another (nested), or while another thread's loop
+// holds the pool, runs on its calling thread alone: no deadlock, and the
+// viewer's frame never waits for an export's loop.
 
 #include <cstdint>
 #include <functional>
@@ -14,5 +25,12 @@ int workerThreads(int requested);
 // threads. The first exception thrown by fn is rethrown after all threads
 // stop; remaining items are skipped.
 void parallelFor(std::int64_t count, int threads, const std::function<void(std::int64_t)>& fn);
+
+// Calls body(begin, end) once per range of a static partition of [0, n) into
+// min(threads, ceil(n / grain)) ranges (at least one; `threads` as given,
+// not workerThreads: 0 or 1 runs serially). Range i is
+// [n i / k, n (i + 1) / k). Exceptions as parallelFor.
+void parallelRanges(std::int64_t n, int threads, const std::function<void(std::int64_t, std::int64_t)>& body,
+                    std::int64_t grain = 4096);
 
 }  // namespace vox

@@ -1,4 +1,5 @@
 #include "geometry/deform/cage_arap.h"
+#include "geometry/disjoint_sets.h"
 
 #include "geometry/deform/deformation_metrics.h"
 #include "geometry/error.h"
@@ -89,31 +90,20 @@ void CageArap::precompute(const TriMesh& restCage, std::span<const std::int32_t>
 
   // Every connected component needs a handle, or the global step is singular.
   {
-    std::vector<std::int32_t> component(std::size_t(nv), -1);
-    std::vector<std::int32_t> stack;
-    for (std::int32_t s = 0; s < nv; ++s) {
-      if (component[std::size_t(s)] >= 0) continue;
-      bool anchored = false;
-      std::size_t size = 0;
-      component[std::size_t(s)] = s;
-      stack.push_back(s);
-      while (!stack.empty()) {
-        const std::int32_t v = stack.back();
-        stack.pop_back();
-        ++size;
-        anchored = anchored || freeIndex_[std::size_t(v)] < 0;
-        for (std::int32_t k = offsets_[std::size_t(v)]; k < offsets_[std::size_t(v) + 1]; ++k) {
-          const std::int32_t u = adjacency_[std::size_t(k)];
-          if (component[std::size_t(u)] < 0) {
-            component[std::size_t(u)] = s;
-            stack.push_back(u);
-          }
-        }
-      }
-      if (!anchored)
-        throw InputError("cage", "a connected part of the cage (" + std::to_string(size) + " vertices, including vertex " +
-                                     std::to_string(s) + ") holds no handle vertex");
+    DisjointSets parts{std::size_t(nv)};
+    for (std::int32_t v = 0; v < nv; ++v)
+      for (std::int32_t k = offsets_[std::size_t(v)]; k < offsets_[std::size_t(v) + 1]; ++k) parts.unite(v, adjacency_[std::size_t(k)]);
+    std::vector<std::size_t> size(std::size_t(nv), 0);
+    std::vector<std::uint8_t> anchored(std::size_t(nv), 0);
+    for (std::int32_t v = 0; v < nv; ++v) {
+      const std::int32_t r = parts.find(v);
+      ++size[std::size_t(r)];
+      if (freeIndex_[std::size_t(v)] < 0) anchored[std::size_t(r)] = 1;
     }
+    for (std::int32_t s = 0; s < nv; ++s)
+      if (parts.find(s) == s && !anchored[std::size_t(s)])
+        throw InputError("cage", "a connected part of the cage (" + std::to_string(size[std::size_t(s)]) + " vertices, including vertex " +
+                                     std::to_string(s) + ") holds no handle vertex");
   }
 
   freeVertices_.clear();

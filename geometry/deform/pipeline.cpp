@@ -1,4 +1,5 @@
 #include "geometry/deform/pipeline.h"
+#include "geometry/disjoint_sets.h"
 
 #include "geometry/deform/green_coordinates.h"
 #include "geometry/deform/label_groups.h"
@@ -277,17 +278,13 @@ std::vector<std::uint8_t> DeformationPipeline::acrossSeparation() const {
     const Label g = vertexGroup[v];
     return inside[v] && !out[v] && g != kMixed && g < separated.size() && separated[g];
   };
-  std::vector<std::int32_t> root(nv);
-  std::iota(root.begin(), root.end(), 0);
-  const auto find = [&](std::int32_t v) {
-    while (root[std::size_t(v)] != v) v = root[std::size_t(v)] = root[std::size_t(root[std::size_t(v)])];
-    return v;
-  };
+  DisjointSets islands(nv);
+  const auto find = [&](std::int32_t v) { return islands.find(v); };
   for (std::size_t t = 0; t < transferMesh_.tetCount(); ++t) {
     const Tet& tet = transferMesh_.tets[t];
     for (int a = 0; a < 4; ++a)
       for (int b = a + 1; b < 4; ++b)
-        if (candidate(std::size_t(tet[a])) && candidate(std::size_t(tet[b]))) root[std::size_t(find(tet[a]))] = find(tet[b]);
+        if (candidate(std::size_t(tet[a])) && candidate(std::size_t(tet[b]))) islands.unite(tet[a], tet[b]);
   }
   std::vector<std::int64_t> size(nv, 0);
   std::vector<std::int64_t> largest(separated.size(), 0);

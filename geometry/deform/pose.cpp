@@ -1,4 +1,5 @@
 #include "geometry/deform/pose.h"
+#include "geometry/disjoint_sets.h"
 
 #include "geometry/deform/label_groups.h"
 #include "geometry/error.h"
@@ -247,16 +248,10 @@ std::string poseToJson(const Pose& pose) {
 void writePose(const std::string& path, const Pose& pose) { writeFileAtomic(path, poseToJson(pose)); }
 
 std::vector<std::int32_t> cageParts(const TriMesh& cage) {
-  std::vector<std::int32_t> part(cage.vertexCount());
-  std::iota(part.begin(), part.end(), 0);
-  const auto root = [&](std::int32_t v) {
-    while (part[std::size_t(v)] != v) v = part[std::size_t(v)] = part[std::size_t(part[std::size_t(v)])];
-    return v;
-  };
+  DisjointSets parts(cage.vertexCount());
   for (const Tri& t : cage.triangles)
-    for (int k = 1; k < 3; ++k) part[std::size_t(root(t[k]))] = root(t[0]);
-  for (std::size_t v = 0; v < part.size(); ++v) part[v] = root(std::int32_t(v));
-  return part;
+    for (int k = 1; k < 3; ++k) parts.unite(t[0], t[k]);
+  return parts.representatives();
 }
 
 bool usesLabelGroups(const Pose& pose) {

@@ -1,4 +1,5 @@
 #include "geometry/deform/surface_checks.h"
+#include "geometry/disjoint_sets.h"
 
 #include "geometry/error.h"
 #include "geometry/io/mesh_io.h"
@@ -18,16 +19,6 @@ std::uint64_t edgeKey(std::int32_t a, std::int32_t b) {
   if (a > b) std::swap(a, b);
   return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b);
 }
-
-struct DisjointSets {
-  std::vector<std::int32_t> parent;
-  explicit DisjointSets(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  std::int32_t find(std::int32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(std::int32_t a, std::int32_t b) { parent[find(a)] = find(b); }
-};
 
 }  // namespace
 

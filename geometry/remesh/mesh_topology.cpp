@@ -1,4 +1,5 @@
 #include "geometry/remesh/mesh_topology.h"
+#include "geometry/disjoint_sets.h"
 
 #include "geometry/remesh/element_classification.h"
 #include "geometry/remesh/face_adjacency.h"
@@ -10,23 +11,6 @@
 namespace vox::remesh {
 
 namespace {
-
-struct DisjointSets {
-  std::vector<std::int32_t> parent;
-  explicit DisjointSets(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  std::int32_t find(std::int32_t x) {
-    while (parent[std::size_t(x)] != x) {
-      parent[std::size_t(x)] = parent[std::size_t(parent[std::size_t(x)])];
-      x = parent[std::size_t(x)];
-    }
-    return x;
-  }
-  void unite(std::int32_t a, std::int32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[std::size_t(std::max(a, b))] = std::min(a, b);
-  }
-};
 
 std::vector<std::int32_t> toVector(const LabelSet& s) { return {s.begin(), s.end()}; }
 
