@@ -386,10 +386,12 @@ Hit trace(vec3 e, vec3 d, uint pixel) {
   return res;
 }
 
-uint shade(Hit h) {
+// RaycastShading: ambient, a light at the eye and a fill light.
+uint shade(Hit h, vec3 d) {
   if (!h.hit) return P.background;
+  const float head = abs(d[h.axis]) / length(d);
   const float lambert = max(0.0, -float(h.step) * P.light[h.axis]);
-  const float s = P.ambient + (1.0 - P.ambient) * lambert;
+  const float s = P.ambient + P.headlight * head + P.fill * lambert;
   const uint albedo = palette[h.label];
   const vec3 c = vec3(float(albedo & 0xFFu), float((albedo >> 8) & 0xFFu), float((albedo >> 16) & 0xFFu));
   const uvec3 q = uvec3(min(vec3(255.0), floor(c * s + 0.5)));
@@ -406,5 +408,6 @@ void main() {
   const uint pixel = px.y * P.width + px.x;
   // A ray that crosses no front face keeps the background.
   if (entries[2u * P.width * P.height + pixel] == 0u) return;
-  image[pixel] = shade(trace(vec3Of(P.eye), pixelDirection(px), pixel));
+  const vec3 d = pixelDirection(px);
+  image[pixel] = shade(trace(vec3Of(P.eye), d, pixel), d);
 }

@@ -255,11 +255,14 @@ RayResult traceRayReference(const LabelGrid& source, const RaycastMesh& mesh, co
   return tracer.trace(origin, direction);
 }
 
-Rgb shadeRay(const RayResult& r, const RaycastView& view, const Palette& palette, const RaycastShading& shading) {
+Rgb shadeRay(const RayResult& r, const Eigen::Vector3d& direction, const RaycastView& view, const Palette& palette,
+             const RaycastShading& shading) {
   if (!r.hit) return shading.background;
-  // The crossed face's normal faces the camera: -step along the axis.
-  const double lambert = std::max(0.0, -double(r.step) * view.light[r.axis]);
-  const double shade = shading.ambient + (1.0 - shading.ambient) * lambert;
+  // The crossed face's normal faces the camera: -step along the axis. The
+  // same float operations as raycast.comp, so both round alike.
+  const float head = std::abs(float(direction[r.axis])) / float(direction.cast<float>().norm());
+  const float lambert = std::max(0.0f, -float(r.step) * float(view.light[r.axis]));
+  const double shade = double(float(shading.ambient) + float(shading.headlight) * head + float(shading.fill) * lambert);
   const Rgb albedo = palette.color(r.label);
   auto q = [&](std::uint8_t c) { return std::uint8_t(std::min(255.0, std::floor(double(c) * shade + 0.5))); };
   return {q(albedo.r), q(albedo.g), q(albedo.b)};
@@ -275,8 +278,10 @@ RgbImage raycastReference(const LabelGrid& source, const RaycastMesh& mesh, cons
   std::vector<RaycastStats> perRow(static_cast<std::size_t>(h));
   parallelFor(h, 0, [&](std::int64_t y) {
     const Tracer tracer{source, mesh, frame, factors, view, palette, limits, perRow[std::size_t(y)]};
-    for (int x = 0; x < w; ++x)
-      image.at(x, int(y)) = shadeRay(tracer.trace(view.eye, view.direction(x, int(y))), view, palette, shading);
+    for (int x = 0; x < w; ++x) {
+      const Eigen::Vector3d d = view.direction(x, int(y));
+      image.at(x, int(y)) = shadeRay(tracer.trace(view.eye, d), d, view, palette, shading);
+    }
   });
   if (stats) {
     for (const RaycastStats& s : perRow) {

@@ -76,8 +76,10 @@ RayResult traceRayReference(const LabelGrid& source, const RaycastMesh& mesh, co
                             const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, const RaycastLimits& limits,
                             RaycastStats* stats = nullptr);
 
-// Shades a ray result: label colour times (ambient + (1 - ambient) Lambert).
-Rgb shadeRay(const RayResult& r, const RaycastView& view, const Palette& palette, const RaycastShading& shading);
+// Shades a ray result (RaycastShading).
+// `direction`: the ray's direction (any length).
+Rgb shadeRay(const RayResult& r, const Eigen::Vector3d& direction, const RaycastView& view, const Palette& palette,
+             const RaycastShading& shading);
 
 // The whole image (rows in parallel on the available cores).
 RgbImage raycastReference(const LabelGrid& source, const RaycastMesh& mesh, const RaycastFrame& frame, const RaycastView& view,

@@ -91,11 +91,19 @@ struct RaycastView {
 };
 RaycastView makeRaycastView(const RaycastFrame& frame, const Camera& camera, const CuttingPlanes& cuts);
 
-// How a visible voxel is shaded: Lambert on the crossed voxel face plus
-// ambient, times the label colour; misses get the background.
+// How a visible voxel is shaded: the label colour times
+//   ambient + headlight |n . d| / |d| + fill max(0, n . light)
+// with n the crossed voxel face's normal (towards the camera) and d the
+// ray: a light at the eye makes faces seen head-on bright and grazing ones
+// dark, so a curved surface reads as curved through its voxel steps, and a
+// fill light from above and to the left of the camera tells the three face
+// orientations apart. Cut faces are voxel faces and are lit the same way.
+// Misses get the background.
 struct RaycastShading {
   Rgb background{22, 24, 29};
-  double ambient = 0.35;
+  double ambient = 0.22;
+  double headlight = 0.55;
+  double fill = 0.3;
 };
 
 // Bounds that keep every ray finite on any mesh (thesis: "a given number of

@@ -254,6 +254,8 @@ void RaycastKernel::castRays(const RaycastFrame& frame, const RaycastView& view,
   p.tanHalfFovY = float(view.camera.tanHalfFovY);
   p.aspect = float(view.camera.aspect);
   p.ambient = float(shading.ambient);
+  p.headlight = float(shading.headlight);
+  p.fill = float(shading.fill);
   p.width = std::uint32_t(w);
   p.height = std::uint32_t(h);
   p.cutCount = std::uint32_t(view.cuts.size());

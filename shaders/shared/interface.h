@@ -270,8 +270,8 @@ struct RaycastParams {
   uint maxWalkSteps;
   uint maxEntries;
   uint maxCells;
-  uint pad0;
-  uint pad1;
+  float headlight;     // weight of the light at the eye (RaycastShading)
+  float fill;          // weight of the fill light along `light`
 };
 
 #ifdef __cplusplus

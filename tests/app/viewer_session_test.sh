@@ -21,6 +21,11 @@ cmp posed_cut.png redone.png
   --preserve-volumes -q
 cmp cli.nii.gz export.nii.gz
 test -s export.json && test -s export.png
+if [ -n "${VOX_UPDATE_GOLDEN:-}" ]; then  # regenerate, then look at the PNGs
+  cp rest.png "$src/assets/golden/viewer_am_rest.png"
+  cp posed.png "$src/assets/golden/viewer_am_right_arm_45.png"
+  cp posed_cut.png "$src/assets/golden/viewer_am_right_arm_45_cut.png"
+fi
 python3 - "$src/assets/golden" <<'PY'
 import sys, zlib, struct
 def load(path):

@@ -173,7 +173,7 @@ void expectRenderEqualsRasterizedRender(const test::PosedPhantom& p) {
 
 // Golden images of a pose, ray cast through its posed TM at 320 x 240 with
 // and without a cutting plane: the GPU kernel against the PNGs under
-// assets/golden (VOXMORPH_WRITE_GOLDEN=1 rewrites them from the CPU
+// assets/golden (VOX_UPDATE_GOLDEN=1 rewrites them from the CPU
 // reference) and against the CPU reference, each within 0.1 % of the pixels
 // off by more than 5/255.
 void expectGoldenImages(const test::PosedPhantom& p) {
@@ -190,7 +190,7 @@ void expectGoldenImages(const test::PosedPhantom& p) {
     const RgbImage gpuImage = kernel.render(frame, view, palette);
     const RgbImage cpuImage = raycastReference(p.source, mesh, frame, view, palette);
     const std::string golden = test::assetPath("golden/raycast_" + stem + (cut.empty() ? "" : "_cut") + ".png");
-    if (std::getenv("VOXMORPH_WRITE_GOLDEN")) writePng(golden, cpuImage);
+    if (std::getenv("VOX_UPDATE_GOLDEN")) writePng(golden, cpuImage);
     const ImageDifference g = compareImages(gpuImage, readPng(golden), 5);
     const ImageDifference c = compareImages(gpuImage, cpuImage, 5);
     std::cout << "[ stats    ] " << stem << (cut.empty() ? "" : " cut " + cut) << ": GPU vs golden " << g.differing
