@@ -105,6 +105,13 @@ bool project(const CameraRays& r, const Eigen::Vector3d& p, float& x, float& y) 
   return true;
 }
 
+// The handle of axis cut a: the centre of the plane's section of the scene box.
+Eigen::Vector3d cutHandle(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, int a, double at) {
+  Eigen::Vector3d c = 0.5 * (lo + hi);
+  c[a] = at;
+  return c;
+}
+
 ImU32 rgba(int r, int g, int b, int a = 255) { return IM_COL32(r, g, b, a); }
 
 // Export on a worker thread: gpu::deformGrid with the viewer's pose. The
@@ -189,7 +196,7 @@ struct InputState {
   bool scripted = false;
 };
 
-enum class DragKind { None, Orbit, Pan, Rect, GizmoRotate, GizmoTranslate };
+enum class DragKind { None, Orbit, Pan, Rect, GizmoRotate, GizmoTranslate, CutPlane };
 
 struct Frame {
   double deformMs = 0, raycastMs = 0, uiMs = 0, presentMs = 0, totalMs = 0;
@@ -218,6 +225,7 @@ private:
   // through the same input handling as the mouse (press, moves, release).
   void gizmoRotate(int axis, double degrees, int steps);
   void gizmoTranslate(int axis, double mm, int steps);
+  void cutDrag(int axis, double mm, int steps);
   void startExport(const std::string& path, const std::string& report, const std::string& png, bool preserve);
   void savePose(const std::string& path);
   void loadPose(const std::string& path);
@@ -532,6 +540,26 @@ void Viewer::drawOverlays(const CameraRays& rays) {
       dl->AddCircleFilled(p[v], isPicked ? 5.0f : 3.0f, isPicked ? rgba(255, 60, 200) : c);
     }
   }
+  // Axis cuts: the plane's section of the scene box and a handle to slide it.
+  for (int a = 0; a < 3; ++a) {
+    if (!cutOn_[a]) continue;
+    const int u = (a + 1) % 3, v = (a + 2) % 3;
+    ImVec2 corner[4];
+    bool shown = true;
+    for (int k = 0; k < 4; ++k) {
+      Eigen::Vector3d q;
+      q[a] = cutAt_[a];
+      q[u] = (k == 0 || k == 3) ? sceneLo_[u] : sceneHi_[u];
+      q[v] = k < 2 ? sceneLo_[v] : sceneHi_[v];
+      shown = shown && project(rays, q, corner[k].x, corner[k].y);
+    }
+    float hx, hy;
+    if (shown && project(rays, cutHandle(sceneLo_, sceneHi_, a, cutAt_[a]), hx, hy)) {
+      const ImU32 c = drag_ == DragKind::CutPlane && dragAxis_ == a ? rgba(255, 255, 255) : rgba(120, 255, 200, 200);
+      dl->AddPolyline(corner, 4, c, ImDrawFlags_Closed, 1.5f);
+      dl->AddCircleFilled(ImVec2(hx, hy), 7.0f, c);
+    }
+  }
   if (drag_ == DragKind::Rect) {
     dl->AddRect(ImVec2(float(dragX0_), float(dragY0_)), ImVec2(float(input_.x), float(input_.y)), rgba(255, 60, 200), 0, 0, 1.5f);
   }
@@ -603,7 +631,15 @@ void Viewer::handleMouse(const CameraRays& rays, bool ignoreUi) {
     drag_ = DragKind::Orbit;
     if (right || middle) drag_ = DragKind::Pan;
     else if (ctrl) drag_ = DragKind::Rect;
-    else if (editor_->state().active >= 0) {
+    for (int a = 0; a < 3 && drag_ == DragKind::Orbit; ++a) {
+      float hx, hy;
+      if (cutOn_[a] && project(rays, cutHandle(sceneLo_, sceneHi_, a, cutAt_[a]), hx, hy) && std::hypot(hx - mx, hy - my) < 9.0) {
+        drag_ = DragKind::CutPlane;
+        dragAxis_ = a;
+      }
+    }
+    if (drag_ == DragKind::CutPlane) {
+    } else if (editor_->state().active >= 0 && drag_ == DragKind::Orbit) {
       // Gizmo handles first: arrow tips, then rings.
       const Eigen::Vector3d c = activeCentre();
       const double r = gizmoRadiusMm(rays, c);
@@ -670,12 +706,27 @@ void Viewer::handleMouse(const CameraRays& rays, bool ignoreUi) {
         }
         break;
       }
+      case DragKind::CutPlane: {
+        // Along the plane's axis as it appears on screen.
+        float x0, y0, x1, y1;
+        const Eigen::Vector3d c = cutHandle(sceneLo_, sceneHi_, dragAxis_, cutAt_[dragAxis_]);
+        const double r = gizmoRadiusMm(rays, c);
+        if (project(rays, c, x0, y0) && project(rays, c + r * Eigen::Vector3d::Unit(dragAxis_), x1, y1)) {
+          const double ax = x1 - x0, ay = y1 - y0, len2 = ax * ax + ay * ay;
+          if (len2 > 1e-6) {
+            const double mm = (dx * ax + dy * ay) / len2 * r;
+            cutAt_[dragAxis_] = float(std::clamp(double(cutAt_[dragAxis_]) + mm, sceneLo_[dragAxis_], sceneHi_[dragAxis_]));
+          }
+        }
+        break;
+      }
       default: break;
     }
     lastX_ = mx;
     lastY_ = my;
   } else if (drag_ != DragKind::None) {
     // Released.
+    if (drag_ == DragKind::CutPlane) editor_->setCuts(cutsFromPanel());
     const bool click = std::hypot(mx - dragX0_, my - dragY0_) < 3.0;
     const std::vector<Eigen::Vector3d> cage = editor_->builtCagePositions();
     if (drag_ == DragKind::Rect) {
@@ -835,6 +886,23 @@ void Viewer::gizmoTranslate(int axis, double mm, int steps) {
   dragExpected_ = DragKind::GizmoTranslate;
 }
 
+void Viewer::cutDrag(int axis, double mm, int steps) {
+  // Press on the plane's handle, drag it along its axis, release.
+  int fw = 0, fh = 0;
+  glfwGetFramebufferSize(window_, &fw, &fh);
+  const CameraRays rays = cameraRays(orbit_.camera(fw - viewLeft(fw), fh));
+  if (!cutOn_[axis]) throw InputError("script", "cut_drag: that axis has no cutting plane");
+  const Eigen::Vector3d c = cutHandle(sceneLo_, sceneHi_, axis, cutAt_[axis]);
+  dragPath_.clear();
+  for (int k = 0; k <= steps; ++k) {
+    float x = 0, y = 0;
+    project(rays, c + (mm * k / steps) * Eigen::Vector3d::Unit(axis), x, y);
+    dragPath_.emplace_back(x, y);
+  }
+  dragIndex_ = 0;
+  dragExpected_ = DragKind::CutPlane;
+}
+
 void Viewer::runScriptStep(const ScriptStep& s) {
   const std::string& k = s.step;
   if (k == "mouse_move") {
@@ -879,6 +947,8 @@ void Viewer::runScriptStep(const ScriptStep& s) {
     gizmoRotate(s.text[0] - 'x', s.value, s.substeps);
   } else if (k == "gizmo_translate") {
     gizmoTranslate(s.text[0] - 'x', s.value, s.substeps);
+  } else if (k == "cut_drag") {
+    cutDrag(s.text[0] - 'x', s.value, s.substeps);
   } else if (k == "toggle") {
     if (s.text == "cage") showCage_ = s.flag;
     else if (s.text == "envelope") showEnvelope_ = s.flag;

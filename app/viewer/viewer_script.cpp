@@ -15,7 +15,7 @@ namespace {
 using nlohmann::json;
 
 const std::set<std::string> kSteps = {"mouse_move", "mouse_down", "mouse_up", "scroll",      "key",       "select_group", "pick_rect",
-                                      "pick_clear", "fix",        "move",     "gizmo_rotate", "gizmo_translate", "toggle", "cut",
+                                      "pick_clear", "fix",        "move",     "gizmo_rotate", "gizmo_translate", "toggle", "cut", "cut_drag",
                                       "hide",       "arap",       "undo",     "redo",        "save_pose", "load_pose",    "export",       "cancel_export",
                                       "screenshot", "camera",     "wait",     "quit"};
 
@@ -82,7 +82,7 @@ struct Reader {
     if (s.step == "pick_rect" && s.numbers.size() != 4) fail(what + " needs 'rect': [x0, y0, x1, y1]");
     if ((s.step == "screenshot" || s.step == "save_pose" || s.step == "load_pose" || s.step == "export") && s.path.empty())
       fail(what + " needs a 'path'");
-    if ((s.step == "gizmo_rotate" || s.step == "gizmo_translate") && s.text != "x" && s.text != "y" && s.text != "z")
+    if ((s.step == "gizmo_rotate" || s.step == "gizmo_translate" || s.step == "cut_drag") && s.text != "x" && s.text != "y" && s.text != "z")
       fail(what + " needs 'axis': \"x\", \"y\" or \"z\"");
     return s;
   }

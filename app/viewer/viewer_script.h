@@ -22,7 +22,8 @@
 // scroll with "dy"; key with "key": a GLFW key name such as "Z" and
 // "ctrl"/"shift"); high-level steps call what the panels call (select_group,
 // pick_rect, pick_clear, fix, move, gizmo_rotate and gizmo_translate through
-// the gizmo's drag code, toggle, cut, hide, arap, undo, redo, save_pose,
+// the gizmo's drag code, cut_drag through a cutting plane's handle, toggle,
+// cut, hide, arap, undo, redo, save_pose,
 // load_pose, export, cancel_export, screenshot, camera, wait, quit). An
 // export waits for its end unless "background": true; cancel_export cancels
 // the running export and waits until it has stopped. Paths are relative to

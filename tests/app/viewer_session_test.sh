@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # Scripted viewer session on the AM phantom under Xvfb + lavapipe: select the
-# right arm, turn it 45 degrees with the gizmo, cut, undo back to rest, redo,
-# save the pose, start an export and cancel it, export. Checks: the screenshots match the golden images
-# (the ray caster's tolerance), the screenshot after undo equals the rest
-# one and the one after redo the cut one, byte for byte, and `voxmorph deform
-# --pose` on the saved pose writes a grid byte-identical to the export.
+# right arm, turn it 45 degrees with the gizmo, cut, slide the cut by its
+# handle, undo back to rest, redo, save the pose, start an export and cancel
+# it, export. Checks: the screenshots match the golden images (the ray
+# caster's tolerance), the screenshot after undo equals the rest one and the
+# one after redo the slid cut's, byte for byte; the cancelled export left
+# nothing; `voxmorph deform --pose` on the saved pose writes a grid
+# byte-identical to the export.
 set -euo pipefail
 bin=$1 src=$2 work=$3
 rm -rf "$work" && mkdir -p "$work"
@@ -16,7 +18,8 @@ grep -q "export cancelled; nothing written" session.log
 test ! -e cancelled.nii.gz && test ! -e cancelled.json
 if ls -a | grep -q '^\.tmp-'; then echo "temporary files left behind"; ls -a; exit 1; fi
 cmp rest.png undone.png
-cmp posed_cut.png redone.png
+! cmp -s posed_cut.png posed_cut_slid.png  # the plane's handle moved the cut
+cmp posed_cut_slid.png redone.png
 "$bin" deform "$src/assets/icrp110_am.nii.gz" --organs "$src/assets/icrp110_am_organs.dat" --pose pose.json -o cli.nii.gz \
   --preserve-volumes -q
 cmp cli.nii.gz export.nii.gz
