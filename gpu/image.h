@@ -10,27 +10,21 @@
 
 namespace vox::gpu {
 
-class Image3D {
+// An image in device memory with its view, owned (destroyed with it).
+// Created in VK_IMAGE_LAYOUT_GENERAL, where Image3D and Image2D keep it.
+class DeviceImage {
 public:
-  Image3D() = default;
-  // Throws RuntimeFailure when a side exceeds maxImageDimension3D or the
-  // image exceeds the allocation limit.
-  Image3D(Context& context, std::array<std::uint32_t, 3> extent, VkFormat format);
-  ~Image3D();
-  Image3D(Image3D&& other) noexcept;
-  Image3D& operator=(Image3D&& other) noexcept;
-  Image3D(const Image3D&) = delete;
-  Image3D& operator=(const Image3D&) = delete;
+  DeviceImage() = default;
+  DeviceImage(Context& context, VkImageType type, VkExtent3D extent, VkFormat format, VkImageUsageFlags usage);
+  ~DeviceImage() { release(); }
+  DeviceImage(DeviceImage&& other) noexcept;
+  DeviceImage& operator=(DeviceImage&& other) noexcept;
+  DeviceImage(const DeviceImage&) = delete;
+  DeviceImage& operator=(const DeviceImage&) = delete;
 
-  const std::array<std::uint32_t, 3>& extent() const { return extent_; }
-  VkFormat format() const { return format_; }
+  Context* context() const { return context_; }
   VkImage handle() const { return image_; }
   VkImageView view() const { return view_; }
-  std::uint64_t texelBytes() const;
-
-  // Whole-image copies from / to tightly packed host memory (x fastest).
-  void upload(const void* src);
-  void download(void* dst) const;
 
 private:
   void release();
@@ -38,6 +32,27 @@ private:
   VkImage image_ = VK_NULL_HANDLE;
   VkImageView view_ = VK_NULL_HANDLE;
   VkDeviceMemory memory_ = VK_NULL_HANDLE;
+};
+
+class Image3D {
+public:
+  Image3D() = default;
+  // Throws RuntimeFailure when a side exceeds maxImageDimension3D or the
+  // image exceeds the allocation limit.
+  Image3D(Context& context, std::array<std::uint32_t, 3> extent, VkFormat format);
+
+  const std::array<std::uint32_t, 3>& extent() const { return extent_; }
+  VkFormat format() const { return format_; }
+  VkImage handle() const { return image_.handle(); }
+  VkImageView view() const { return image_.view(); }
+  std::uint64_t texelBytes() const;
+
+  // Whole-image copies from / to tightly packed host memory (x fastest).
+  void upload(const void* src);
+  void download(void* dst) const;
+
+private:
+  DeviceImage image_;
   std::array<std::uint32_t, 3> extent_{0, 0, 0};
   VkFormat format_ = VK_FORMAT_UNDEFINED;
 };
@@ -51,27 +66,18 @@ public:
   Image2D() = default;
   // Throws RuntimeFailure for a side of 0 or over 16384 pixels.
   Image2D(Context& context, std::uint32_t width, std::uint32_t height);
-  ~Image2D();
-  Image2D(Image2D&& other) noexcept;
-  Image2D& operator=(Image2D&& other) noexcept;
-  Image2D(const Image2D&) = delete;
-  Image2D& operator=(const Image2D&) = delete;
 
   std::uint32_t width() const { return width_; }
   std::uint32_t height() const { return height_; }
-  bool valid() const { return image_ != VK_NULL_HANDLE; }
-  VkImage handle() const { return image_; }
-  VkImageView view() const { return view_; }
+  bool valid() const { return image_.handle() != VK_NULL_HANDLE; }
+  VkImage handle() const { return image_.handle(); }
+  VkImageView view() const { return image_.view(); }
 
   // Reads the image back (screenshots, tests); waits for the GPU.
   RgbImage download() const;
 
 private:
-  void release();
-  Context* context_ = nullptr;
-  VkImage image_ = VK_NULL_HANDLE;
-  VkImageView view_ = VK_NULL_HANDLE;
-  VkDeviceMemory memory_ = VK_NULL_HANDLE;
+  DeviceImage image_;
   std::uint32_t width_ = 0, height_ = 0;
 };
 

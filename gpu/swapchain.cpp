@@ -13,6 +13,17 @@ namespace {
 
 bool isBgr(VkFormat f) { return f == VK_FORMAT_B8G8R8A8_UNORM || f == VK_FORMAT_B8G8R8A8_SRGB; }
 
+// Fills an image in VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL with one colour.
+void clearTransferDst(VkCommandBuffer cmd, VkImage image, Rgb colour) {
+  VkClearColorValue c{};
+  c.float32[0] = float(colour.r) / 255.0f;
+  c.float32[1] = float(colour.g) / 255.0f;
+  c.float32[2] = float(colour.b) / 255.0f;
+  c.float32[3] = 1.0f;
+  const VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+  vkCmdClearColorImage(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &c, 1, &range);
+}
+
 }  // namespace
 
 Swapchain::Swapchain(Context& context, VkSurfaceKHR surface, std::uint32_t width, std::uint32_t height, SwapchainOptions options)
@@ -223,13 +234,7 @@ void Swapchain::blit(const Frame& frame, const Image2D& source, std::uint32_t le
   toLayout(frame.commands, image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
   left = std::min(left, extent_.width - 1);
   if (left > 0) {
-    VkClearColorValue c{};
-    c.float32[0] = float(background.r) / 255.0f;
-    c.float32[1] = float(background.g) / 255.0f;
-    c.float32[2] = float(background.b) / 255.0f;
-    c.float32[3] = 1.0f;
-    const VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-    vkCmdClearColorImage(frame.commands, image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &c, 1, &range);
+    clearTransferDst(frame.commands, image, background);
     VkMemoryBarrier b{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
     b.srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
     b.dstAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT;
@@ -250,13 +255,7 @@ void Swapchain::blit(const Frame& frame, const Image2D& source, std::uint32_t le
 void Swapchain::clear(const Frame& frame, Rgb colour) {
   const VkImage image = images_[frame.image];
   toLayout(frame.commands, image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
-  VkClearColorValue c{};
-  c.float32[0] = float(colour.r) / 255.0f;
-  c.float32[1] = float(colour.g) / 255.0f;
-  c.float32[2] = float(colour.b) / 255.0f;
-  c.float32[3] = 1.0f;
-  const VkImageSubresourceRange range{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
-  vkCmdClearColorImage(frame.commands, image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &c, 1, &range);
+  clearTransferDst(frame.commands, image, colour);
   toLayout(frame.commands, image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
 }
 
