@@ -11,6 +11,7 @@
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/io/mesh_io.h"
+#include "geometry/io/output_path.h"
 #include "geometry/organ_table.h"
 
 #include <chrono>
@@ -66,11 +67,12 @@ struct CageCommandOptions {
 
 void buildCageCommand(const CageCommandOptions& o) {
   installStderrProgress(o.quiet);
-  if (!hasSurfaceExtension(o.output)) throw InputError(o.output, "unknown surface format (use .obj, .off or .ply)");
+  checkOutputPath(o.output, OutputKind::Surface, "--output");
+  checkOutputPath(o.report, OutputKind::Json, "--report");
   CageOptions options = o.cage;
   for (const std::string& s : o.separations) options.separations.push_back(parseSeparation(s));
   if (!options.separations.empty() && o.organs.empty())
-    throw InputError("--separate", "limb separation needs the grid's organ table (--organs) to find the label groups");
+    throw UsageError("--separate", "limb separation needs the grid's organ table (--organs) to find the label groups");
 
   const auto t0 = std::chrono::steady_clock::now();
   const LabelGrid grid = readGrid(o.input);
@@ -125,9 +127,9 @@ void addCageCommand(CLI::App& app) {
                   "box in mm: right_arm:trunk or right_arm:trunk@xmin,ymin,zmin,xmax,ymax,zmax (repeatable)")
       ->allow_extra_args(false);
   cmd->add_option("--dilation", o->cage.dilationMm, "Offset of the cage from the foreground, mm (default 20)")
-      ->check(CLI::PositiveNumber);
+      ->check(numberIn(0, 10000, "mm", true));
   cmd->add_option("--vertices", o->cage.targetVertices, "Cage vertices after QEM simplification (default 300)")
-      ->check(CLI::Range(8, 100000));
+      ->check(integerIn(8, 100000));
   cmd->add_flag("-q,--quiet", o->quiet, "No progress or summary (warnings still go to stderr)");
   cmd->callback([o] { buildCageCommand(*o); });
 }

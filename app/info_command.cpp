@@ -110,13 +110,19 @@ void gridInfo(const InfoOptions& o) {
         totalMass += e["mass_g"].get<double>();
       } else {
         e["name"] = nullptr;
+        e["unnamed"] = true;
       }
     }
     labels.push_back(e);
   }
   j["labels"] = labels;
   j["label_count"] = stats.presentLabels();
-  if (organs) j["total_mass_g"] = totalMass;
+  std::string unnamedNote;
+  if (organs) {
+    j["total_mass_g"] = totalMass;
+    j["unnamed_labels"] = organs->unnamedLabels(stats.counts);
+    unnamedNote = unnamedLabelsNote(*organs, stats.counts);
+  }
 
   if (o.json) {
     std::cout << j.dump(2) << "\n";
@@ -141,6 +147,7 @@ void gridInfo(const InfoOptions& o) {
       std::printf("\n");
     }
     if (organs) std::printf("\ntotal mass  %.1f g\n", totalMass);
+    if (!unnamedNote.empty()) std::printf("warning: %s\n", unnamedNote.c_str());
   }
   if (cpuEqual && !*cpuEqual) throw RuntimeFailure("GPU label statistics differ from the CPU reference");
 }

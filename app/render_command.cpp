@@ -12,7 +12,9 @@
 #include "geometry/deform/pose.h"
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
+#include "geometry/io/output_path.h"
 #include "geometry/io/png_io.h"
+#include "geometry/label_stats.h"
 #include "geometry/organ_table.h"
 #include "geometry/render/camera.h"
 #include "geometry/render/cutting_planes.h"
@@ -57,6 +59,7 @@ double msSince(std::chrono::steady_clock::time_point t0) {
 
 void render(const RenderOptions& o) {
   installStderrProgress(o.quiet);
+  checkOutputPath(o.output, OutputKind::Png, "--output");
   int width = 0, height = 0;
   parseImageSize(o.size, width, height);
   CuttingPlanes cuts;
@@ -67,6 +70,11 @@ void render(const RenderOptions& o) {
   if (!o.organs.empty()) organs = OrganTable::read(o.organs);
   Palette palette = organs ? Palette::fromOrgans(*organs, grid.maxLabel()) : Palette(grid.maxLabel());
   if (!o.hide.empty()) palette.hide(o.hide, organs ? &*organs : nullptr);
+  const LabelStats stats = computeLabelStats(grid);
+  bool anyVisible = false;
+  for (std::size_t l = 1; l < stats.counts.size(); ++l) anyVisible = anyVisible || (stats.counts[l] > 0 && palette.visible(Label(l)));
+  if (!anyVisible && stats.foregroundVoxels() > 0)
+    throw UsageError("--hide", "'" + o.hide + "' hides every label of the grid; the image would be empty");
 
   TetMesh restMesh;
   std::vector<Eigen::Vector3d> posed;
