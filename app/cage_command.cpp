@@ -8,11 +8,13 @@
 #include "geometry/deform/cage_builder.h"
 #include "geometry/deform/label_groups.h"
 #include "geometry/deform/pipeline.h"
+#include "geometry/deform/pose_frame.h"
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/io/mesh_io.h"
 #include "geometry/io/output_path.h"
 #include "geometry/organ_table.h"
+#include "geometry/world_frame.h"
 
 #include <chrono>
 #include <cstdio>
@@ -76,6 +78,7 @@ void buildCageCommand(const CageCommandOptions& o) {
 
   const auto t0 = std::chrono::steady_clock::now();
   const LabelGrid grid = readGrid(o.input);
+  for (LimbSeparation& s : options.separations) regionInGridFrame(s.region, grid.geometry(), "--separate");
   const LabelGrid groups = options.separations.empty() ? binaryGroupGrid(grid) : labelGroupGrid(grid, OrganTable::read(o.organs));
   const CageResult r = buildCage(groups, options);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -83,7 +86,9 @@ void buildCageCommand(const CageCommandOptions& o) {
   if (!c.validCage())
     throw RuntimeFailure(o.input + ": the automatic cage is not a valid cage (" + cageFault(c) +
                          "); try another --vertices or --dilation");
-  writeSurface(o.output, r.cage);
+  TriMesh cage = r.cage;
+  surfaceGridToWorld(cage, grid.geometry());
+  writeSurface(o.output, cage);
 
   if (!o.report.empty()) {
     nlohmann::json j = {{"input", o.input},

@@ -16,6 +16,7 @@
 #include "geometry/deform/label_volumes.h"
 #include "geometry/deform/out_of_core.h"
 #include "geometry/deform/pipeline.h"
+#include "geometry/deform/pose_frame.h"
 #include "geometry/deform/rasterize.h"
 #include "geometry/deform/surface_checks.h"
 #include "geometry/error.h"
@@ -25,6 +26,7 @@
 #include "geometry/io/output_path.h"
 #include "geometry/io/png_io.h"
 #include "geometry/label_stats.h"
+#include "geometry/world_frame.h"
 #include "gpu/context.h"
 #include "gpu/kernels/field_interpolation.h"
 #include "gpu/kernels/rasterize.h"
@@ -167,7 +169,10 @@ void deform(const DeformOptions& o) {
   if (o.preserveVolumes && o.maxMemoryMb > 0)
     throw UsageError("--preserve-volumes", "needs the posed grid in memory; it cannot be combined with --max-memory");
   // Everything the command can reject cheaply is checked before the work.
-  const Pose pose = readPose(o.pose);
+  // Poses, cages and --separate boxes are in the world frame (world_frame.h);
+  // the pipeline works in the grid frame.
+  const GridGeometry frame = openGridSlices(o.input)->geometry();
+  const Pose pose = poseInGridFrame(readPose(o.pose), frame, o.pose);
   std::optional<OrganTable> organTable;
   if (!o.organs.empty()) organTable = OrganTable::read(o.organs);
   PipelineOptions options = poseOptions(pose, o.pose, organTable);
@@ -175,13 +180,17 @@ void deform(const DeformOptions& o) {
   options.cage.targetVertices = o.vertices;
   for (const std::string& text : o.separations) {
     options.cage.separations.push_back(parseSeparation(text));
+    regionInGridFrame(options.cage.separations.back().region, frame, "--separate " + text);
     options.cuts->push_back(options.cage.separations.back());
   }
   if (!options.cage.separations.empty() && !options.organs)
     throw InputError(o.pose, "limb separation needs the grid's organ table (--organs) to find the label groups");
   if (usesLabelGroups(pose) && !options.organs)
     throw InputError(o.pose, "a selection by label group needs the grid's organ table (--organs)");
-  if (!o.cage.empty()) options.userCage = readCage(o.cage);
+  if (!o.cage.empty()) {
+    options.userCage = readCage(o.cage);
+    surfaceWorldToGrid(*options.userCage, frame);
+  }
   const bool separated = !options.cage.separations.empty();
 
   Engine engine;
@@ -226,11 +235,13 @@ void deform(const DeformOptions& o) {
   if (!o.posedCage.empty()) {
     TriMesh posed = pipeline->cage();
     posed.positions = pipeline->deformedCage();
+    surfaceGridToWorld(posed, frame);
     writeSurface(o.posedCage, posed);
   }
   if (!o.posedMesh.empty()) {
     TetMesh posed = pipeline->transferMesh();
     posed.positions = pipeline->deformedTransferMesh();
+    tetMeshGridToWorld(posed, frame);
     writeTetMesh(o.posedMesh, posed);
   }
   for (const StageTime& t : pipeline->stats().stages) report.stages.push_back(t);

@@ -10,6 +10,7 @@
 #include "geometry/remesh/meshing_estimate.h"
 #include "geometry/remesh/remesh.h"
 #include "geometry/remesh/remesh_report.h"
+#include "geometry/world_frame.h"
 
 #include <cmath>
 #include <cstdio>
@@ -86,13 +87,21 @@ inline void checkRemeshEstimate(const RemeshCliOptions& o, const remesh::Meshing
 
 // Remeshes `initial` (whose domain tets and topology the report compares
 // against), writes the output mesh, prints the report and writes its JSON.
+// `toWorld`: the grid whose frame `initial` is in (mesh), written in its
+// world frame (world_frame.h); none for remesh, whose input is in world.
 inline void runRemesh(RemeshCliOptions& o, const TetMesh& initial, const remesh::MeshTopology& initialTopology,
-                      double setupSeconds) {
+                      double setupSeconds, const GridGeometry* toWorld = nullptr) {
   o.remesh.projectOnInterfaces = o.surface != "none";
   o.remesh.hermite = o.surface == "hpss";
   remesh::RemeshStats stats;
   const TetMesh output = remesh::remeshTetMesh(initial, o.remesh, &stats, o.keepImaginary, o.input);
-  writeTetMesh(o.output, output);
+  if (toWorld) {
+    TetMesh world = output;
+    tetMeshGridToWorld(world, *toWorld);
+    writeTetMesh(o.output, world);
+  } else {
+    writeTetMesh(o.output, output);
+  }
   remesh::ReportOptions reportOptions;
   reportOptions.distances = !o.noDistances;
   reportOptions.threads = o.remesh.threads;

@@ -10,6 +10,7 @@
 #include "app/command_line.h"
 #include "geometry/deform/pipeline.h"
 #include "geometry/deform/pose.h"
+#include "geometry/deform/pose_frame.h"
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/io/output_path.h"
@@ -82,7 +83,7 @@ void render(const RenderOptions& o) {
     restMesh = boxTransferMesh(grid, o.input);
     posed = restMesh.positions;
   } else {
-    const Pose pose = readPose(o.pose);
+    const Pose pose = poseInGridFrame(readPose(o.pose), grid.geometry(), o.pose);
     PipelineOptions options = poseOptions(pose, o.pose, organs);
     options.envelope = false;
     DeformationPipeline pipeline(grid, options);
