@@ -20,10 +20,11 @@ struct MeshingEstimate {
 };
 
 // Tets of an isotropic mesh at length l: domain volume over the mean tet
-// volume at that length. The factors are measured (docs/BENCHMARKS.md): 10.3
-// tets per l^3 of domain, about 600 bytes per tet at the remesher's peak.
-constexpr double kTetsPerCubicLength = 10.3;
-constexpr double kRemeshBytesPerTet = 600.0;
+// volume at that length. The factors are the larger of those measured
+// (docs/BENCHMARKS.md, "Meshing estimate"): tets per l^3 of domain and peak
+// bytes per output tet (the imaginary layer and the complex's tables count).
+constexpr double kTetsPerCubicLength = 12.0;
+constexpr double kRemeshBytesPerTet = 1200.0;
 
 MeshingEstimate estimateMeshing(const LabelGrid& grid, double targetLength);
 MeshingEstimate estimateMeshing(const TetMesh& mesh, double targetLength);

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <vector>
@@ -102,22 +103,47 @@ Camera parseCamera(const std::string& description, const Eigen::Vector3d& sceneM
     const double el = keys.count("elevation") ? parseNumber("elevation", keys["elevation"][0]) : 0.0;
     if (std::abs(el) >= 90.0) throw UsageError("--camera", "elevation must be in (-90, 90) degrees");
     const double diagonal = (sceneMax - sceneMin).norm();
-    // Default: the box's bounding sphere fits the narrower field of view.
+    const double a = az * std::numbers::pi / 180.0, e = el * std::numbers::pi / 180.0;
+    // Direction from the target to the eye: azimuth 0 puts the eye on -y.
+    const Eigen::Vector3d toEye(std::sin(a) * std::cos(e), -std::cos(a) * std::cos(e), std::sin(e));
+    // Default: the nearest eye from which the box's eight corners project
+    // inside the frame, kFrameMargin of the half-frame left free (a tall
+    // body fills the frame's height rather than a sphere around it), or the
+    // bounding sphere's fit where that is nearer.
+    const double tanY = std::tan(0.5 * cam.fovYDegrees * std::numbers::pi / 180.0) * (1.0 - kFrameMargin);
+    const double tanX = tanY * double(width) / double(height);
+    const Eigen::Vector3d right = (-toEye).cross(cam.up).normalized();
+    const Eigen::Vector3d up = right.cross(-toEye);
+    double distance = 0.0;
+    for (int c = 0; c < 8; ++c) {
+      const Eigen::Vector3d corner((c & 1) ? sceneMax.x() : sceneMin.x(), (c & 2) ? sceneMax.y() : sceneMin.y(),
+                                   (c & 4) ? sceneMax.z() : sceneMin.z());
+      const Eigen::Vector3d d = corner - cam.target;
+      const double depth = d.dot(toEye);  // towards the eye
+      distance = std::max({distance, depth + std::abs(d.dot(right)) / tanX, depth + std::abs(d.dot(up)) / tanY});
+    }
+    // Never farther than the bounding sphere's fit.
     const double halfY = 0.5 * cam.fovYDegrees * std::numbers::pi / 180.0;
     const double halfX = std::atan(std::tan(halfY) * double(width) / double(height));
-    double distance = 0.5 * diagonal / std::sin(std::min(halfX, halfY));
+    distance = std::min(distance, 0.5 * diagonal / std::sin(std::min(halfX, halfY)));
     if (keys.count("distance")) {
       bool mm = false;
       const double d = parseNumber("distance", keys["distance"][0], &mm);
       distance = mm ? d : d * diagonal;
     }
     if (!(distance > 0.0)) throw UsageError("--camera", "distance must be positive");
-    const double a = az * std::numbers::pi / 180.0, e = el * std::numbers::pi / 180.0;
-    // Direction from the target to the eye: azimuth 0 puts the eye on -y.
-    const Eigen::Vector3d toEye(std::sin(a) * std::cos(e), -std::cos(a) * std::cos(e), std::sin(e));
     cam.eye = cam.target + distance * toEye;
   }
-  cameraRays(cam);  // validates the result
+  const CameraRays rays = cameraRays(cam);  // validates the result
+  cam.depthNear = std::numeric_limits<double>::max();
+  cam.depthFar = -cam.depthNear;
+  for (int c = 0; c < 8; ++c) {
+    const Eigen::Vector3d corner((c & 1) ? sceneMax.x() : sceneMin.x(), (c & 2) ? sceneMax.y() : sceneMin.y(),
+                                 (c & 4) ? sceneMax.z() : sceneMin.z());
+    const double depth = (corner - rays.eye).dot(rays.forward);
+    cam.depthNear = std::min(cam.depthNear, depth);
+    cam.depthFar = std::max(cam.depthFar, depth);
+  }
   return cam;
 }
 

@@ -85,14 +85,17 @@ struct RaycastView {
   Eigen::Vector3d right{0, 0, 0};         // the ray of pixel (x, y) is
   Eigen::Vector3d up{0, 0, 0};            //   eye + t (forward + sx right + sy up)
   std::vector<Eigen::Vector4d> cuts;      // render frame: cell c is removed iff xyz . c > w
-  Eigen::Vector3d light{0, 0, 1};         // unit vector towards the light, grid-frame axes
+  Eigen::Vector3d light{0, 0, 1};         // unit vector towards the fill light, grid-frame axes
+  Eigen::Vector3d headlight{0, -1, 0};    // unit vector towards the camera, grid-frame axes
+  double depthNear = 0.0, depthFar = 0.0;  // the camera's depth-cue range (Camera::depthNear/Far)
 
   Eigen::Vector3d direction(int x, int y) const { return forward + camera.sx(x) * right + camera.sy(y) * up; }
 };
 RaycastView makeRaycastView(const RaycastFrame& frame, const Camera& camera, const CuttingPlanes& cuts);
 
-// How a visible voxel is shaded: Lambert on the crossed voxel face plus
-// ambient, times the label colour; misses get the background.
+// How a visible voxel is shaded: the crossed voxel face under a headlight
+// and a fill light plus ambient (shaders/shared/shading.glsl), times the
+// label colour; misses get the background.
 struct RaycastShading {
   Rgb background{22, 24, 29};
   double ambient = 0.35;

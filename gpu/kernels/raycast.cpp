@@ -208,6 +208,7 @@ RgbImage RaycastKernel::render(const RaycastFrame& frame, const RaycastView& vie
     p.cellsLo[a] = float(frame.cellsLo[a]);
     p.cellsHi[a] = float(frame.cellsHi[a]);
     p.light[a] = float(view.light[a]);
+    p.headlight[a] = float(view.headlight[a]);
     p.sourceShift[a] = std::int32_t(sourceShift_[a]);
     p.sourceDims[a] = std::int32_t(source_.dims[a]);
   }
@@ -223,6 +224,8 @@ RgbImage RaycastKernel::render(const RaycastFrame& frame, const RaycastView& vie
   p.tanHalfFovY = float(view.camera.tanHalfFovY);
   p.aspect = float(view.camera.aspect);
   p.ambient = float(shading.ambient);
+  p.depthNear = float(view.depthNear);
+  p.depthFar = float(view.depthFar);
   p.width = std::uint32_t(w);
   p.height = std::uint32_t(h);
   p.cutCount = std::uint32_t(view.cuts.size());

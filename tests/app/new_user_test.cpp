@@ -3,7 +3,8 @@
 // path), one style of range message and exit code 2 for every usage error,
 // the memory estimate that refuses a target length far below the voxel
 // size, organ tables that name every label of their phantom, and the
-// deformation's printed organ table, CSV, warnings and histogram plot.
+// deformation's printed organ table, CSV, warnings and histogram plot, and
+// renders that show shape, fill the frame and carry a legend and a scale bar.
 
 #include "geometry/io/grid_io.h"
 #include "geometry/io/png_io.h"
@@ -17,7 +18,9 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
+#include <tuple>
 
 namespace vox {
 namespace {
@@ -170,6 +173,42 @@ TEST(NewUser, DeformPrintsTheOrganTableWritesItsCsvAndPlots) {
   EXPECT_GT(plot.width, 1000);
   EXPECT_GT(countNotBackground(plot, Rgb{255, 255, 255}), 5000u);
   EXPECT_GT(std::count(plot.pixels.begin(), plot.pixels.end(), Rgb{52, 101, 164}), 100);
+}
+
+TEST(NewUser, RendersShowShapeFillTheFrameAndCarryALegendAndAScaleBar) {
+  VOX_REQUIRE_VOXMORPH();
+  const std::string dir = test::tempDir();
+  const std::string grid = spheres(dir, 48);
+  const std::string base = "render " + test::quote(grid) + " --size 160x120 -q --cpu -o ";
+  ASSERT_EQ(voxmorph(base + test::quote(dir + "/plain.png")).exitCode, 0);
+  const RgbImage plain = readPng(dir + "/plain.png");
+  // A sphere's faces seen head-on: the headlight, fill light and depth cue
+  // give it many tones, not three flat ones.
+  std::set<std::tuple<int, int, int>> tones;
+  for (const Rgb& p : plain.pixels) tones.insert({p.r, p.g, p.b});
+  EXPECT_GT(tones.size(), 12u);
+  // The framing fits the foreground box's corners, not a sphere around the
+  // box: the ball spans over 70 % of the rows (58 % with the sphere's fit).
+  const Rgb background{22, 24, 29};
+  int top = plain.height, bottom = -1;
+  for (int y = 0; y < plain.height; ++y)
+    for (int x = 0; x < plain.width; ++x)
+      if (!(plain.at(x, y) == background)) {
+        top = std::min(top, y);
+        bottom = std::max(bottom, y);
+      }
+  EXPECT_GE(bottom - top + 1, int(0.7 * plain.height)) << top << " " << bottom;
+  // Legend and scale bar: light text over the image, a bar at the bottom right.
+  std::ofstream(dir + "/organs.dat") << "ID name tissue density\n1 Core 1 1.0\n2 Shell 1 1.0\n3 Skin 1 1.0\n";
+  ASSERT_EQ(voxmorph(base + test::quote(dir + "/annotated.png") + " --legend --scale-bar --organs " + test::quote(dir + "/organs.dat")).exitCode, 0);
+  const RgbImage annotated = readPng(dir + "/annotated.png");
+  const Rgb text{235, 235, 235};
+  std::size_t legendText = 0, barText = 0;
+  for (int y = 0; y < annotated.height; ++y)
+    for (int x = 0; x < annotated.width; ++x)
+      if (annotated.at(x, y) == text) (x < annotated.width / 2 && y < annotated.height / 2 ? legendText : barText) += 1;
+  EXPECT_GT(legendText, 40u);
+  EXPECT_GT(barText, 60u);
 }
 
 }  // namespace
