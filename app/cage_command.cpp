@@ -8,10 +8,13 @@
 #include "geometry/deform/cage_builder.h"
 #include "geometry/deform/label_groups.h"
 #include "geometry/deform/pipeline.h"
+#include "geometry/deform/pose_frame.h"
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/io/mesh_io.h"
+#include "geometry/io/output_path.h"
 #include "geometry/organ_table.h"
+#include "geometry/world_frame.h"
 
 #include <chrono>
 #include <cstdio>
@@ -66,14 +69,16 @@ struct CageCommandOptions {
 
 void buildCageCommand(const CageCommandOptions& o) {
   installStderrProgress(o.quiet);
-  if (!hasSurfaceExtension(o.output)) throw InputError(o.output, "unknown surface format (use .obj, .off or .ply)");
+  checkOutputPath(o.output, OutputKind::Surface, "--output");
+  checkOutputPath(o.report, OutputKind::Json, "--report");
   CageOptions options = o.cage;
   for (const std::string& s : o.separations) options.separations.push_back(parseSeparation(s));
   if (!options.separations.empty() && o.organs.empty())
-    throw InputError("--separate", "limb separation needs the grid's organ table (--organs) to find the label groups");
+    throw UsageError("--separate", "limb separation needs the grid's organ table (--organs) to find the label groups");
 
   const auto t0 = std::chrono::steady_clock::now();
   const LabelGrid grid = readGrid(o.input);
+  for (LimbSeparation& s : options.separations) regionInGridFrame(s.region, grid.geometry(), "--separate");
   const LabelGrid groups = options.separations.empty() ? binaryGroupGrid(grid) : labelGroupGrid(grid, OrganTable::read(o.organs));
   const CageResult r = buildCage(groups, options);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -81,7 +86,9 @@ void buildCageCommand(const CageCommandOptions& o) {
   if (!c.validCage())
     throw RuntimeFailure(o.input + ": the automatic cage is not a valid cage (" + cageFault(c) +
                          "); try another --vertices or --dilation");
-  writeSurface(o.output, r.cage);
+  TriMesh cage = r.cage;
+  surfaceGridToWorld(cage, grid.geometry());
+  writeSurface(o.output, cage);
 
   if (!o.report.empty()) {
     nlohmann::json j = {{"input", o.input},
@@ -125,9 +132,9 @@ void addCageCommand(CLI::App& app) {
                   "box in mm: right_arm:trunk or right_arm:trunk@xmin,ymin,zmin,xmax,ymax,zmax (repeatable)")
       ->allow_extra_args(false);
   cmd->add_option("--dilation", o->cage.dilationMm, "Offset of the cage from the foreground, mm (default 20)")
-      ->check(CLI::PositiveNumber);
+      ->check(numberIn(0, 10000, "mm", true));
   cmd->add_option("--vertices", o->cage.targetVertices, "Cage vertices after QEM simplification (default 300)")
-      ->check(CLI::Range(8, 100000));
+      ->check(integerIn(8, 100000));
   cmd->add_flag("-q,--quiet", o->quiet, "No progress or summary (warnings still go to stderr)");
   cmd->callback([o] { buildCageCommand(*o); });
 }

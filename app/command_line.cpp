@@ -4,6 +4,7 @@
 #include "geometry/progress.h"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <string>
@@ -55,6 +56,56 @@ void writeJson(const std::string& path, const nlohmann::json& json) {
     return;
   }
   writeFileAtomic(path, text);
+}
+
+namespace {
+
+std::string formatBound(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", v);
+  return text;
+}
+
+}  // namespace
+
+CLI::Validator numberIn(double lo, double hi, const std::string& unit, bool openLow) {
+  const std::string range = (openLow ? "(" : "[") + formatBound(lo) + ", " + formatBound(hi) + "]" + (unit.empty() ? "" : " " + unit);
+  return CLI::Validator(
+      [=](std::string& text) -> std::string {
+        double v = 0.0;
+        std::size_t used = 0;
+        try {
+          v = std::stod(text, &used);
+        } catch (const std::exception&) {
+          used = 0;
+        }
+        const bool inside = used == text.size() && std::isfinite(v) && (openLow ? v > lo : v >= lo) && v <= hi;
+        return inside ? std::string() : "must be a number in " + range + ", got '" + text + "'";
+      },
+      "NUMBER in " + range);
+}
+
+CLI::Validator integerIn(std::int64_t lo, std::int64_t hi, const std::string& unit) {
+  const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]" + (unit.empty() ? "" : " " + unit);
+  return CLI::Validator(
+      [=](std::string& text) -> std::string {
+        long long v = 0;
+        std::size_t used = 0;
+        try {
+          v = std::stoll(text, &used);
+        } catch (const std::exception&) {
+          used = 0;
+        }
+        const bool inside = used == text.size() && !text.empty() && v >= lo && v <= hi;
+        return inside ? std::string() : "must be an integer in " + range + ", got '" + text + "'";
+      },
+      "INTEGER in " + range);
+}
+
+std::int64_t physicalMemoryMb() {
+  const long pages = ::sysconf(_SC_PHYS_PAGES), pageSize = ::sysconf(_SC_PAGE_SIZE);
+  if (pages <= 0 || pageSize <= 0) return std::int64_t(1) << 20;
+  return std::int64_t(pages) * std::int64_t(pageSize) >> 20;
 }
 
 std::string withThousands(std::uint64_t n) {

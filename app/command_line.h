@@ -38,6 +38,15 @@ LimbSeparation parseSeparation(const std::string& text);
 // limb separation asked for it (cage and deform commands).
 void warnForegroundOutside(std::int64_t voxels, bool separated);
 
+// One style of range message for every numeric option, NaN and infinities
+// refused: "--length: must be a number in (0, 100000] mm, got 'nan'". A lower
+// bound given as open excludes it (a length must be > 0).
+CLI::Validator numberIn(double lo, double hi, const std::string& unit, bool openLow = false);
+CLI::Validator integerIn(std::int64_t lo, std::int64_t hi, const std::string& unit = "");
+
+// Physical memory of the machine in MB (the default memory budget).
+std::int64_t physicalMemoryMb();
+
 // Human-readable number with thousands separators: 7161276 -> "7,161,276".
 std::string withThousands(std::uint64_t n);
 

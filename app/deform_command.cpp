@@ -10,15 +10,22 @@
 
 #include "app/command_line.h"
 #include "geometry/deform/deformation_report.h"
+#include "geometry/deform/distortion_plot.h"
 #include "geometry/deform/pose.h"
-#include "geometry/raster/rasterize.h"
+#include "geometry/deform/pose_frame.h"
 #include "geometry/deform/surface_checks.h"
 #include "geometry/error.h"
 #include "geometry/io/atomic_file.h"
+#include "geometry/io/grid_io.h"
+#include "geometry/io/output_path.h"
+#include "geometry/io/png_io.h"
 #include "geometry/organ_table.h"
+#include "geometry/raster/rasterize.h"
+#include "geometry/world_frame.h"
 #include "gpu/deform_grid.h"
 
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 
 namespace vox::app {
@@ -26,7 +33,8 @@ namespace vox::app {
 namespace {
 
 struct DeformOptions {
-  std::string input, pose, output, report, organs, cage, posedCage, posedMesh;
+  std::string input, pose, output, report, organs, cage, posedCage, posedMesh, plots;
+  double flagPercent = kDefaultFlagPercent;
   std::vector<std::string> separations;
   double dilationMm = 20.0;
   int vertices = 300;
@@ -39,8 +47,23 @@ struct DeformOptions {
   bool quiet = false;
 };
 
+// The per-organ CSV lies beside the JSON report: r.json -> r.csv.
+std::string tablePath(const DeformOptions& o) {
+  if (o.report.empty() || o.report == "-") return "";
+  std::filesystem::path p(o.report);
+  return p.replace_extension(".csv").string();
+}
+
 void deform(const DeformOptions& o) {
   installStderrProgress(o.quiet);
+  checkOutputPath(o.output, OutputKind::Grid, "--output");
+  checkOutputPath(o.report, OutputKind::Json, "--report");
+  checkOutputPath(o.posedCage, OutputKind::Surface, "--posed-cage");
+  checkOutputPath(o.posedMesh, OutputKind::TetMesh, "--posed-mesh");
+  checkOutputPath(tablePath(o), OutputKind::Csv, "--report");
+  checkOutputPath(o.plots, OutputKind::Png, "--plots");
+  if (o.preserveVolumes && o.maxMemoryMb > 0)
+    throw UsageError("--preserve-volumes", "needs the posed grid in memory; it cannot be combined with --max-memory");
   gpu::DeformGridRequest request;
   request.input = o.input;
   request.output = o.output;
@@ -57,19 +80,37 @@ void deform(const DeformOptions& o) {
   request.posedMesh = o.posedMesh;
   request.warn = [](const std::string& message) { std::fprintf(stderr, "voxmorph: warning: %s\n", message.c_str()); };
   // Everything the command can reject cheaply is checked before the work.
-  request.pose = readPose(o.pose);
+  // Poses, cages and --separate boxes are in the world frame (world_frame.h);
+  // the pipeline works in the grid frame.
+  const GridGeometry frame = openGridSlices(o.input)->geometry();
+  request.pose = poseInGridFrame(readPose(o.pose), frame, o.pose);
   if (!o.organs.empty()) request.organs = OrganTable::read(o.organs);
-  for (const std::string& text : o.separations) request.extraSeparations.push_back(parseSeparation(text));
-  if (!o.cage.empty()) request.cage = readCage(o.cage);
+  for (const std::string& text : o.separations) {
+    request.extraSeparations.push_back(parseSeparation(text));
+    regionInGridFrame(request.extraSeparations.back().region, frame, "--separate " + text);
+  }
+  if (!o.cage.empty()) {
+    request.cage = readCage(o.cage);
+    surfaceWorldToGrid(*request.cage, frame);
+  }
   gpu::checkDeformGridRequest(request);
 
   const DeformationReport report = gpu::deformGrid(request);
   if (!o.report.empty()) {
     const std::string json = deformationReportJson(report);
-    if (o.report == "-") std::fputs(json.c_str(), stdout);
-    else writeFileAtomic(o.report, json);
+    if (o.report == "-") {
+      std::fputs(json.c_str(), stdout);
+    } else {
+      writeFileAtomic(o.report, json);
+      writeFileAtomic(tablePath(o), labelChangeCsv(report, o.flagPercent));
+    }
   }
-  if (!o.quiet && o.report != "-") std::fputs(deformationSummary(report).c_str(), stdout);
+  if (!o.plots.empty()) writePng(o.plots, distortionPlot(report));
+  if (!o.quiet && o.report != "-") {
+    std::fputs(deformationSummary(report).c_str(), stdout);
+    std::fputs(("\n" + labelChangeTable(report, o.flagPercent)).c_str(), stdout);
+  }
+  for (const std::string& w : deformationWarnings(report)) std::fprintf(stderr, "voxmorph: warning: %s\n", w.c_str());
 }
 
 }  // namespace
@@ -80,8 +121,11 @@ void addDeformCommand(CLI::App& app) {
   cmd->add_option("grid", o->input, "Label grid (.nii .nii.gz .mha .mhd .nrrd .nhdr .inr)")->required();
   cmd->add_option("--pose", o->pose, "Pose file (JSON, docs/POSES.md)")->required();
   cmd->add_option("-o,--output", o->output, "Posed grid (.nii .nii.gz .mha .mhd; any grid format in core)")->required();
-  cmd->add_option("--report", o->report, "JSON report (stage times, sizes, outliers, per-label volume and mass change, "
+  cmd->add_option("--report", o->report, "JSON report, and the per-organ table as CSV beside it (r.json -> r.csv) (stage times, sizes, outliers, per-label volume and mass change, "
                                          "distortion, refinement); '-' for stdout");
+  cmd->add_option("--plots", o->plots, "Also draw the distortion and organ volume-change histograms (thesis Figure 3.19) as PNG");
+  cmd->add_option("--flag", o->flagPercent, "Flag organs whose volume changes by more than this, % (default 2)")
+      ->check(numberIn(0, 1000, "%"));
   cmd->add_option("--organs", o->organs, "Organ table (ID name tissue density): masses, and label groups for limb separation");
   auto* cage = cmd->add_option("--cage", o->cage, "Use this cage (.obj .off .ply; closed, outward, no self-intersections)");
   cmd->add_option("--separate", o->separations,
@@ -89,17 +133,17 @@ void addDeformCommand(CLI::App& app) {
                   "or right_arm:trunk@xmin,ymin,zmin,xmax,ymax,zmax (repeatable; adds to the pose's \"separations\")")
       ->allow_extra_args(false);
   cmd->add_option("--dilation", o->dilationMm, "Automatic cage: offset from the foreground, mm (default 20)")
-      ->check(CLI::PositiveNumber)
+      ->check(numberIn(0, 10000, "mm", true))
       ->excludes(cage);
   cmd->add_option("--vertices", o->vertices, "Automatic cage: vertices after QEM (default 300)")
-      ->check(CLI::Range(8, 100000))
+      ->check(integerIn(8, 100000))
       ->excludes(cage);
   cmd->add_option("--samples", o->samples, "k: k^3 samples per output voxel, majority label (default 1; odd k recommended)")
-      ->check(CLI::Range(1, kMaxRasterSamples));
+      ->check(integerIn(1, kMaxRasterSamples));
   cmd->add_option("--max-memory", o->maxMemoryMb,
                   "Out of core under this budget (MB): the pipeline runs on a downsampled grid, G' is rasterized from "
                   "streamed source slices and written slab by slab")
-      ->check(CLI::Range(std::int64_t(256), std::int64_t(1) << 30));
+      ->check(integerIn(256, std::int64_t(1) << 30, "MB"));
   cmd->add_option("--posed-cage", o->posedCage, "Also write the posed cage (.obj .off .ply), to check a pose's handles");
   cmd->add_option("--posed-mesh", o->posedMesh, "Also write the posed transfer mesh (.mesh .vtu .msh)");
   cmd->add_flag("--preserve-volumes", o->preserveVolumes,
@@ -107,10 +151,10 @@ void addDeformCommand(CLI::App& app) {
                 "(sum of the transfer mesh's Jacobian determinants over its voxels), within about a voxel; in core only");
   cmd->add_flag("--cpu", o->cpu, "Rasterize and interpolate fields with the CPU reference instead of the GPU");
   cmd->add_option("--max-tets", o->maxTets, "Tet budget of the refined transfer mesh (default 250000)")
-      ->check(CLI::Range(std::int64_t(1000), std::int64_t(1) << 30));
+      ->check(integerIn(1000, std::int64_t(1) << 30));
   cmd->add_option("--refine-iterations", o->refineIterations,
                   "Transfer-mesh regenerations of the deformation-adaptive refinement at most (default 1; 0: none)")
-      ->check(CLI::Range(0, 100));
+      ->check(integerIn(0, 100));
   cmd->add_flag("-q,--quiet", o->quiet, "No progress or summary (warnings still go to stderr)");
   cmd->callback([o] { deform(*o); });
 }

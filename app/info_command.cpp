@@ -9,6 +9,7 @@
 #include "geometry/label_stats.h"
 #include "geometry/mesh_quality.h"
 #include "geometry/organ_table.h"
+#include "geometry/world_frame.h"
 #include "gpu/context.h"
 #include "gpu/kernels/label_stats.h"
 
@@ -84,6 +85,14 @@ void gridInfo(const InfoOptions& o) {
   j["voxels"] = g.voxelCount();
   j["spacing_mm"] = vec3(g.spacing);
   j["origin_mm"] = vec3(g.origin);
+  // World (RAS) coordinates, as nibabel reports them: the affine and the
+  // axis codes.
+  const Eigen::Matrix4d affine = g.indexToWorld();
+  j["world_origin_mm"] = vec3(affine.topRightCorner<3, 1>());
+  j["affine"] = nlohmann::json::array();
+  for (int r = 0; r < 4; ++r) j["affine"].push_back({affine(r, 0), affine(r, 1), affine(r, 2), affine(r, 3)});
+  j["orientation"] = orientationCode(g);
+  j["axis_aligned"] = axisAligned(g);
   j["voxel_volume_mm3"] = vv;
   j["read_ms"] = readMs;
   j["label_stats"] = {{"engine", engine}, {"ms", statsMs}, {"gpu_ms", gpuMs}};
@@ -110,13 +119,19 @@ void gridInfo(const InfoOptions& o) {
         totalMass += e["mass_g"].get<double>();
       } else {
         e["name"] = nullptr;
+        e["unnamed"] = true;
       }
     }
     labels.push_back(e);
   }
   j["labels"] = labels;
   j["label_count"] = stats.presentLabels();
-  if (organs) j["total_mass_g"] = totalMass;
+  std::string unnamedNote;
+  if (organs) {
+    j["total_mass_g"] = totalMass;
+    j["unnamed_labels"] = organs->unnamedLabels(stats.counts);
+    unnamedNote = unnamedLabelsNote(*organs, stats.counts);
+  }
 
   if (o.json) {
     std::cout << j.dump(2) << "\n";
@@ -125,7 +140,12 @@ void gridInfo(const InfoOptions& o) {
     std::printf("dims        %lld x %lld x %lld (%s voxels)\n", (long long)g.dims[0], (long long)g.dims[1], (long long)g.dims[2],
                 withThousands(std::uint64_t(g.voxelCount())).c_str());
     std::printf("spacing     %g x %g x %g mm (voxel %g mm^3)\n", g.spacing[0], g.spacing[1], g.spacing[2], vv);
-    std::printf("origin      %g %g %g mm\n", g.origin[0], g.origin[1], g.origin[2]);
+    std::printf("origin      %g %g %g mm (world, RAS; centre of voxel 0,0,0)\n", affine(0, 3), affine(1, 3), affine(2, 3));
+    std::printf("orientation %s (i, j, k towards; nibabel's aff2axcodes)%s\n", orientationCode(g).c_str(),
+                axisAligned(g) ? "" : ", oblique");
+    for (int r = 0; r < 3; ++r)
+      std::printf("%s[%9.4f %9.4f %9.4f %10.3f]\n", r == 0 ? "affine      " : "            ", affine(r, 0), affine(r, 1), affine(r, 2),
+                  affine(r, 3));
     std::printf("labels      %zu non-zero\n", stats.presentLabels());
     std::printf("foreground  %s voxels, %.1f cm^3\n", withThousands(fg).c_str(), double(fg) * vv * 1e-3);
     std::printf("statistics  %s, %.1f ms", engine.c_str(), statsMs);
@@ -141,6 +161,7 @@ void gridInfo(const InfoOptions& o) {
       std::printf("\n");
     }
     if (organs) std::printf("\ntotal mass  %.1f g\n", totalMass);
+    if (!unnamedNote.empty()) std::printf("warning: %s\n", unnamedNote.c_str());
   }
   if (cpuEqual && !*cpuEqual) throw RuntimeFailure("GPU label statistics differ from the CPU reference");
 }

@@ -31,6 +31,9 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     app.exit(e);
     return 2;
+  } catch (const vox::UsageError& e) {
+    std::fprintf(stderr, "voxmorph: error: %s\n", e.what());
+    return 2;
   } catch (const std::bad_alloc&) {
     std::fprintf(stderr, "voxmorph: error: out of memory\n");
     return 1;

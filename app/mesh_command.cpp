@@ -7,6 +7,7 @@
 #include "geometry/io/mesh_io.h"
 #include "geometry/remesh/adaptive_voxel_tetrahedralization.h"
 #include "geometry/remesh/mesh_topology.h"
+#include "geometry/remesh/meshing_estimate.h"
 
 #include <chrono>
 #include <cstdio>
@@ -20,13 +21,15 @@ void addMeshCommand(CLI::App& app) {
   addRemeshOptions(*cmd, *o);
   cmd->callback([o] {
     installStderrProgress(o->quiet);
+    checkRemeshOutputs(*o);
     const auto t0 = std::chrono::steady_clock::now();
     const LabelGrid grid = readGrid(o->input);
+    checkRemeshEstimate(*o, remesh::estimateMeshing(grid, o->remesh.targetLength));
     const remesh::AdaptiveTetrahedralizationOptions decomposition =
         remesh::adaptiveOptionsForTarget(grid.geometry(), o->remesh.targetLength);
     const TetMesh initial = remesh::tetrahedralizeVoxelsAdaptive(grid, decomposition);
     const double setupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    runRemesh(*o, initial, remesh::computeGridTopology(grid), setupSeconds);
+    runRemesh(*o, initial, remesh::computeGridTopology(grid), setupSeconds, &grid.geometry());
   });
 }
 

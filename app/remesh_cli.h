@@ -5,9 +5,14 @@
 #include "app/command_line.h"
 #include "geometry/io/atomic_file.h"
 #include "geometry/io/mesh_io.h"
+#include "geometry/io/output_path.h"
+#include "geometry/error.h"
+#include "geometry/remesh/meshing_estimate.h"
 #include "geometry/remesh/remesh.h"
 #include "geometry/remesh/remesh_report.h"
+#include "geometry/world_frame.h"
 
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <string>
@@ -20,6 +25,7 @@ struct RemeshCliOptions {
   std::string surface = "hpss";
   bool keepImaginary = false;
   bool noDistances = false;
+  std::int64_t maxMemoryMb = 0;  // 0: the machine's physical memory
   bool quiet = false;
 };
 
@@ -31,33 +37,71 @@ inline void addRemeshOptions(CLI::App& cmd, RemeshCliOptions& o) {
       "MESH");
   cmd.add_option("-l,--length", o.remesh.targetLength, "Target edge length l (mm); e_min = 4/5 l, e_max = 4/3 l")
       ->required()
-      ->check(CLI::PositiveNumber);
+      ->check(numberIn(0, 100000, "mm", true));
   cmd.add_option("-o,--output", o.output, "Output tet mesh (.mesh .vtu .msh), domain tets (label > 0)")
       ->required()
       ->check(meshExtension);
   cmd.add_option("--iterations", o.remesh.iterations, "Split-collapse-flip-smooth iterations (default 10)")
-      ->check(CLI::Range(0, 100));
-  cmd.add_option("--flip-smooth", o.remesh.flipSmoothCycles, "Final flip-smooth cycles (default 3)")->check(CLI::Range(0, 100));
+      ->check(integerIn(0, 100));
+  cmd.add_option("--flip-smooth", o.remesh.flipSmoothCycles, "Final flip-smooth cycles (default 3)")->check(integerIn(0, 100));
   cmd.add_option("--surface", o.surface, "Interface model boundary vertices are projected on: hpss (default), pss, none")
       ->check(CLI::IsMember({"hpss", "pss", "none"}));
   cmd.add_option("--mls-radius", o.remesh.mlsRadius, "Width of the interface model's kernel (mm; default automatic)")
-      ->check(CLI::NonNegativeNumber);
-  cmd.add_option("--threads", o.remesh.threads, "Threads (default 2)")->check(CLI::Range(1, 64));
+      ->check(numberIn(0, 100000, "mm"));
+  cmd.add_option("--threads", o.remesh.threads, "Threads (default 2)")->check(integerIn(1, 64));
   cmd.add_option("--report", o.report, "Also write the quality report as JSON (- for stdout instead of the text)");
+  cmd.add_option("--max-memory", o.maxMemoryMb,
+                 "Refuse a run whose estimated peak memory exceeds this budget (MB; default the machine's memory)")
+      ->check(integerIn(64, std::int64_t(1) << 30, "MB"));
   cmd.add_flag("--keep-imaginary", o.keepImaginary, "Also write the imaginary layer around the domain (label 0)");
   cmd.add_flag("--no-distance", o.noDistances, "Skip the interface Hausdorff distances of the report");
   cmd.add_flag("-q,--quiet", o.quiet, "No progress on stderr");
 }
 
+// Checks the output and report paths before the input is read.
+inline void checkRemeshOutputs(const RemeshCliOptions& o) {
+  checkOutputPath(o.output, OutputKind::TetMesh, "--output");
+  checkOutputPath(o.report, OutputKind::Json, "--report");
+}
+
+// Prints the run's estimated size and refuses, before any work, a length
+// longer than the labelled region or a run beyond the memory budget.
+inline void checkRemeshEstimate(const RemeshCliOptions& o, const remesh::MeshingEstimate& e) {
+  const double l = o.remesh.targetLength;
+  char text[160];
+  if (l > e.extentMm) {
+    std::snprintf(text, sizeof text, "%g mm is longer than the labelled region (%.4g mm across); use at most %.4g mm", l, e.extentMm,
+                  e.extentMm);
+    throw UsageError("--length", text);
+  }
+  const std::int64_t budgetMb = o.maxMemoryMb > 0 ? o.maxMemoryMb : physicalMemoryMb();
+  const std::string size = remesh::describeEstimate(e);
+  if (e.bytes > (budgetMb << 20)) {
+    const double shortest = l * std::cbrt(double(e.bytes) / double(budgetMb << 20));
+    std::snprintf(text, sizeof text, "%g mm asks for %s, over the %lld MB budget; use -l %.3g or more, or raise --max-memory", l,
+                  size.c_str(), (long long)budgetMb, shortest * 1.01);
+    throw UsageError("--length", text);
+  }
+  if (!o.quiet && o.report != "-") std::fprintf(stderr, "estimate: %s at l = %g mm\n", size.c_str(), l);
+}
+
 // Remeshes `initial` (whose domain tets and topology the report compares
 // against), writes the output mesh, prints the report and writes its JSON.
+// `toWorld`: the grid whose frame `initial` is in (mesh), written in its
+// world frame (world_frame.h); none for remesh, whose input is in world.
 inline void runRemesh(RemeshCliOptions& o, const TetMesh& initial, const remesh::MeshTopology& initialTopology,
-                      double setupSeconds) {
+                      double setupSeconds, const GridGeometry* toWorld = nullptr) {
   o.remesh.projectOnInterfaces = o.surface != "none";
   o.remesh.hermite = o.surface == "hpss";
   remesh::RemeshStats stats;
   const TetMesh output = remesh::remeshTetMesh(initial, o.remesh, &stats, o.keepImaginary, o.input);
-  writeTetMesh(o.output, output);
+  if (toWorld) {
+    TetMesh world = output;
+    tetMeshGridToWorld(world, *toWorld);
+    writeTetMesh(o.output, world);
+  } else {
+    writeTetMesh(o.output, output);
+  }
   remesh::ReportOptions reportOptions;
   reportOptions.distances = !o.noDistances;
   reportOptions.threads = o.remesh.threads;

@@ -10,12 +10,16 @@
 #include "app/command_line.h"
 #include "geometry/deform/pipeline.h"
 #include "geometry/deform/pose.h"
+#include "geometry/deform/pose_frame.h"
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
+#include "geometry/io/output_path.h"
 #include "geometry/io/png_io.h"
+#include "geometry/label_stats.h"
 #include "geometry/organ_table.h"
 #include "geometry/render/camera.h"
 #include "geometry/render/cutting_planes.h"
+#include "geometry/render/image_annotations.h"
 #include "geometry/render/palette.h"
 #include "geometry/render/raycast_reference.h"
 #include "geometry/render/raycast_scene.h"
@@ -24,6 +28,7 @@
 #include "gpu/kernels/raycast.h"
 
 #include <chrono>
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 #include <optional>
@@ -48,8 +53,28 @@ struct RenderOptions {
   std::string pose;
   bool cpu = false;
   bool verify = false;
+  bool legend = false;
+  bool scaleBar = false;
   bool quiet = false;
 };
+
+// The organs the image shows (rays of every fourth pixel row and column on
+// the CPU reference), most pixels first, with their colours.
+std::vector<LegendEntry> visibleOrgans(const LabelGrid& grid, const RaycastMesh& mesh, const RaycastFrame& frame, const RaycastView& view,
+                                       const Palette& palette, const OrganTable* organs) {
+  const std::vector<std::uint64_t> pixels = visibleLabelPixels(grid, mesh, frame, view, palette, 4);
+  std::vector<std::size_t> labels;
+  for (std::size_t l = 1; l < pixels.size(); ++l)
+    if (pixels[l] > 0) labels.push_back(l);
+  std::stable_sort(labels.begin(), labels.end(), [&](std::size_t a, std::size_t b) { return pixels[a] > pixels[b]; });
+  std::vector<LegendEntry> entries;
+  for (const std::size_t l : labels) {
+    const Organ* organ = organs ? organs->find(int(l)) : nullptr;
+    const std::string name = organ ? organ->name : organs ? "label " + std::to_string(l) + " (not in organ table)" : "label " + std::to_string(l);
+    entries.push_back({palette.color(Label(l)), name});
+  }
+  return entries;
+}
 
 double msSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -57,6 +82,7 @@ double msSince(std::chrono::steady_clock::time_point t0) {
 
 void render(const RenderOptions& o) {
   installStderrProgress(o.quiet);
+  checkOutputPath(o.output, OutputKind::Png, "--output");
   int width = 0, height = 0;
   parseImageSize(o.size, width, height);
   CuttingPlanes cuts;
@@ -67,6 +93,11 @@ void render(const RenderOptions& o) {
   if (!o.organs.empty()) organs = OrganTable::read(o.organs);
   Palette palette = organs ? Palette::fromOrgans(*organs, grid.maxLabel()) : Palette(grid.maxLabel());
   if (!o.hide.empty()) palette.hide(o.hide, organs ? &*organs : nullptr);
+  const LabelStats stats = computeLabelStats(grid);
+  bool anyVisible = false;
+  for (std::size_t l = 1; l < stats.counts.size(); ++l) anyVisible = anyVisible || (stats.counts[l] > 0 && palette.visible(Label(l)));
+  if (!anyVisible && stats.foregroundVoxels() > 0)
+    throw UsageError("--hide", "'" + o.hide + "' hides every label of the grid; the image would be empty");
 
   TetMesh restMesh;
   std::vector<Eigen::Vector3d> posed;
@@ -74,7 +105,7 @@ void render(const RenderOptions& o) {
     restMesh = boxTransferMesh(grid, o.input);
     posed = restMesh.positions;
   } else {
-    const Pose pose = readPose(o.pose);
+    const Pose pose = poseInGridFrame(readPose(o.pose), grid.geometry(), o.pose);
     PipelineOptions options = poseOptions(pose, o.pose, organs);
     options.envelope = false;
     DeformationPipeline pipeline(grid, options);
@@ -120,6 +151,8 @@ void render(const RenderOptions& o) {
         throw RuntimeFailure("GPU image differs from the CPU reference on more than 0.1% of the pixels");
     }
   }
+  if (o.legend) drawLegend(image, visibleOrgans(grid, mesh, frame, view, palette, organs ? &*organs : nullptr));
+  if (o.scaleBar) drawScaleBar(image, view.camera, (camera.target - camera.eye).dot(view.camera.forward));
   writePng(o.output, image);
   if (!o.quiet)
     std::fprintf(stderr, "%s: %d x %d, %s, %.1f ms\n", o.output.c_str(), width, height, engine.c_str(), ms);
@@ -144,6 +177,8 @@ void addRenderCommand(CLI::App& app) {
   cmd->add_option("--hide", o->hide, "Labels to hide: \"5,7,10-20\", or organ-name substrings with --organs (\"skin,adipose\")");
   cmd->add_option("--organs", o->organs, "Organ table (ID name tissue density): colours by organ name");
   cmd->add_option("--pose", o->pose, "Pose file (JSON, docs/POSES.md): render the grid posed through its transfer mesh");
+  cmd->add_flag("--legend", o->legend, "List the organs the image shows, with their colours (names from --organs)");
+  cmd->add_flag("--scale-bar", o->scaleBar, "Draw a scale bar (mm, at the depth of the camera's target)");
   cmd->add_flag("--cpu", o->cpu, "Render with the CPU reference instead of the GPU");
   cmd->add_flag("--verify", o->verify, "Render on both and fail if more than 0.1% of the pixels differ by more than 5/255");
   cmd->add_flag("-q,--quiet", o->quiet, "No progress or summary on stderr");

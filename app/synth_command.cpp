@@ -2,6 +2,7 @@
 
 #include "app/command_line.h"
 #include "geometry/io/grid_io.h"
+#include "geometry/io/output_path.h"
 #include "geometry/synth.h"
 
 #include <cstdio>
@@ -19,9 +20,11 @@ void addSynthCommand(CLI::App& app) {
       ->required()
       ->check(CLI::IsMember({"spheres", "junctions", "stick"}));
   cmd->add_option("-o,--output", o->output, "Output grid (.nii.gz, .mha, .nrrd, .inr ...)")->required();
-  cmd->add_option("--size", o->size, "Voxels along the longest axis")->check(CLI::Range(8, 4096));
+  cmd->add_option("--size", o->size, "Voxels along the longest axis")->check(integerIn(8, 4096));
   cmd->add_option("--organs", o->organs, "Also write an organ table naming the labels");
   cmd->callback([o] {
+    checkOutputPath(o->output, OutputKind::Grid, "--output");
+    checkOutputPath(o->organs, OutputKind::Text, "--organs");
     const SynthKind kind = synthKindFromName(o->kind);
     const LabelGrid grid = synthesize(kind, o->size);
     writeGrid(o->output, grid);

@@ -1,5 +1,6 @@
 #pragma once
-// Errors that voxmorph reports to its user as one line and exit code 1.
+// Errors that voxmorph reports to its user as one line: exit code 1, or 2 for
+// a usage error.
 
 #include <stdexcept>
 #include <string>
@@ -14,6 +15,15 @@ public:
   using std::runtime_error::runtime_error;
   InputError(const std::string& path, const std::string& fault)
       : std::runtime_error(path + ": " + fault) {}
+};
+
+// A bad command line: an option's value out of range or malformed, an output
+// extension no writer knows. The message names the option and the fault:
+// "<option>: <what is wrong>". Exit code 2, like the parser's own errors; an
+// InputError for callers that do not tell the two apart.
+class UsageError : public InputError {
+public:
+  UsageError(const std::string& option, const std::string& fault) : InputError(option, fault) {}
 };
 
 // A failure that is not the input's fault (disk full, GPU lost, ...).

@@ -13,6 +13,25 @@
 
 namespace vox {
 
+std::vector<int> OrganTable::unnamedLabels(const std::vector<std::uint64_t>& counts) const {
+  std::vector<int> unnamed;
+  for (std::size_t l = 1; l < counts.size(); ++l)
+    if (counts[l] > 0 && !find(int(l))) unnamed.push_back(int(l));
+  return unnamed;
+}
+
+std::string unnamedLabelsNote(const OrganTable& organs, const std::vector<std::uint64_t>& counts) {
+  const std::vector<int> unnamed = organs.unnamedLabels(counts);
+  if (unnamed.empty()) return "";
+  std::string text = "labels without a name in the organ table:";
+  for (std::size_t k = 0; k < unnamed.size(); ++k) {
+    std::string voxels = std::to_string(counts[std::size_t(unnamed[k])]);
+    for (int i = int(voxels.size()) - 3; i > 0; i -= 3) voxels.insert(std::size_t(i), ",");
+    text += (k ? ", " : " ") + std::to_string(unnamed[k]) + " (" + voxels + " voxels)";
+  }
+  return text + "; their mass is left out of the totals";
+}
+
 OrganTable OrganTable::read(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "cannot open organ table");

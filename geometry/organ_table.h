@@ -6,6 +6,7 @@
 
 #include "geometry/label_grid.h"
 
+#include <cstdint>
 #include <map>
 #include <string>
 #include <vector>
@@ -18,6 +19,12 @@ struct Organ {
   int tissue = 0;
   double density = 1.0;  // g/cm^3
 };
+
+class OrganTable;
+
+// "labels without a name in the organ table: 141 (3,880 voxels); their mass
+// is left out of the totals", or "" when every label has a name.
+std::string unnamedLabelsNote(const OrganTable& organs, const std::vector<std::uint64_t>& counts);
 
 class OrganTable {
 public:
@@ -33,6 +40,9 @@ public:
   double mass(int id, std::uint64_t voxels, double voxelVolumeMm3) const;
   // IDs whose names contain any of the given substrings (case-insensitive).
   std::vector<int> idsMatching(const std::vector<std::string>& substrings) const;
+  // Labels > 0 with voxels (counts indexed by label) that the table does not
+  // name: their mass is unknown and left out of every total.
+  std::vector<int> unnamedLabels(const std::vector<std::uint64_t>& counts) const;
 
   void add(Organ organ) { organs_[organ.id] = std::move(organ); }
   // Writes the table in the format read() accepts (atomic).

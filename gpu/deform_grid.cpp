@@ -9,6 +9,7 @@
 #include "geometry/io/grid_io.h"
 #include "geometry/io/mesh_io.h"
 #include "geometry/label_stats.h"
+#include "geometry/world_frame.h"
 #include "gpu/context.h"
 #include "gpu/kernels/field_interpolation.h"
 #include "gpu/kernels/rasterize.h"
@@ -199,11 +200,13 @@ DeformationReport deformGrid(const DeformGridRequest& o) {
   if (!o.posedCage.empty()) {
     TriMesh posed = pipeline->cage();
     posed.positions = pipeline->deformedCage();
+    surfaceGridToWorld(posed, source.geometry());
     writeSurface(o.posedCage, posed);
   }
   if (!o.posedMesh.empty()) {
     TetMesh posed = pipeline->transferMesh();
     posed.positions = pipeline->deformedTransferMesh();
+    tetMeshGridToWorld(posed, source.geometry());
     writeTetMesh(o.posedMesh, posed);
   }
   for (const StageTime& t : pipeline->stats().stages) report.stages.push_back(t);

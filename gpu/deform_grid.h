@@ -31,11 +31,11 @@ namespace vox::gpu {
 struct DeformGridRequest {
   std::string input;          // label grid file
   std::string output;         // posed grid file (any grid format in core)
-  Pose pose;
+  Pose pose;                        // in the grid frame (poseInGridFrame)
   std::string poseSource = "pose";  // names the pose in errors and the report
   std::optional<OrganTable> organs;
   std::vector<LimbSeparation> extraSeparations;  // beside the pose's own
-  std::optional<TriMesh> cage;                   // instead of the automatic cage
+  std::optional<TriMesh> cage;                   // instead of the automatic cage (grid frame)
   double dilationMm = 20.0;
   int vertices = 300;
   int samples = 1;
@@ -44,7 +44,7 @@ struct DeformGridRequest {
   bool preserveVolumes = false;
   std::int64_t maxTets = RefinementOptions{}.maxTets;
   int refineIterations = RefinementOptions{}.maxIterations;
-  std::string posedCage, posedMesh;  // optional extra outputs
+  std::string posedCage, posedMesh;  // optional extra outputs, written in the world frame
   // Warnings (a GPU that could not be used, foreground outside the cage).
   std::function<void(const std::string&)> warn;
 };

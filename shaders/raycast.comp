@@ -29,6 +29,7 @@ layout(std430, binding = VOX_RAYCAST_BINDING_SLAB0 + 6) readonly buffer Slab6 { 
 layout(std430, binding = VOX_RAYCAST_BINDING_SLAB0 + 7) readonly buffer Slab7 { uint slab7[]; };
 
 #include "shared/raycast.glsl"
+#include "shared/shading.glsl"
 
 // ---------------------------------------------------------------- entry faces
 
@@ -228,10 +229,11 @@ struct Hit {
   uint label;
   int axis;
   int step;
+  float t;  // ray parameter of the visible cell's entry (depth along the view axis, mm)
 };
 
 Hit trace(vec3 e, vec3 d, uint pixel) {
-  Hit res = Hit(false, 0u, 0, 0);
+  Hit res = Hit(false, 0u, 0, 0, 0.0);
   // 1. Clip to the cells of G' and to the kept side of the cutting planes.
   float tLo = 0.0, tHi = kInf;
   const vec3 lo = vec3Of(P.cellsLo), hi = vec3Of(P.cellsHi);
@@ -349,6 +351,7 @@ Hit trace(vec3 e, vec3 d, uint pixel) {
             res.label = label;
             res.axis = dda.axis;
             res.step = int(dda.step[dda.axis]);
+            res.t = dda.tEnter;
             return res;
           }
         } else if (rayInside) {
@@ -386,12 +389,10 @@ Hit trace(vec3 e, vec3 d, uint pixel) {
   return res;
 }
 
-// RaycastShading: ambient, a light at the eye and a fill light.
-uint shade(Hit h, vec3 d) {
+uint shade(Hit h) {
   if (!h.hit) return P.background;
-  const float head = abs(d[h.axis]) / length(d);
-  const float lambert = max(0.0, -float(h.step) * P.light[h.axis]);
-  const float s = P.ambient + P.headlight * head + P.fill * lambert;
+  const float depth = P.depthFar > P.depthNear ? (h.t - P.depthNear) / (P.depthFar - P.depthNear) : 0.0;
+  const float s = faceShade(h.axis, h.step, vec3Of(P.headlight), vec3Of(P.light), P.ambient, depth);
   const uint albedo = palette[h.label];
   const vec3 c = vec3(float(albedo & 0xFFu), float((albedo >> 8) & 0xFFu), float((albedo >> 16) & 0xFFu));
   const uvec3 q = uvec3(min(vec3(255.0), floor(c * s + 0.5)));
@@ -408,6 +409,5 @@ void main() {
   const uint pixel = px.y * P.width + px.x;
   // A ray that crosses no front face keeps the background.
   if (entries[2u * P.width * P.height + pixel] == 0u) return;
-  const vec3 d = pixelDirection(px);
-  image[pixel] = shade(trace(vec3Of(P.eye), d, pixel), d);
+  image[pixel] = shade(trace(vec3Of(P.eye), pixelDirection(px), pixel));
 }

@@ -4,6 +4,7 @@
 #include "app/viewer/viewer_script.h"
 #include "geometry/deform/deformation_report.h"
 #include "geometry/deform/pose_editor.h"
+#include "geometry/deform/pose_frame.h"
 #include "geometry/error.h"
 #include "geometry/io/atomic_file.h"
 #include "geometry/io/grid_io.h"
@@ -294,7 +295,7 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options) {
   if (!options.organs.empty()) organs = OrganTable::read(options.organs);
   std::string setupSource = "view";
   if (!options.pose.empty()) {
-    setupPose_ = readPose(options.pose);
+    setupPose_ = poseInGridFrame(readPose(options.pose), grid_.geometry(), options.pose);
     setupSource = options.pose;
   }
   std::vector<LimbSeparation> extra;
@@ -767,7 +768,7 @@ void Viewer::savePose(const std::string& path) {
 }
 
 void Viewer::loadPose(const std::string& path) {
-  editor_->loadPose(readPose(path), path);
+  editor_->loadPose(poseInGridFrame(readPose(path), grid_.geometry(), path), path);
   applyView();
   status("pose loaded from " + path);
 }

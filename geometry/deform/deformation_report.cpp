@@ -49,6 +49,18 @@ std::string fixed(double v, int digits) {
   return buf;
 }
 
+std::string changeFlag(const LabelChange& c, double flagPercent) {
+  if (c.unnamed) return "unnamed";
+  if (std::abs(c.volumeChangePercent) <= flagPercent) return "";
+  return c.before < kSmallOrganVoxels ? "small" : "*";
+}
+
+std::string csvQuoted(const std::string& s) {
+  std::string q = "\"";
+  for (const char ch : s) q += ch == '"' ? std::string("\"\"") : std::string(1, ch);
+  return q + "\"";
+}
+
 }  // namespace
 
 std::vector<LabelChange> labelChanges(std::span<const std::uint64_t> before, std::span<const std::uint64_t> after,
@@ -64,6 +76,7 @@ std::vector<LabelChange> labelChanges(std::span<const std::uint64_t> before, std
     c.volumeChangePercent = percentChange(double(c.before), double(c.after));
     if (organs) {
       if (const Organ* o = organs->find(int(l))) c.name = o->name;
+      else c.unnamed = true;
       c.massBeforeGrams = organs->mass(int(l), c.before, voxelVolumeMm3);
       c.massAfterGrams = organs->mass(int(l), c.after, voxelVolumeMm3);
     }
@@ -235,6 +248,7 @@ std::string deformationReportJson(const DeformationReport& r) {
   for (const LabelChange& c : r.labels) {
     json j = {{"label", c.label}, {"voxels_before", c.before}, {"voxels_after", c.after}, {"volume_change_pct", c.volumeChangePercent}};
     if (!c.name.empty()) j["name"] = c.name;
+    if (c.unnamed) j["unnamed"] = true;
     if (c.deformedVolumeVoxels >= 0) j["deformed_volume_voxels"] = c.deformedVolumeVoxels;
     if (r.withMasses) {
       j["mass_before_g"] = c.massBeforeGrams;
@@ -261,6 +275,7 @@ std::string deformationReportJson(const DeformationReport& r) {
     whole["mass_change_pct"] = r.wholeBody.massChangePercent;
   }
   root["whole_body"] = whole;
+  root["warnings"] = deformationWarnings(r);
   if (const auto& c = r.volumeCorrection)
     root["volume_correction"] = {{"boundary_voxels", c->candidates},
                                  {"relabelled_voxels", c->relabelled},
@@ -323,6 +338,73 @@ std::string deformationSummary(const DeformationReport& r) {
   s << "  distortion: angle mean " << fixed(r.distortion.angle.mean, 2) << " deg (rms deviation " << fixed(r.distortion.angle.rmsDeviation, 2)
     << "), stretch mean " << fixed(r.distortion.stretch.mean, 4) << " (rms deviation " << fixed(r.distortion.stretch.rmsDeviation, 4) << ")\n";
   return s.str();
+}
+
+std::string labelChangeTable(const DeformationReport& r, double flagPercent) {
+  std::ostringstream s;
+  char line[256];
+  if (r.withMasses)
+    std::snprintf(line, sizeof line, "%6s  %-36s %10s %10s %11s %11s %8s  %s\n", "label", "organ", "voxels", "after", "mass g",
+                  "after g", "change %", "flag");
+  else
+    std::snprintf(line, sizeof line, "%6s  %-36s %10s %10s %8s  %s\n", "label", "organ", "voxels", "after", "change %", "flag");
+  s << line;
+  for (const LabelChange& c : r.labels) {
+    const std::string name = c.unnamed ? "(not in organ table)" : c.name;
+    const std::string flag = changeFlag(c, flagPercent);
+    if (r.withMasses)
+      std::snprintf(line, sizeof line, "%6d  %-36.36s %10llu %10llu %11.3f %11.3f %+8.2f  %s\n", int(c.label), name.c_str(),
+                    (unsigned long long)c.before, (unsigned long long)c.after, c.massBeforeGrams, c.massAfterGrams,
+                    c.volumeChangePercent, flag.c_str());
+    else
+      std::snprintf(line, sizeof line, "%6d  %-36.36s %10llu %10llu %+8.2f  %s\n", int(c.label), name.c_str(),
+                    (unsigned long long)c.before, (unsigned long long)c.after, c.volumeChangePercent, flag.c_str());
+    std::string row(line);
+    while (row.size() > 1 && row[row.size() - 2] == ' ') row.erase(row.size() - 2, 1);
+    s << row;
+  }
+  std::size_t flagged = 0;
+  for (const LabelChange& c : r.labels) flagged += changeFlag(c, flagPercent) == "*";
+  s << "  " << flagged << " organs of " << kSmallOrganVoxels << " voxels or more changed by more than " << fixed(flagPercent, 1)
+    << " % (*); small: the same under " << kSmallOrganVoxels << " voxels\n";
+  return s.str();
+}
+
+std::string labelChangeCsv(const DeformationReport& r, double flagPercent) {
+  std::ostringstream s;
+  s << "label,name,voxels_before,voxels_after,volume_before_mm3,volume_after_mm3,mass_before_g,mass_after_g,change_pct,flag\n";
+  const double vv = r.source.voxelVolume();
+  for (const LabelChange& c : r.labels) {
+    s << c.label << "," << csvQuoted(c.name) << "," << c.before << "," << c.after << "," << fixed(double(c.before) * vv, 3) << ","
+      << fixed(double(c.after) * vv, 3) << ",";
+    if (r.withMasses && !c.unnamed) s << fixed(c.massBeforeGrams, 4) << "," << fixed(c.massAfterGrams, 4);
+    else s << ",";
+    s << "," << fixed(c.volumeChangePercent, 4) << "," << changeFlag(c, flagPercent) << "\n";
+  }
+  return s.str();
+}
+
+std::vector<std::string> deformationWarnings(const DeformationReport& r) {
+  std::vector<std::string> w;
+  if (r.tmInverted > 0)
+    w.push_back(std::to_string(r.tmInverted) + " transfer-mesh tets inverted by the deformation (" +
+                fixed(100.0 * r.tmInvertedVolumeFraction, 3) +
+                " % of the volume): the map folds there and the posed grid takes one side of the fold");
+  const DistortionHistogram& st = r.distortion.stretch;
+  const DistortionHistogram& an = r.distortion.angle;
+  if (st.max >= kLargeStretch || (st.min > 0 && st.min <= 1.0 / kLargeStretch))
+    w.push_back("large distortion: dual edges stretched up to " + fixed(st.max, 2) + "x and shrunk down to " + fixed(st.min, 2) +
+                "x (" + fixed(100.0 * (st.above + st.below), 2) + " % of the volume outside 0.5x-1.5x)");
+  if (std::max(an.max - 90.0, 90.0 - an.min) >= kLargeAngleDeviationDeg)
+    w.push_back("large distortion: right angles sheared to " + fixed(an.min, 1) + "-" + fixed(an.max, 1) + " degrees");
+  std::string unnamed;
+  std::size_t count = 0;
+  for (const LabelChange& c : r.labels)
+    if (c.unnamed) {
+      unnamed += (count++ ? ", " : " ") + std::to_string(c.label) + " (" + std::to_string(c.before) + " voxels)";
+    }
+  if (count > 0) w.push_back("labels without a name in the organ table:" + unnamed + "; their mass is left out of the totals");
+  return w;
 }
 
 }  // namespace vox

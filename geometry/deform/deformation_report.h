@@ -31,6 +31,7 @@ inline constexpr std::uint64_t kSmallOrganVoxels = 1000;
 struct LabelChange {
   Label label = 0;
   std::string name;                // organ name, or "" without a table
+  bool unnamed = false;            // a table was given but does not name the label
   std::uint64_t before = 0, after = 0;
   double volumeChangePercent = 0;  // also the mass change: one density per label
   double massBeforeGrams = 0, massAfterGrams = 0;  // 0 without a table
@@ -109,5 +110,24 @@ void describePipeline(DeformationReport& report, const DeformationPipeline& pipe
 // The report as JSON text (indented) and as a short human summary.
 std::string deformationReportJson(const DeformationReport& report);
 std::string deformationSummary(const DeformationReport& report);
+
+// Organs whose volume (and mass) changes by more than this are flagged in
+// the printed table and the CSV.
+inline constexpr double kDefaultFlagPercent = 2.0;
+// Beyond these the deformation warns of large distortion: a dual edge
+// stretched or shrunk by a factor of two or more, an angle off by 45 degrees.
+inline constexpr double kLargeStretch = 2.0;
+inline constexpr double kLargeAngleDeviationDeg = 45.0;
+
+// The per-organ table a person reads: label, name, voxels before and after,
+// mass before and after (with a table), change in %, and a flag column:
+// "*" beyond flagPercent (organs of kSmallOrganVoxels or more), "small"
+// beyond it under that size, "unnamed" for labels the organ table lacks.
+std::string labelChangeTable(const DeformationReport& report, double flagPercent = kDefaultFlagPercent);
+// The same rows as CSV (header line; names quoted).
+std::string labelChangeCsv(const DeformationReport& report, double flagPercent = kDefaultFlagPercent);
+// One line per thing a user must know: inverted TM tets, large distortion,
+// labels without a name in the organ table. Empty when all is well.
+std::vector<std::string> deformationWarnings(const DeformationReport& report);
 
 }  // namespace vox

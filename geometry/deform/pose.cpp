@@ -34,9 +34,14 @@ public:
       fail(std::string("invalid JSON: ") + e.what());
     }
     requireObject(root, "the pose");
-    allowKeys(root, "the pose", {"name", "arap_iterations", "selections", "separations"});
+    allowKeys(root, "the pose", {"name", "frame", "arap_iterations", "selections", "separations"});
     Pose pose;
     if (root.contains("name")) pose.name = text(root["name"], "'name'");
+    if (root.contains("frame")) {
+      const std::string frame = text(root["frame"], "'frame'");
+      if (frame != "world" && frame != "grid") fail("'frame' must be \"world\" or \"grid\", not '" + frame + "'");
+      pose.frame = frame == "grid" ? PoseFrame::Grid : PoseFrame::World;
+    }
     if (root.contains("arap_iterations")) {
       const json& it = root["arap_iterations"];
       if (!it.is_number_integer() || it.get<long long>() < 0 || it.get<long long>() > 100000)
@@ -206,6 +211,7 @@ Pose readPose(const std::string& path) {
 std::string poseToJson(const Pose& pose) {
   json root;
   if (!pose.name.empty()) root["name"] = pose.name;
+  if (pose.frame == PoseFrame::Grid) root["frame"] = "grid";
   root["arap_iterations"] = pose.arapIterations;
   json selections = json::array();
   for (const PoseSelection& s : pose.selections) {

@@ -4,6 +4,7 @@
 // JSON schema (docs/POSES.md has the full description and examples):
 //   {
 //     "name": "right arm raised",                      optional string
+//     "frame": "world",                                optional: "world" (default) or "grid"
 //     "arap_iterations": 10,                           optional integer >= 0
 //     "selections": [                                  required, non-empty
 //       { "name": "trunk",                             optional string
@@ -26,8 +27,12 @@
 //         "cut_region": {"min": [x, y, z], "max": [x, y, z]} }   optional TM cut region; default: region
 //     ]
 //   }
-// Coordinates are millimetres in the grid frame (origin + spacing .* ijk is
-// the centre of voxel ijk), so a pose survives regenerating the cage.
+// Coordinates are millimetres in the image's world frame (RAS, as nibabel
+// computes it from the NIfTI sform/qform; world_frame.h), or with "frame":
+// "grid" in the grid frame (origin + spacing .* ijk is the centre of voxel
+// ijk; the two agree for grids stored without rotation or axis flips). Being
+// in mm, a pose survives regenerating the cage. The pipeline works in the
+// grid frame: poseInGridFrame (pose_frame.h) converts.
 // A selection takes the cage vertices inside its box (bounds included) or
 // sphere (distance <= radius), or the vertex nearest each of its points. A transform maps x to
 //   R(axis, angle) (x - center) + center + translation.
@@ -106,8 +111,11 @@ struct PoseSeparation {
   LimbSeparation cut() const { return {cage.groupA, cage.groupB, cutRegion ? cutRegion : cage.region}; }
 };
 
+enum class PoseFrame { World, Grid };
+
 struct Pose {
   std::string name;
+  PoseFrame frame = PoseFrame::World;
   std::vector<PoseSelection> selections;
   int arapIterations = 10;
   std::vector<PoseSeparation> separations;

@@ -53,6 +53,8 @@ PoseEditor::PoseEditor(const LabelGrid& grid, std::optional<OrganTable> organs, 
   pipeline_ = std::make_unique<DeformationPipeline>(grid_, options);
   tetVoxels_ = tetLabelVoxels(grid_, pipeline_->transferMesh());
   state_.pose = shaping;
+  // The session works in the grid frame, and saves its poses so.
+  state_.pose.frame = PoseFrame::Grid;
   if (!state_.pose.selections.empty()) selectHandles(state_.pose, pipeline_->builtCage(), setupSource_, pipeline_->cageGroups());
   refreshFigures();
 }
@@ -199,6 +201,7 @@ void PoseEditor::loadPose(const Pose& pose, const std::string& source) {
   selectHandles(pose, pipeline_->builtCage(), source, pipeline_->cageGroups());
   push();
   state_.pose = pose;
+  state_.pose.frame = PoseFrame::Grid;
   state_.pose.separations = separations_;
   state_.active = -1;
   for (std::size_t k = 0; k < pose.selections.size(); ++k)

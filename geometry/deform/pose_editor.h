@@ -10,7 +10,9 @@
 // (DeformationPipeline::setPose: handles, ARAP factorization, Green
 // coordinates) only when its handle set changed (a selection added, removed,
 // made fixed or moving); a changed transform costs one deformTo() frame.
-// Picked vertices index the built cage (pipeline().builtCage()).
+// Picked vertices index the built cage (pipeline().builtCage()). Everything
+// is in the grid frame: poses given to it must have been converted
+// (poseInGridFrame), and the pose it holds says "frame": "grid".
 
 #include "geometry/deform/label_volumes.h"
 #include "geometry/deform/pipeline.h"

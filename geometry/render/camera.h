@@ -12,6 +12,9 @@
 
 namespace vox {
 
+// Share of the half-frame the default camera leaves free around the scene.
+inline constexpr double kFrameMargin = 0.05;
+
 struct Camera {
   Eigen::Vector3d eye{0, -1, 0};
   Eigen::Vector3d target{0, 0, 0};
@@ -19,6 +22,11 @@ struct Camera {
   double fovYDegrees = 35.0;    // vertical field of view
   int width = 640;
   int height = 480;
+  // Depth along the view axis (mm) of the scene box's nearest and farthest
+  // corners, set by parseCamera: the range of the shading's depth cue (none
+  // when far <= near). Part of the camera so that two renders of one scene
+  // with one camera shade alike.
+  double depthNear = 0.0, depthFar = 0.0;
 };
 
 // Orthonormal basis and per-pixel rays of a camera.

@@ -30,7 +30,7 @@ double number(const std::string& text, const std::string& whole) {
   double v = 0.0;
   const auto res = std::from_chars(s.data(), s.data() + s.size(), v);
   if (s.empty() || res.ec != std::errc() || res.ptr != s.data() + s.size() || !std::isfinite(v))
-    throw InputError("--cut", "'" + whole + "': '" + text + "' is not a number");
+    throw UsageError("--cut", "'" + whole + "': '" + text + "' is not a number");
   return v;
 }
 }  // namespace
@@ -46,17 +46,17 @@ void CuttingPlanes::add(const std::string& text) {
       v.push_back(number(body.substr(start, comma - start), text));
       start = comma + 1;
     }
-    if (v.size() != 4) throw InputError("--cut", "'" + text + "': plane= needs four numbers nx,ny,nz,d");
+    if (v.size() != 4) throw UsageError("--cut", "'" + text + "': plane= needs four numbers nx,ny,nz,d");
     const Eigen::Vector3d n(v[0], v[1], v[2]);
-    if (n.norm() == 0.0) throw InputError("--cut", "'" + text + "': the plane normal is zero");
-    if (free) throw InputError("--cut", "'" + text + "': only one free plane is allowed");
+    if (n.norm() == 0.0) throw UsageError("--cut", "'" + text + "': the plane normal is zero");
+    if (free) throw UsageError("--cut", "'" + text + "': only one free plane is allowed");
     free = CuttingPlane{n, v[3]};
     return;
   }
   if (text.size() < 3 || (text[0] != 'x' && text[0] != 'y' && text[0] != 'z') || (text[1] != '>' && text[1] != '<'))
-    throw InputError("--cut", "'" + text + "': expected x>VALUE, y<VALUE, ... (mm) or plane=nx,ny,nz,d");
+    throw UsageError("--cut", "'" + text + "': expected x>VALUE, y<VALUE, ... (mm) or plane=nx,ny,nz,d");
   const int a = text[0] - 'x';
-  if (axis[a]) throw InputError("--cut", "'" + text + "': only one plane per axis is allowed");
+  if (axis[a]) throw UsageError("--cut", "'" + text + "': only one plane per axis is allowed");
   const double value = number(text.substr(2), text);
   const double sign = text[1] == '>' ? 1.0 : -1.0;
   CuttingPlane p;

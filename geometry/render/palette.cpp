@@ -119,7 +119,7 @@ void Palette::hide(const std::string& list, const OrganTable* organs) {
     start = comma + 1;
     while (!item.empty() && item.front() == ' ') item.erase(item.begin());
     while (!item.empty() && item.back() == ' ') item.pop_back();
-    if (item.empty()) throw InputError("--hide", "empty item in '" + list + "'");
+    if (item.empty()) throw UsageError("--hide", "empty item in '" + list + "'");
     const bool numeric = std::isdigit(static_cast<unsigned char>(item[0])) != 0;
     if (numeric) {
       long lo = 0, hi = 0;
@@ -128,13 +128,13 @@ void Palette::hide(const std::string& list, const OrganTable* organs) {
       hi = lo;
       if (r.ec == std::errc() && r.ptr != end && *r.ptr == '-') r = std::from_chars(r.ptr + 1, end, hi);
       if (r.ec != std::errc() || r.ptr != end || lo < 0 || hi < lo)
-        throw InputError("--hide", "'" + item + "' is not a label or a range LOW-HIGH");
+        throw UsageError("--hide", "'" + item + "' is not a label or a range LOW-HIGH");
       if (hi >= long(colors_.size()))
-        throw InputError("--hide", "label " + std::to_string(hi) + " is above the grid's largest label " + std::to_string(colors_.size() - 1));
+        throw UsageError("--hide", "label " + std::to_string(hi) + " is above the grid's largest label " + std::to_string(colors_.size() - 1));
       for (long l = lo; l <= hi; ++l) visible_[std::size_t(l)] = 0;
       continue;
     }
-    if (!organs) throw InputError("--hide", "'" + item + "' is not a label number (organ names need --organs)");
+    if (!organs) throw UsageError("--hide", "'" + item + "' is not a label number (organ names need --organs)");
     const std::vector<int> ids = organs->idsMatching({item});
     bool any = false;
     for (int id : ids)
@@ -142,7 +142,7 @@ void Palette::hide(const std::string& list, const OrganTable* organs) {
         visible_[std::size_t(id)] = 0;
         any = true;
       }
-    if (!any) throw InputError("--hide", "no organ of the grid matches '" + item + "'");
+    if (!any) throw UsageError("--hide", "no organ of the grid matches '" + item + "'");
   }
 }
 

@@ -1,6 +1,7 @@
 #include "geometry/render/raycast_reference.h"
 
 #include "geometry/parallel.h"
+#include "shaders/shared/interface.h"
 
 #include <Eigen/Geometry>
 
@@ -216,6 +217,7 @@ struct Tracer {
             res.label = label;
             res.axis = dda.axis;
             res.step = dda.step[dda.axis];
+            res.t = dda.tEnter;
             res.tet = tet;
             ++stats.hits;
             return res;
@@ -255,14 +257,16 @@ RayResult traceRayReference(const LabelGrid& source, const RaycastMesh& mesh, co
   return tracer.trace(origin, direction);
 }
 
-Rgb shadeRay(const RayResult& r, const Eigen::Vector3d& direction, const RaycastView& view, const Palette& palette,
-             const RaycastShading& shading) {
+Rgb shadeRay(const RayResult& r, const RaycastView& view, const Palette& palette, const RaycastShading& shading) {
   if (!r.hit) return shading.background;
-  // The crossed face's normal faces the camera: -step along the axis. The
-  // same float operations as raycast.comp, so both round alike.
-  const float head = std::abs(float(direction[r.axis])) / float(direction.cast<float>().norm());
-  const float lambert = std::max(0.0f, -float(r.step) * float(view.light[r.axis]));
-  const double shade = double(float(shading.ambient) + float(shading.headlight) * head + float(shading.fill) * lambert);
+  // shaders/shared/shading.glsl's faceShade: the crossed face's normal faces
+  // the camera (-step along the axis), under the headlight and the fill light.
+  const double head = std::max(0.0, -double(r.step) * view.headlight[r.axis]);
+  const double side = std::max(0.0, -double(r.step) * view.light[r.axis]);
+  const double light =
+      std::min(1.0, shading.ambient + (1.0 - shading.ambient) * (VOX_SHADE_HEADLIGHT * head + VOX_SHADE_FILL * side));
+  const double depth = view.depthFar > view.depthNear ? (r.t - view.depthNear) / (view.depthFar - view.depthNear) : 0.0;
+  const double shade = light * (1.0 - VOX_SHADE_DEPTH * std::clamp(depth, 0.0, 1.0));
   const Rgb albedo = palette.color(r.label);
   auto q = [&](std::uint8_t c) { return std::uint8_t(std::min(255.0, std::floor(double(c) * shade + 0.5))); };
   return {q(albedo.r), q(albedo.g), q(albedo.b)};
@@ -278,10 +282,8 @@ RgbImage raycastReference(const LabelGrid& source, const RaycastMesh& mesh, cons
   std::vector<RaycastStats> perRow(static_cast<std::size_t>(h));
   parallelFor(h, 0, [&](std::int64_t y) {
     const Tracer tracer{source, mesh, frame, factors, view, palette, limits, perRow[std::size_t(y)]};
-    for (int x = 0; x < w; ++x) {
-      const Eigen::Vector3d d = view.direction(x, int(y));
-      image.at(x, int(y)) = shadeRay(tracer.trace(view.eye, d), d, view, palette, shading);
-    }
+    for (int x = 0; x < w; ++x)
+      image.at(x, int(y)) = shadeRay(tracer.trace(view.eye, view.direction(x, int(y))), view, palette, shading);
   });
   if (stats) {
     for (const RaycastStats& s : perRow) {
@@ -294,6 +296,28 @@ RgbImage raycastReference(const LabelGrid& source, const RaycastMesh& mesh, cons
     }
   }
   return image;
+}
+
+std::vector<std::uint64_t> visibleLabelPixels(const LabelGrid& source, const RaycastMesh& mesh, const RaycastFrame& frame,
+                                              const RaycastView& view, const Palette& palette, int stride) {
+  const std::vector<TetFactors> factors = computeTetFactors(mesh, frame);
+  const int w = view.camera.width, h = view.camera.height;
+  const int rows = (h + stride - 1) / stride;
+  std::vector<std::vector<std::uint64_t>> perRow(std::size_t(rows), std::vector<std::uint64_t>(palette.size(), 0));
+  std::vector<RaycastStats> stats(static_cast<std::size_t>(rows));
+  const RaycastLimits limits;
+  parallelFor(rows, 0, [&](std::int64_t r) {
+    const Tracer tracer{source, mesh, frame, factors, view, palette, limits, stats[std::size_t(r)]};
+    const int y = int(r) * stride;
+    for (int x = 0; x < w; x += stride) {
+      const RayResult hit = tracer.trace(view.eye, view.direction(x, y));
+      if (hit.hit) ++perRow[std::size_t(r)][hit.label];
+    }
+  });
+  std::vector<std::uint64_t> counts(palette.size(), 0);
+  for (const auto& row : perRow)
+    for (std::size_t l = 0; l < counts.size(); ++l) counts[l] += row[l];
+  return counts;
 }
 
 }  // namespace vox

@@ -68,6 +68,7 @@ struct RayResult {
   Label label = 0;
   int axis = 0;             // axis of the crossed cell face
   int step = 0;             // +-1: the ray's direction along that axis
+  double t = 0.0;           // ray parameter of the cell's entry: depth along the view axis, mm
   std::int32_t tet = -1;    // tet containing the cell centre
 };
 
@@ -76,10 +77,13 @@ RayResult traceRayReference(const LabelGrid& source, const RaycastMesh& mesh, co
                             const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, const RaycastLimits& limits,
                             RaycastStats* stats = nullptr);
 
-// Shades a ray result (RaycastShading).
-// `direction`: the ray's direction (any length).
-Rgb shadeRay(const RayResult& r, const Eigen::Vector3d& direction, const RaycastView& view, const Palette& palette,
-             const RaycastShading& shading);
+// Shades a ray result: label colour times faceShade (shaders/shared/shading.glsl).
+Rgb shadeRay(const RayResult& r, const RaycastView& view, const Palette& palette, const RaycastShading& shading);
+
+// Per label (indexed by label), the pixels of every stride-th row and column
+// whose ray shows it: what a legend lists as visible.
+std::vector<std::uint64_t> visibleLabelPixels(const LabelGrid& source, const RaycastMesh& mesh, const RaycastFrame& frame,
+                                              const RaycastView& view, const Palette& palette, int stride);
 
 // The whole image (rows in parallel on the available cores).
 RgbImage raycastReference(const LabelGrid& source, const RaycastMesh& mesh, const RaycastFrame& frame, const RaycastView& view,

@@ -113,8 +113,11 @@ RaycastView makeRaycastView(const RaycastFrame& frame, const Camera& camera, con
     // n . x > d with x = renderOrigin + s .* c.
     v.cuts.emplace_back(p.normal[0] * s[0], p.normal[1] * s[1], p.normal[2] * s[2], p.offset - p.normal.dot(frame.renderOrigin));
   }
-  // A light above and to the left of the camera: the three face orientations
-  // a voxel shows get three different shades.
+  // A headlight, and a fill light above and to the left of the camera: the
+  // three face orientations a voxel shows get three different shades.
+  v.headlight = -v.camera.forward;
+  v.depthNear = camera.depthNear;
+  v.depthFar = camera.depthFar;
   v.light = (-v.camera.forward + 0.6 * v.camera.up - 0.4 * v.camera.right).normalized();
   return v;
 }

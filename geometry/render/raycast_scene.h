@@ -4,7 +4,7 @@
 // (gpu/kernels/raycast.h).
 //
 // Render frame: the index space of the deformed grid G' that the rasterizer
-// fills (deformedGridGeometry in geometry/raster/rasterize.h),
+// fills (deformedGridGeometry in geometry/deform/rasterize.h),
 // shifted by an integer so that its origin lies near the mesh: the centre of
 // the render cell c (integer vector) is the centre of output voxel
 // c + cellShift. Cells are unit cubes, so the 3D DDA of thesis Algorithm 2 is
@@ -85,25 +85,20 @@ struct RaycastView {
   Eigen::Vector3d right{0, 0, 0};         // the ray of pixel (x, y) is
   Eigen::Vector3d up{0, 0, 0};            //   eye + t (forward + sx right + sy up)
   std::vector<Eigen::Vector4d> cuts;      // render frame: cell c is removed iff xyz . c > w
-  Eigen::Vector3d light{0, 0, 1};         // unit vector towards the light, grid-frame axes
+  Eigen::Vector3d light{0, 0, 1};         // unit vector towards the fill light, grid-frame axes
+  Eigen::Vector3d headlight{0, -1, 0};    // unit vector towards the camera, grid-frame axes
+  double depthNear = 0.0, depthFar = 0.0;  // the camera's depth-cue range (Camera::depthNear/Far)
 
   Eigen::Vector3d direction(int x, int y) const { return forward + camera.sx(x) * right + camera.sy(y) * up; }
 };
 RaycastView makeRaycastView(const RaycastFrame& frame, const Camera& camera, const CuttingPlanes& cuts);
 
-// How a visible voxel is shaded: the label colour times
-//   ambient + headlight |n . d| / |d| + fill max(0, n . light)
-// with n the crossed voxel face's normal (towards the camera) and d the
-// ray: a light at the eye makes faces seen head-on bright and grazing ones
-// dark, so a curved surface reads as curved through its voxel steps, and a
-// fill light from above and to the left of the camera tells the three face
-// orientations apart. Cut faces are voxel faces and are lit the same way.
-// Misses get the background.
+// How a visible voxel is shaded: the crossed voxel face under a headlight
+// and a fill light plus ambient (shaders/shared/shading.glsl), times the
+// label colour; misses get the background.
 struct RaycastShading {
   Rgb background{22, 24, 29};
-  double ambient = 0.22;
-  double headlight = 0.55;
-  double fill = 0.3;
+  double ambient = 0.35;
 };
 
 // Bounds that keep every ray finite on any mesh (thesis: "a given number of

@@ -239,6 +239,7 @@ void RaycastKernel::castRays(const RaycastFrame& frame, const RaycastView& view,
     p.cellsLo[a] = float(frame.cellsLo[a]);
     p.cellsHi[a] = float(frame.cellsHi[a]);
     p.light[a] = float(view.light[a]);
+    p.headlight[a] = float(view.headlight[a]);
     p.sourceShift[a] = std::int32_t(sourceShift_[a]);
     p.sourceDims[a] = std::int32_t(source_.dims[a]);
   }
@@ -254,8 +255,8 @@ void RaycastKernel::castRays(const RaycastFrame& frame, const RaycastView& view,
   p.tanHalfFovY = float(view.camera.tanHalfFovY);
   p.aspect = float(view.camera.aspect);
   p.ambient = float(shading.ambient);
-  p.headlight = float(shading.headlight);
-  p.fill = float(shading.fill);
+  p.depthNear = float(view.depthNear);
+  p.depthFar = float(view.depthFar);
   p.width = std::uint32_t(w);
   p.height = std::uint32_t(h);
   p.cutCount = std::uint32_t(view.cuts.size());

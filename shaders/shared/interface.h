@@ -33,7 +33,7 @@ struct LabelStatsPush {
 // ---------------------------------------------------------------- rasterize
 // Deformed-grid rasterization (gpu/kernels/rasterize.h) and field
 // interpolation (gpu/kernels/field_interpolation.h) on a slab of lattice
-// slices. CPU reference: geometry/raster/lattice_tets.h, rasterize.h.
+// slices. CPU reference: geometry/deform/lattice_tets.h, rasterize.h.
 // A task is one tet on one lattice slice, VOX_RASTER_ROWS_PER_TASK rows of
 // it; the stages that follow a tet walk its scanline spans:
 //   locate   (rasterize_locate.comp, tasks): state <- atomicMin(local tet)
@@ -204,6 +204,11 @@ static_assert(sizeof(RasterReducePush) == 32);
 
 // raycast.comp: one invocation per pixel of the flagged tiles, one work group
 // per tile; the other pixels keep the background the image was filled with.
+// Weights of the two lights of shared/shading.glsl (and shadeRay).
+#define VOX_SHADE_HEADLIGHT 0.75
+#define VOX_SHADE_FILL 0.4
+#define VOX_SHADE_DEPTH 0.6   // darkening at the far end of the scene's depth
+
 #define VOX_RAYCAST_BINDING_PARAMS 0     // RaycastParams
 #define VOX_RAYCAST_BINDING_NODES 1      // RaycastNode[]: boundary BVH
 #define VOX_RAYCAST_BINDING_FACES 2      // uvec4[faceCount]: outward vertices a, b, c and the tet
@@ -253,7 +258,8 @@ struct RaycastParams {
   float cellsLo[4];  // box covered by the cells of the deformed grid
   float cellsHi[4];
   float cuts[4 * VOX_RAYCAST_MAX_CUTS];  // cell c removed iff dot(xyz, c) > w
-  float light[4];    // unit vector towards the light (grid-frame axes)
+  float light[4];    // unit vector towards the fill light (grid-frame axes)
+  float headlight[4];  // unit vector towards the camera (grid-frame axes)
   float toCamera[12];  // rows of [forward right up]^-1: q - eye -> (t, t sx, t sy)
   float tanHalfFovY;
   float aspect;
@@ -270,8 +276,8 @@ struct RaycastParams {
   uint maxWalkSteps;
   uint maxEntries;
   uint maxCells;
-  float headlight;     // weight of the light at the eye (RaycastShading)
-  float fill;          // weight of the fill light along `light`
+  float depthNear;     // depth along the view axis (mm, = ray t) of the scene box's
+  float depthFar;      // nearest and farthest corners: the depth cue's range (none if far <= near)
 };
 
 #ifdef __cplusplus
@@ -279,7 +285,7 @@ static_assert(sizeof(RaycastPreparePush) == 16);
 static_assert(sizeof(RaycastNode) == 32);
 static_assert(sizeof(RaycastEntriesPush) == 16);
 static_assert(sizeof(RaycastPush) == 16);
-static_assert(sizeof(RaycastParams) == 316);
+static_assert(sizeof(RaycastParams) == 332);
 #endif
 
 #ifdef __cplusplus

@@ -1,5 +1,6 @@
 // voxmorph render end to end: images on the GPU and the CPU, options, and
-// bad input (one-line error naming the fault, exit code 1, no output file).
+// bad input (one-line error naming the fault, exit code 1 or 2 for usage
+// errors, no output file).
 
 #include "geometry/io/grid_io.h"
 #include "geometry/io/png_io.h"
@@ -51,11 +52,17 @@ TEST(RenderCommand, CutsAndHiddenOrgansChangeTheImage) {
   ASSERT_EQ(test::runCommand(voxmorph(base + " -o " + test::quote(dir + "/all.png"))).exitCode, 0);
   auto r = test::runCommand(voxmorph(base + " -o " + test::quote(dir + "/cut.png") + " --cut " + test::quote("y<25") + " --cut plane=0,0,1,150"));
   ASSERT_EQ(r.exitCode, 0) << r.err;
-  r = test::runCommand(voxmorph(base + " -o " + test::quote(dir + "/hidden.png") + " --hide trunk,head,muscle,heart,humerus"));
+  r = test::runCommand(voxmorph(base + " -o " + test::quote(dir + "/hidden.png") + " --hide trunk,head,muscle,heart"));
   ASSERT_EQ(r.exitCode, 0) << r.err;
   const RgbImage all = readPng(dir + "/all.png");
   EXPECT_GT(compareImages(all, readPng(dir + "/cut.png"), 0).differing, 50u);
-  EXPECT_EQ(countNotBackground(readPng(dir + "/hidden.png"), kBackground), 0u);
+  // Only the humeri are left.
+  EXPECT_LT(countNotBackground(readPng(dir + "/hidden.png"), kBackground), countNotBackground(all, kBackground) / 4);
+  EXPECT_GT(countNotBackground(readPng(dir + "/hidden.png"), kBackground), 0u);
+  // Hiding every label would draw an empty image: a usage error, no file.
+  r = test::runCommand(voxmorph(base + " -o " + test::quote(dir + "/none.png") + " --hide trunk,head,muscle,heart,humerus"));
+  EXPECT_EQ(r.exitCode, 2) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/none.png"));
 }
 
 TEST(RenderCommand, BadInputIsAOneLineErrorAndNoOutput) {
@@ -66,19 +73,23 @@ TEST(RenderCommand, BadInputIsAOneLineErrorAndNoOutput) {
   struct Case {
     std::string args;
     std::string message;
+    int exitCode = 1;  // 2: a usage error
   };
   const std::vector<Case> cases = {
       {"render " + test::quote(dir + "/absent.mha") + out, "absent.mha"},
-      {"render " + test::quote(grid) + out + " --camera zoom=2", "--camera: unknown key 'zoom'"},
-      {"render " + test::quote(grid) + out + " --size 64", "--size: "},
-      {"render " + test::quote(grid) + out + " --cut " + test::quote("w>3"), "--cut: "},
-      {"render " + test::quote(grid) + out + " --hide 1-999", "--hide: "},
+      {"render " + test::quote(grid) + out + " --camera zoom=2", "--camera: unknown key 'zoom'", 2},
+      {"render " + test::quote(grid) + out + " --size 64", "--size: ", 2},
+      {"render " + test::quote(grid) + out + " --size 0x0", "--size: ", 2},
+      {"render " + test::quote(grid) + " -o " + test::quote(dir + "/out.jpg"), "use .png", 2},
+      {"render " + test::quote(grid) + out + " --hide 1-9", "hides every label", 2},
+      {"render " + test::quote(grid) + out + " --cut " + test::quote("w>3"), "--cut: ", 2},
+      {"render " + test::quote(grid) + out + " --hide 1-999", "--hide: ", 2},
       {"render " + test::quote(grid) + out + " --organs " + test::quote(dir + "/absent.dat"), "absent.dat"},
       {"render " + test::quote(grid) + " -o " + test::quote(dir + "/no/such/dir/out.png"), "out.png"},
   };
   for (const Case& c : cases) {
     const auto r = test::runCommand(voxmorph(c.args));
-    EXPECT_EQ(r.exitCode, 1) << c.args << "\n" << r.err;
+    EXPECT_EQ(r.exitCode, c.exitCode) << c.args << "\n" << r.err;
     EXPECT_NE(r.err.find(c.message), std::string::npos) << c.args << "\n" << r.err;
     EXPECT_EQ(r.err.find("voxmorph: error: "), r.err.rfind("voxmorph: error: ")) << "one error line: " << r.err;
   }

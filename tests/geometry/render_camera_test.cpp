@@ -24,10 +24,23 @@ TEST(RenderCamera, DefaultOrbitLooksAtTheBoxCentreFromMinusYAndFitsTheBox) {
   EXPECT_NEAR(c.eye[0], 200.0, 1e-9);
   EXPECT_NEAR(c.eye[2], 800.0, 1e-9);
   EXPECT_LT(c.eye[1], 100.0);
-  // The bounding sphere fits: its angular radius is the half field of view.
-  const double radius = 0.5 * (kHi - kLo).norm();
-  const double distance = (c.eye - c.target).norm();
-  EXPECT_NEAR(std::asin(radius / distance), 0.5 * 35.0 * M_PI / 180.0, 1e-9);
+  // The box's corners project inside the frame, the tallest one onto the
+  // margin: the 1600 mm box fills the frame's height.
+  const CameraRays rays = cameraRays(c);
+  double widest = 0.0, tallest = 0.0;
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector3d corner((k & 1) ? kHi.x() : kLo.x(), (k & 2) ? kHi.y() : kLo.y(), (k & 4) ? kHi.z() : kLo.z());
+    const Eigen::Vector3d d = corner - rays.eye;
+    const double depth = d.dot(rays.forward);
+    widest = std::max(widest, std::abs(d.dot(rays.right)) / depth / (rays.tanHalfFovY * rays.aspect));
+    tallest = std::max(tallest, std::abs(d.dot(rays.up)) / depth / rays.tanHalfFovY);
+  }
+  // The corners' fit with the margin, or the bounding sphere's where nearer.
+  EXPECT_LE(tallest, 1.0);
+  EXPECT_GE(tallest, 1.0 - kFrameMargin - 1e-9);
+  EXPECT_LT(widest, tallest);
+  // The depth cue's range spans the box along the view axis.
+  EXPECT_NEAR(c.depthFar - c.depthNear, 200.0, 1e-9);
 }
 
 TEST(RenderCamera, AzimuthElevationAndDistance) {

@@ -1,0 +1,69 @@
+#include "geometry/remesh/meshing_estimate.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+namespace vox::remesh {
+
+namespace {
+
+void finish(MeshingEstimate& e, double targetLength) {
+  const double tets = kTetsPerCubicLength * e.domainVolumeMm3 / (targetLength * targetLength * targetLength);
+  const double cap = double(std::numeric_limits<std::int64_t>::max() / 1024);
+  e.tets = std::int64_t(std::min(cap, std::ceil(tets)));
+  e.bytes = std::int64_t(std::min(cap, std::ceil(tets * kRemeshBytesPerTet)));
+}
+
+}  // namespace
+
+MeshingEstimate estimateMeshing(const LabelGrid& grid, double targetLength) {
+  const GridGeometry& g = grid.geometry();
+  std::int64_t labelled = 0;
+  Index3 lo = g.dims, hi{-1, -1, -1};
+  for (std::int64_t k = 0; k < g.dims[2]; ++k)
+    for (std::int64_t j = 0; j < g.dims[1]; ++j)
+      for (std::int64_t i = 0; i < g.dims[0]; ++i)
+        if (grid.at(i, j, k) != 0) {
+          ++labelled;
+          const Index3 c{i, j, k};
+          for (int a = 0; a < 3; ++a) {
+            lo[a] = std::min(lo[a], c[a]);
+            hi[a] = std::max(hi[a], c[a]);
+          }
+        }
+  MeshingEstimate e;
+  e.domainVolumeMm3 = double(labelled) * g.voxelVolume();
+  for (int a = 0; a < 3; ++a)
+    if (hi[a] >= lo[a]) e.extentMm = std::max(e.extentMm, double(hi[a] - lo[a] + 1) * g.spacing[a]);
+  finish(e, targetLength);
+  return e;
+}
+
+MeshingEstimate estimateMeshing(const TetMesh& mesh, double targetLength) {
+  MeshingEstimate e;
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::max()), hi = -lo;
+  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
+    if (mesh.labels[t] <= 0) continue;
+    e.domainVolumeMm3 += std::abs(signedVolume(mesh.positions, mesh.tets[t]));
+    for (const auto v : mesh.tets[t]) {
+      lo = lo.cwiseMin(mesh.positions[std::size_t(v)]);
+      hi = hi.cwiseMax(mesh.positions[std::size_t(v)]);
+    }
+  }
+  if (e.domainVolumeMm3 > 0.0) e.extentMm = (hi - lo).maxCoeff();
+  finish(e, targetLength);
+  return e;
+}
+
+std::string describeEstimate(const MeshingEstimate& e) {
+  char text[96];
+  const double mb = double(e.bytes) / double(1 << 20);
+  if (mb >= 10240.0) std::snprintf(text, sizeof text, "about %.3g M tets and %.1f GB", double(e.tets) * 1e-6, mb / 1024.0);
+  else if (e.tets >= 1000000) std::snprintf(text, sizeof text, "about %.3g M tets and %.0f MB", double(e.tets) * 1e-6, mb);
+  else std::snprintf(text, sizeof text, "about %lld tets and %.0f MB", (long long)e.tets, std::max(1.0, mb));
+  return text;
+}
+
+}  // namespace vox::remesh

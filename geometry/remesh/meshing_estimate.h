@@ -1,0 +1,35 @@
+#pragma once
+// The size of a remeshing run before it starts: how many tets an isotropic
+// mesh at target length l holds, and the memory the remesher needs for them.
+// A length far below the voxel size asks for gigabytes; the mesh and remesh
+// commands print this estimate and refuse beyond their memory budget.
+
+#include "geometry/label_grid.h"
+#include "geometry/tet_mesh.h"
+
+#include <cstdint>
+#include <string>
+
+namespace vox::remesh {
+
+struct MeshingEstimate {
+  double domainVolumeMm3 = 0.0;  // labelled volume (label > 0)
+  double extentMm = 0.0;         // longest side of the labelled region's box
+  std::int64_t tets = 0;         // domain tets of the output
+  std::int64_t bytes = 0;        // peak memory of the remesher
+};
+
+// Tets of an isotropic mesh at length l: domain volume over the mean tet
+// volume at that length. The factors are the larger of those measured
+// (docs/BENCHMARKS.md, "Meshing estimate"): tets per l^3 of domain and peak
+// bytes per output tet (the imaginary layer and the complex's tables count).
+constexpr double kTetsPerCubicLength = 12.0;
+constexpr double kRemeshBytesPerTet = 1200.0;
+
+MeshingEstimate estimateMeshing(const LabelGrid& grid, double targetLength);
+MeshingEstimate estimateMeshing(const TetMesh& mesh, double targetLength);
+
+// "about 346,000 tets and 210 MB".
+std::string describeEstimate(const MeshingEstimate& e);
+
+}  // namespace vox::remesh
