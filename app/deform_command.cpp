@@ -15,6 +15,7 @@
 #include "geometry/deform/label_volumes.h"
 #include "geometry/deform/out_of_core.h"
 #include "geometry/deform/pipeline.h"
+#include "geometry/deform/posed_extent.h"
 #include "geometry/deform/rasterize.h"
 #include "geometry/deform/surface_checks.h"
 #include "geometry/error.h"
@@ -45,6 +46,7 @@ struct DeformOptions {
   std::int64_t maxMemoryMb = 0;
   bool cpu = false;
   bool preserveVolumes = false;
+  bool allowGrowth = false;
   std::int64_t maxTets = RefinementOptions{}.maxTets;
   int refineIterations = RefinementOptions{}.maxIterations;
   bool quiet = false;
@@ -201,6 +203,8 @@ void deform(const DeformOptions& o) {
   auto pipeline = std::make_unique<DeformationPipeline>(source.workingGrid(), options);
   warnForegroundOutside(pipeline->stats().foregroundOutsideCage, separated);
   pipeline->deform();
+  checkPosedGrowth(source.geometry(), pipeline->deformedTransferMesh(), o.pose,
+                   selectionMovingFarthest(pipeline->pose(), pipeline->handles(), pipeline->deformedCage(), source.geometry()), o.allowGrowth);
 
   std::unique_ptr<gpu::FieldInterpolationKernel> interpolationKernel;
   VertexFieldInterpolation interpolate = cpuFieldInterpolation();
@@ -306,6 +310,8 @@ void addDeformCommand(CLI::App& app) {
   cmd->add_flag("--preserve-volumes", o->preserveVolumes,
                 "Relabel boundary voxels of the posed grid so that each label keeps the volume the deformation gives it "
                 "(sum of the transfer mesh's Jacobian determinants over its voxels), within about a voxel; in core only");
+  cmd->add_flag("--allow-growth", o->allowGrowth,
+                "Accept a posed grid of more than 8 times the source's voxels (a pose that moves parts far from the body)");
   cmd->add_flag("--cpu", o->cpu, "Rasterize and interpolate fields with the CPU reference instead of the GPU");
   cmd->add_option("--max-tets", o->maxTets, "Tet budget of the refined transfer mesh (default 250000)")
       ->check(CLI::Range(std::int64_t(1000), std::int64_t(1) << 30));
