@@ -42,6 +42,7 @@ struct DeformOptions {
   std::int64_t maxMemoryMb = 0;
   bool cpu = false;
   bool preserveVolumes = false;
+  bool allowGrowth = false;
   std::int64_t maxTets = RefinementOptions{}.maxTets;
   int refineIterations = RefinementOptions{}.maxIterations;
   bool quiet = false;
@@ -74,6 +75,7 @@ void deform(const DeformOptions& o) {
   request.maxMemoryMb = o.maxMemoryMb;
   request.cpu = o.cpu;
   request.preserveVolumes = o.preserveVolumes;
+  request.allowGrowth = o.allowGrowth;
   request.maxTets = o.maxTets;
   request.refineIterations = o.refineIterations;
   request.posedCage = o.posedCage;
@@ -149,6 +151,8 @@ void addDeformCommand(CLI::App& app) {
   cmd->add_flag("--preserve-volumes", o->preserveVolumes,
                 "Relabel boundary voxels of the posed grid so that each label keeps the volume the deformation gives it "
                 "(sum of the transfer mesh's Jacobian determinants over its voxels), within about a voxel; in core only");
+  cmd->add_flag("--allow-growth", o->allowGrowth,
+                "Accept a posed grid of more than 8 times the source's voxels (a pose that moves parts far from the body)");
   cmd->add_flag("--cpu", o->cpu, "Rasterize and interpolate fields with the CPU reference instead of the GPU");
   cmd->add_option("--max-tets", o->maxTets, "Tet budget of the refined transfer mesh (default 250000)")
       ->check(integerIn(1000, std::int64_t(1) << 30));

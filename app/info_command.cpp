@@ -30,6 +30,7 @@ struct InfoOptions {
   bool cpu = false;
   bool verify = false;
   bool devices = false;
+  std::int64_t maxMemoryMb = 0;
 };
 
 double msSince(std::chrono::steady_clock::time_point t0) {
@@ -38,17 +39,28 @@ double msSince(std::chrono::steady_clock::time_point t0) {
 
 nlohmann::json vec3(const Eigen::Vector3d& v) { return {v[0], v[1], v[2]}; }
 
+void printGridInfo(const InfoOptions& o, const GridGeometry& g, const LabelStats& stats, const std::optional<OrganTable>& organs,
+                   const std::string& engine, double readMs, double statsMs, double gpuMs, std::optional<bool> cpuEqual);
+
 void gridInfo(const InfoOptions& o) {
-  auto t0 = std::chrono::steady_clock::now();
-  const LabelGrid grid = readGrid(o.input);
-  const double readMs = msSince(t0);
   std::optional<OrganTable> organs;
   if (!o.organs.empty()) organs = OrganTable::read(o.organs);
-
+  auto t0 = std::chrono::steady_clock::now();
   LabelStats stats;
   std::string engine;
-  double statsMs = 0.0, gpuMs = 0.0;
+  double readMs = 0.0, statsMs = 0.0, gpuMs = 0.0;
   std::optional<bool> cpuEqual;
+  if (o.maxMemoryMb > 0) {
+    // Streamed: the grid is never held; statistics on the CPU, slab by slab.
+    const std::unique_ptr<GridSliceReader> reader = openGridSlices(o.input);
+    stats = computeLabelStats(*reader, (o.maxMemoryMb << 20) / 2);
+    statsMs = msSince(t0);
+    engine = "CPU (streamed under --max-memory)";
+    printGridInfo(o, reader->geometry(), stats, organs, engine, readMs, statsMs, gpuMs, cpuEqual);
+    return;
+  }
+  const LabelGrid grid = readGrid(o.input);
+  readMs = msSince(t0);
   if (!o.cpu) {
     try {
       gpu::Context ctx;
@@ -76,7 +88,11 @@ void gridInfo(const InfoOptions& o) {
     }
   }
 
-  const GridGeometry& g = grid.geometry();
+  printGridInfo(o, grid.geometry(), stats, organs, engine, readMs, statsMs, gpuMs, cpuEqual);
+}
+
+void printGridInfo(const InfoOptions& o, const GridGeometry& g, const LabelStats& stats, const std::optional<OrganTable>& organs,
+                   const std::string& engine, double readMs, double statsMs, double gpuMs, std::optional<bool> cpuEqual) {
   const double vv = g.voxelVolume();
   nlohmann::json j;
   j["file"] = o.input;
@@ -207,8 +223,12 @@ void addInfoCommand(CLI::App& app) {
   cmd->add_option("--organs", o->organs, "Organ table (ID name tissue density), for names and masses");
   cmd->add_flag("--json", o->json, "Print JSON instead of text");
   cmd->add_flag("--cpu", o->cpu, "Compute label statistics on the CPU only");
-  cmd->add_flag("--verify", o->verify, "Compute on GPU and CPU and fail unless they are equal");
+  auto* verify = cmd->add_flag("--verify", o->verify, "Compute on GPU and CPU and fail unless they are equal");
   cmd->add_flag("--devices", o->devices, "List the Vulkan devices and exit");
+  cmd->add_option("--max-memory", o->maxMemoryMb,
+                  "Stream the grid under this budget (MB) instead of holding it: CPU statistics, slab by slab")
+      ->check(CLI::Range(std::int64_t(16), std::int64_t(1) << 30))
+      ->excludes(verify);
   cmd->callback([o, cmd] {
     if (o->devices) {
       for (const auto& d : gpu::listDevices()) std::printf("%s\n", d.c_str());

@@ -1,5 +1,8 @@
 #include "geometry/label_stats.h"
 
+#include "geometry/io/grid_io.h"
+#include "geometry/progress.h"
+
 #include <algorithm>
 
 namespace vox {
@@ -53,6 +56,23 @@ LabelStats computeLabelStats(const LabelGrid& grid) {
   LabelStats s;
   s.resize(std::size_t(grid.maxLabel()) + 1);
   accumulateLabelStats(grid.geometry(), 0, grid.dims()[2], grid.data(), s);
+  return s;
+}
+
+LabelStats computeLabelStats(GridSliceReader& reader, std::int64_t bufferBytes) {
+  const GridGeometry& g = reader.geometry();
+  const std::int64_t sliceBytes = g.sliceVoxels() * std::int64_t(sizeof(Label));
+  const std::int64_t slab = std::clamp<std::int64_t>(bufferBytes / sliceBytes, 1, g.dims[2]);
+  std::vector<Label> buffer(std::size_t(slab * g.sliceVoxels()));
+  LabelStats s;
+  ProgressCounter progress("label statistics", double(g.dims[2]));
+  for (std::int64_t k = 0; k < g.dims[2]; k += slab) {
+    const std::int64_t n = std::min(slab, g.dims[2] - k);
+    reader.readSlices(k, n, buffer.data());
+    accumulateLabelStats(g, k, n, buffer.data(), s);
+    progress.advance(double(n));
+  }
+  progress.finish();
   return s;
 }
 

@@ -31,6 +31,12 @@ struct LabelStats {
 
 LabelStats computeLabelStats(const LabelGrid& grid);
 
+class GridSliceReader;
+// The same statistics from a grid streamed slab by slab through a buffer of
+// at most bufferBytes (one slice at least): memory independent of the grid's
+// depth (info --max-memory).
+LabelStats computeLabelStats(GridSliceReader& reader, std::int64_t bufferBytes);
+
 // Accumulates slices [k0, k0 + count) of a grid given slice by slice (used by
 // the streaming paths); `slices` holds count * nx * ny labels.
 void accumulateLabelStats(const GridGeometry& geometry, std::int64_t k0, std::int64_t count, const Label* slices,

@@ -3,6 +3,7 @@
 #include "geometry/deform/label_volumes.h"
 #include "geometry/deform/out_of_core.h"
 #include "geometry/deform/pipeline.h"
+#include "geometry/deform/posed_extent.h"
 #include "geometry/raster/rasterize.h"
 #include "geometry/error.h"
 #include "geometry/io/atomic_file.h"
@@ -187,6 +188,9 @@ DeformationReport deformGrid(const DeformGridRequest& o) {
                 " foreground voxels lie outside the cage without limb separation; the propagation solve places them, but a "
                 "larger --dilation (or --separate where limbs touch) keeps them inside");
   pipeline->deform();
+  checkPosedGrowth(source.geometry(), pipeline->deformedTransferMesh(), o.poseSource,
+                   selectionMovingFarthest(pipeline->pose(), pipeline->handles(), pipeline->deformedCage(), source.geometry()),
+                   o.allowGrowth);
 
   std::unique_ptr<FieldInterpolationKernel> interpolationKernel;
   VertexFieldInterpolation interpolate = cpuFieldInterpolation();

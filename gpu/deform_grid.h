@@ -42,6 +42,7 @@ struct DeformGridRequest {
   std::int64_t maxMemoryMb = 0;  // 0: in core
   bool cpu = false;
   bool preserveVolumes = false;
+  bool allowGrowth = false;  // accept a posed grid of more than 8x the source's voxels (posed_extent.h)
   std::int64_t maxTets = RefinementOptions{}.maxTets;
   int refineIterations = RefinementOptions{}.maxIterations;
   std::string posedCage, posedMesh;  // optional extra outputs, written in the world frame

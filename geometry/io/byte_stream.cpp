@@ -19,6 +19,9 @@ namespace {
 constexpr std::size_t kBufferBytes = std::size_t(1) << 18;
 // zlib counts in unsigned int: feed it at most this much at a time.
 constexpr std::size_t kZlibChunk = std::size_t(1) << 30;
+// Deflate codes a 258-byte match in 2 bits at best; each stream adds at most
+// one such match's worth of slack.
+constexpr std::int64_t kMaxDeflateRatio = 1032;
 
 std::string errnoText() { return std::strerror(errno); }
 
@@ -44,6 +47,7 @@ public:
     if (::fseeko(file_.get(), off_t(start_ + offset), SEEK_SET) != 0) throw InputError(source_, "cannot seek (" + errnoText() + ")");
   }
   std::int64_t size() const override { return size_; }
+  std::int64_t maxSize() const override { return size_; }
   void checkEnd() override {}
 
 private:
@@ -57,6 +61,12 @@ class InflateReader final : public ByteReader {
 public:
   InflateReader(std::FILE* file, std::uint64_t start, std::string source)
       : file_(file), start_(start), source_(std::move(source)), input_(kBufferBytes) {
+    if (::fseeko(file, 0, SEEK_END) != 0) throw InputError(source_, "cannot seek (" + errnoText() + ")");
+    const std::int64_t total = ::ftello(file);
+    const std::int64_t compressed = total > std::int64_t(start_) ? total - std::int64_t(start_) : 0;
+    maxSize_ = compressed > std::numeric_limits<std::int64_t>::max() / kMaxDeflateRatio - 1
+                   ? std::numeric_limits<std::int64_t>::max()
+                   : (compressed + 1) * kMaxDeflateRatio;
     restart();
   }
   ~InflateReader() override {
@@ -88,6 +98,7 @@ public:
   }
 
   std::int64_t size() const override { return -1; }
+  std::int64_t maxSize() const override { return maxSize_; }
 
   void checkEnd() override {
     std::vector<unsigned char> scratch(kBufferBytes);
@@ -157,6 +168,7 @@ private:
   bool inputEnd_ = false;
   bool streamEnd_ = false;
   std::uint64_t position_ = 0;
+  std::int64_t maxSize_ = 0;
 };
 
 class StdioWriter final : public ByteWriter {

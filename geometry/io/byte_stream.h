@@ -22,6 +22,11 @@ public:
   virtual void seek(std::uint64_t offset) = 0;
   // Bytes in the stream when known without decoding it (plain files), else -1.
   virtual std::int64_t size() const = 0;
+  // The most bytes the stream can hold: size() for plain files; for
+  // compressed streams the bound deflate's largest ratio (1032:1) puts on the
+  // bytes left in the file, so that a header declaring more is rejected
+  // before anything is allocated from it.
+  virtual std::int64_t maxSize() const = 0;
   // Compressed streams: decodes what remains and checks that the stream ends
   // with a valid checksum (truncated or corrupt archives are caught here even
   // when every voxel was already read).

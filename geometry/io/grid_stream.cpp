@@ -77,6 +77,13 @@ StreamSliceReader::StreamSliceReader(std::string source, const GridGeometry& geo
                                   voxelTypeName(encoding_.type) + " samples need " + std::to_string(needed) + " bytes from offset " +
                                   std::to_string(dataOffset_) + ", the file holds " + std::to_string(present));
   }
+  const std::int64_t bound = data_->maxSize();
+  if (size < 0 && (std::uint64_t(bound) < dataOffset_ || std::uint64_t(bound) - dataOffset_ < std::uint64_t(needed)))
+    throw InputError(source_, "voxel data is truncated: " + std::to_string(geometry_.dims[0]) + " x " +
+                                  std::to_string(geometry_.dims[1]) + " x " + std::to_string(geometry_.dims[2]) + " " +
+                                  voxelTypeName(encoding_.type) + " samples need " + std::to_string(needed) +
+                                  " bytes, the compressed data can decode to at most " + std::to_string(bound) +
+                                  " (deflate's largest ratio is 1032:1)");
   data_->seek(dataOffset_);
 }
 

@@ -65,7 +65,10 @@ public:
     std::fclose(openForReading(path, path));
     file_.reset(znzopen(path.c_str(), "rb", gzip ? 1 : 0));
     if (!file_) throw InputError(path, std::string("cannot open the file (") + std::strerror(errno) + ")");
-    if (!gzip) size_ = std::int64_t(std::filesystem::file_size(path));
+    const auto fileBytes = std::int64_t(std::filesystem::file_size(path));
+    if (!gzip) size_ = fileBytes;
+    // Deflate's largest ratio is 1032:1 (see ByteReader::maxSize).
+    maxSize_ = gzip ? (fileBytes + 1) * 1032 : fileBytes;
   }
 
   std::size_t read(void* dst, std::size_t n) override {
@@ -82,6 +85,7 @@ public:
     }
   }
   std::int64_t size() const override { return size_; }
+  std::int64_t maxSize() const override { return maxSize_; }
   void checkEnd() override {
     if (!gzip_) return;
     // Decode to the end so that zlib verifies the gzip trailer (CRC and length).
@@ -106,6 +110,7 @@ private:
   bool gzip_;
   ZnzHandle file_;
   std::int64_t size_ = -1;
+  std::int64_t maxSize_ = 0;
 };
 
 std::uint32_t swapped32(std::int32_t v) {

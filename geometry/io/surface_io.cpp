@@ -27,11 +27,27 @@ namespace {
 
 // Appends the fan of `polygon` (vertex indices) to `triangles`; `in` names
 // the line on error, where vertices are numbered from `firstIndex` as in the file.
+// A number as written by to_chars: 0.5, 1e+30, not 0.500000.
+std::string shortest(double v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof(buf), v);
+  return std::string(buf, r.ptr);
+}
+
+// A vertex that `polygon` lists twice, if any. Sorting a copy keeps the
+// check O(n log n) for faces of any size (a cage face may list every vertex).
+std::optional<std::int32_t> repeatedVertex(const std::vector<std::int32_t>& polygon, std::vector<std::int32_t>& scratch) {
+  scratch.assign(polygon.begin(), polygon.end());
+  std::sort(scratch.begin(), scratch.end());
+  const auto twice = std::adjacent_find(scratch.begin(), scratch.end());
+  if (twice == scratch.end()) return std::nullopt;
+  return *twice;
+}
+
 void addFan(const std::vector<std::int32_t>& polygon, std::vector<Tri>& triangles, io::TextScanner& in, int firstIndex) {
   if (polygon.size() < 3) in.fail("face has " + std::to_string(polygon.size()) + " vertices (at least 3 needed)");
-  for (std::size_t i = 0; i < polygon.size(); ++i)
-    for (std::size_t j = 0; j < i; ++j)
-      if (polygon[i] == polygon[j]) in.fail("face repeats vertex " + std::to_string(polygon[i] + firstIndex));
+  std::vector<std::int32_t> scratch;
+  if (const auto v = repeatedVertex(polygon, scratch)) in.fail("face repeats vertex " + std::to_string(*v + firstIndex));
   for (std::size_t i = 1; i + 1 < polygon.size(); ++i) triangles.push_back({polygon[0], polygon[i], polygon[i + 1]});
 }
 
@@ -366,7 +382,7 @@ private:
       if (e.properties[i].list && (e.properties[i].name == "vertex_indices" || e.properties[i].name == "vertex_index"))
         indices = std::ptrdiff_t(i);
     if (indices < 0) headerFail(e, "face element lacks a vertex_indices list");
-    std::vector<std::int32_t> polygon;
+    std::vector<std::int32_t> polygon, scratch;
     for (std::size_t f = 0; f < e.count; ++f) {
       for (std::size_t i = 0; i < e.properties.size(); ++i) {
         const PlyProperty& p = e.properties[i];
@@ -378,15 +394,15 @@ private:
         polygon.clear();
         for (std::int64_t k = 0; k < n; ++k) {
           const double v = value(p.type, "vertex index");
-          if (v < 0 || v >= double(vertexCount) || v != std::floor(v))
-            fail("face " + std::to_string(f) + " references vertex " + std::to_string(v) + " (the file has " +
+          if (v != std::floor(v)) fail("face " + std::to_string(f) + " has vertex index " + shortest(v) + ", not an integer");
+          if (v < 0 || v >= double(vertexCount))
+            fail("face " + std::to_string(f) + " references vertex " + shortest(v) + " (the file has " +
                  std::to_string(vertexCount) + " vertices)");
           polygon.push_back(std::int32_t(v));
         }
         if (polygon.size() < 3) fail("face " + std::to_string(f) + " has " + std::to_string(polygon.size()) + " vertices (at least 3 needed)");
-        for (std::size_t a = 0; a < polygon.size(); ++a)
-          for (std::size_t b = 0; b < a; ++b)
-            if (polygon[a] == polygon[b]) fail("face " + std::to_string(f) + " repeats vertex " + std::to_string(polygon[a]));
+        if (const auto twice = repeatedVertex(polygon, scratch))
+          fail("face " + std::to_string(f) + " repeats vertex " + std::to_string(*twice));
         for (std::size_t k = 1; k + 1 < polygon.size(); ++k) mesh.triangles.push_back({polygon[0], polygon[k], polygon[k + 1]});
       }
     }

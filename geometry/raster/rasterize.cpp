@@ -1,5 +1,7 @@
 #include "geometry/raster/rasterize.h"
 
+#include "geometry/deform/posed_extent.h"
+
 #include "geometry/error.h"
 #include "geometry/parallel.h"
 #include "geometry/progress.h"
@@ -47,24 +49,16 @@ Label sampleLabel(std::uint32_t state) {
 }  // namespace
 
 GridGeometry deformedGridGeometry(const GridGeometry& source, const std::vector<Eigen::Vector3d>& deformed) {
-  if (deformed.empty()) throw InputError("deformed positions", "no vertices");
-  requireFinite(deformed, "deformed positions");
-  Eigen::Vector3d lo = latticeCoordinates(source, deformed[0]), hi = lo;
-  for (const auto& p : deformed) {
-    const Eigen::Vector3d c = latticeCoordinates(source, p);
-    lo = lo.cwiseMin(c);
-    hi = hi.cwiseMax(c);
-  }
+  const PosedExtent e = posedExtent(source, deformed);
+  if (!(e.voxels <= double(kMaxGridVoxels)))
+    throw InputError("deformed positions", "they span " + std::to_string(std::int64_t(e.dims.x())) + " x " +
+                                               std::to_string(std::int64_t(e.dims.y())) + " x " +
+                                               std::to_string(std::int64_t(e.dims.z())) + " voxels, more than the largest supported grid (" +
+                                               std::to_string(kMaxGridVoxels) + " voxels)");
   GridGeometry out = source;
-  Eigen::Vector3d first;
-  for (int a = 0; a < 3; ++a) {
-    // Voxel centres of the source lattice inside [lo, hi] (with a hair of
-    // slack: centres exactly on the box may lie on a tet face).
-    const double f = std::ceil(lo[a] - 1e-6), l = std::floor(hi[a] + 1e-6);
-    out.dims[std::size_t(a)] = std::max<std::int64_t>(1, std::int64_t(l - f) + 1);
-    first[a] = f;
-  }
-  out.origin = source.origin + source.spacing.cwiseProduct(first);
+  // Exact: posedExtent bounds every value by kMaxGridVoxels.
+  for (int a = 0; a < 3; ++a) out.dims[std::size_t(a)] = std::int64_t(e.dims[a]);
+  out.origin = source.origin + source.spacing.cwiseProduct(e.first);
   out.validate("deformed grid");
   return out;
 }

@@ -4,7 +4,7 @@
 // (gpu/kernels/raycast.h).
 //
 // Render frame: the index space of the deformed grid G' that the rasterizer
-// fills (deformedGridGeometry in geometry/deform/rasterize.h),
+// fills (deformedGridGeometry in geometry/raster/rasterize.h),
 // shifted by an integer so that its origin lies near the mesh: the centre of
 // the render cell c (integer vector) is the centre of output voxel
 // c + cellShift. Cells are unit cubes, so the 3D DDA of thesis Algorithm 2 is

@@ -33,7 +33,7 @@ struct LabelStatsPush {
 // ---------------------------------------------------------------- rasterize
 // Deformed-grid rasterization (gpu/kernels/rasterize.h) and field
 // interpolation (gpu/kernels/field_interpolation.h) on a slab of lattice
-// slices. CPU reference: geometry/deform/lattice_tets.h, rasterize.h.
+// slices. CPU reference: geometry/raster/lattice_tets.h, rasterize.h.
 // A task is one tet on one lattice slice, VOX_RASTER_ROWS_PER_TASK rows of
 // it; the stages that follow a tet walk its scanline spans:
 //   locate   (rasterize_locate.comp, tasks): state <- atomicMin(local tet)

@@ -161,6 +161,39 @@ TEST(DeformCommand, BadInputIsAOneLineErrorWithoutOutput) {
   EXPECT_EQ(test::listFiles(s.dir).find("posed"), std::string::npos) << test::listFiles(s.dir);
 }
 
+// The stick figure's top (z above 70 mm) moved by `translation`, the rest fixed.
+std::string topMovedPose(const std::string& translation) {
+  return R"({"selections": [
+    {"name": "body", "box": {"min": [-1000, -1000, -1000], "max": [1000, 1000, 1000]}, "fixed": true},
+    {"name": "top", "box": {"min": [-1000, -1000, 70], "max": [1000, 1000, 1000]},
+     "transform": {"translation": )" + translation + "}}]}";
+}
+
+TEST(DeformCommand, PoseFarOffIsAOneLineErrorNamingTheSelection) {
+  VOX_REQUIRE_VOXMORPH();
+  const Stick s = stick();
+  const std::string out = s.dir + "/posed.nii.gz";
+  const std::string base = "deform " + test::quote(s.grid) + " -o " + test::quote(out) + " -q --cpu --pose ";
+  // Far beyond any grid: no integer conversion may wrap or collapse the extent.
+  for (const char* far : {"[1e30, 0, 0]", "[1e20, 0, 0]", "[0, 0, -1e15]"}) {
+    const std::string pose = writeFile(s.dir + "/far.json", topMovedPose(far));
+    const auto r = test::runCommand(voxmorph(base + test::quote(pose)));
+    expectOneLineError(r, "far.json: selection 'top' (translation");
+    EXPECT_EQ(r.err.find("-"), r.err.find("-1e+15")) << "a wrapped (negative) dimension: " << r.err;
+    EXPECT_FALSE(std::filesystem::exists(out)) << far;
+  }
+  // Within the supported size but far larger than the source: refused unless
+  // --allow-growth.
+  const std::string pose = writeFile(s.dir + "/grow.json", topMovedPose("[400, 400, 0]"));
+  const auto refused = test::runCommand(voxmorph(base + test::quote(pose)));
+  expectOneLineError(refused, "grow.json: selection 'top' (translation (400, 400, 0) mm) makes a posed grid of ");
+  EXPECT_NE(refused.err.find("--allow-growth"), std::string::npos) << refused.err;
+  EXPECT_FALSE(std::filesystem::exists(out));
+  const auto allowed = test::runCommand(voxmorph(base + test::quote(pose) + " --allow-growth"));
+  ASSERT_EQ(allowed.exitCode, 0) << allowed.err;
+  EXPECT_GT(readGrid(out).voxelCount(), 8 * readGrid(s.grid).voxelCount());
+}
+
 TEST(DeformCommand, WarnsWhenTheCageLeavesForegroundOutside) {
   VOX_REQUIRE_VOXMORPH();
   const Stick s = stick();

@@ -3,6 +3,7 @@
 
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
+#include "geometry/label_stats.h"
 #include "tests/geometry/io/grid_test_grids.h"
 #include "tests/support/test_environment.h"
 
@@ -15,6 +16,20 @@ namespace {
 using ::testing::HasSubstr;
 
 const char* const kStreamedFormats[] = {".nii", ".nii.gz", ".mha", ".mhd", ".nrrd", ".inr", ".inr.gz"};
+
+// info --max-memory: statistics streamed through a buffer of a few slices
+// (or less than one) equal those of the grid held whole.
+TEST(GridSlices, StreamedLabelStatisticsEqualTheHeldGrid) {
+  const std::string path = test::tempDir() + "/stats.nii.gz";
+  const LabelGrid grid = test::makeTestGrid(40000, true);
+  writeGrid(path, grid);
+  const LabelStats held = computeLabelStats(grid);
+  const std::int64_t sliceBytes = grid.geometry().sliceVoxels() * std::int64_t(sizeof(Label));
+  for (const std::int64_t buffer : {std::int64_t(1), 3 * sliceBytes, std::int64_t(1) << 30}) {
+    auto reader = openGridSlices(path);
+    EXPECT_EQ(computeLabelStats(*reader, buffer), held) << buffer;
+  }
+}
 
 TEST(GridSlices, WrittenInChunksReadInAnyOrder) {
   const std::string dir = test::tempDir();

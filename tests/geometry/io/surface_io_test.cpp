@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <random>
 
@@ -114,6 +115,8 @@ TEST(SurfaceFormats, BadInput) {
   expectBad("p10.ply", edited(ply, "property float z\n", ""), "line 3: vertex element lacks an x, y or z property");
   expectBad("p11.ply", edited(ply, "float y", "quad y"), "line 5: unknown property type 'quad'");
   expectBad("p12.ply", edited(ply, "3 0 1 2\n", "3 0 1"), "expected vertex index, found nothing");
+  expectBad("p16.ply", edited(ply, "3 0 1 2", "3 0 0.5 2"), "line 13: face 0 has vertex index 0.5, not an integer");
+  expectBad("p17.ply", edited(ply, "3 0 1 2", "3 0 1 1e30"), "face 0 references vertex 1e+30 (the file has 3 vertices)");
   expectBad("p13.ply", edited(ply, "list uchar int vertex_indices", "list uchar int corners"), "face element lacks a vertex_indices list");
   {
     // Binary: a list length larger than the rest of the file.
@@ -131,6 +134,40 @@ TEST(SurfaceFormats, BadInput) {
   broken.triangles[3][1] = 6;
   expectInputError([&] { writeSurface(dir + "/b.obj", broken); }, dir + "/b.obj", "triangle 3 references vertex 6");
   EXPECT_EQ(test::listFiles(dir), "");
+}
+
+// One face listing every vertex of a 200,000-gon: read in time linear in the
+// face's size (a check of repeated vertices by pairs took minutes).
+TEST(SurfaceFormats, LargeFacesReadInLinearTime) {
+  constexpr int n = 200000;
+  std::string obj, offVertices, plyVertices, objFace = "f", offFace = std::to_string(n), plyFace = std::to_string(n);
+  for (int i = 0; i < n; ++i) {
+    const double a = 2.0 * M_PI * i / n;
+    const std::string v = std::to_string(std::cos(a)) + " " + std::to_string(std::sin(a)) + " 0\n";
+    obj += "v " + v;
+    offVertices += v;
+    objFace += " " + std::to_string(i + 1);
+    offFace += " " + std::to_string(i);
+  }
+  plyFace = offFace;
+  const std::string dir = test::tempDir();
+  writeText(dir + "/big.obj", obj + objFace + "\n");
+  writeText(dir + "/big.off", "OFF\n" + std::to_string(n) + " 1 0\n" + offVertices + offFace + "\n");
+  writeText(dir + "/big.ply", "ply\nformat ascii 1.0\nelement vertex " + std::to_string(n) +
+                                  "\nproperty double x\nproperty double y\nproperty double z\nelement face 1\n"
+                                  "property list int int vertex_indices\nend_header\n" + offVertices + plyFace + "\n");
+  for (const char* name : {"big.obj", "big.off", "big.ply"}) {
+    SCOPED_TRACE(name);
+    const auto start = std::chrono::steady_clock::now();
+    const TriMesh m = readSurface(dir + "/" + name);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    EXPECT_EQ(m.faceCount(), std::size_t(n - 2));
+    // About 0.2 s here (1 s under sanitizers); the pairwise check took 30 s.
+    EXPECT_LT(seconds, 5.0);
+  }
+  // A repeat far apart in the face is still found.
+  writeText(dir + "/repeat.obj", obj + objFace + " 7\n");
+  expectInputError([&] { readSurface(dir + "/repeat.obj"); }, dir + "/repeat.obj", "face repeats vertex 7");
 }
 
 // Every prefix and random corruptions of small valid files: an InputError or

@@ -1,0 +1,9 @@
+// libFuzzer harness: the Medit ASCII (.mesh) reader on arbitrary bytes.
+
+#include "geometry/io/mesh_io.h"
+#include "tests/fuzz/fuzz_input.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  vox::fuzz::readAsFile(data, size, ".mesh", [](const std::string& path) { vox::readTetMesh(path); });
+  return 0;
+}

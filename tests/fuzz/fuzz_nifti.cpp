@@ -1,0 +1,9 @@
+// libFuzzer harness: the NIfTI-1 reader (plain, and gzip when the bytes start with its magic) on arbitrary bytes.
+
+#include "geometry/io/grid_io.h"
+#include "tests/fuzz/fuzz_input.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  vox::fuzz::readAsFile(data, size, ".nii", [](const std::string& path) { vox::readGrid(path); });
+  return 0;
+}

@@ -1,0 +1,9 @@
+// libFuzzer harness: the Wavefront OBJ surface reader on arbitrary bytes.
+
+#include "geometry/io/mesh_io.h"
+#include "tests/fuzz/fuzz_input.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  vox::fuzz::readAsFile(data, size, ".obj", [](const std::string& path) { vox::readSurface(path); });
+  return 0;
+}

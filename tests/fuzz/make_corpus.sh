@@ -1,0 +1,64 @@
+#!/usr/bin/env bash
+# Regenerates the seed corpus in tests/fuzz/corpus/: small valid files of
+# every format each harness reads, from voxmorph's writers (a release build)
+# and meshio for the encodings voxmorph does not write (VTU ascii/binary,
+# Gmsh binary, binary PLY). Usage: tests/fuzz/make_corpus.sh [voxmorph binary]
+set -euo pipefail
+cd "$(dirname "$0")"
+bin=$(realpath "${1:-../../build/release/voxmorph}")
+out=corpus
+rm -rf "$out"
+mkdir -p "$out"/{nifti,metaimage,nrrd,inr,medit,meshb,vtu,gmsh,obj,off,ply,pose,organs}
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+
+"$bin" synth stick --size 8 -o "$tmp/g.nii" --organs "$out/organs/stick.dat" >/dev/null
+cp ../../assets/icrp110_am_media.dat "$out/organs/media.dat"
+head -c 2000 ../../assets/icrp110_am_organs.dat > "$out/organs/am_head.dat"
+"$bin" synth spheres --size 8 -o "$tmp/s.nii.gz" >/dev/null
+cp "$tmp/g.nii" "$out/nifti/stick.nii"
+cp "$tmp/s.nii.gz" "$out/nifti/spheres.nii.gz"
+for f in stick.mha stick.mhd; do "$bin" synth stick --size 8 -o "$tmp/$f" >/dev/null; done
+cp "$tmp/stick.mha" "$out/metaimage/stick.mha"
+/usr/bin/python3 - "$tmp/stick.mhd" "$out/metaimage/stick_raw.mha" <<'PY'
+import sys, re
+hdr = open(sys.argv[1]).read()
+raw_name = re.search(r"ElementDataFile = (.*)", hdr).group(1).strip()
+raw = open(sys.argv[1].rsplit('/', 1)[0] + '/' + raw_name, 'rb').read()
+data = raw
+hdr = re.sub(r"ElementDataFile = .*", "ElementDataFile = LOCAL", hdr)
+open(sys.argv[2], 'wb').write(hdr.encode() + data)
+PY
+"$bin" synth stick --size 8 -o "$out/nrrd/stick_gzip.nrrd" >/dev/null
+printf 'NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 2 2\nspacings: 1 1 1\nendian: little\nencoding: raw\n\n\0\1\1\2\0\1\1\2' > "$out/nrrd/raw.nrrd"
+"$bin" synth stick --size 8 -o "$out/inr/stick.inr" >/dev/null
+"$bin" synth stick --size 8 -o "$out/inr/stick.inr.gz" >/dev/null
+
+"$bin" mesh "$tmp/s.nii.gz" -l 6 -o "$out/medit/spheres.mesh" -q >/dev/null
+"$bin" mesh "$tmp/s.nii.gz" -l 6 -o "$out/meshb/spheres.meshb" -q >/dev/null
+"$bin" mesh "$tmp/s.nii.gz" -l 6 -o "$out/vtu/spheres.vtu" -q >/dev/null
+"$bin" mesh "$tmp/s.nii.gz" -l 6 -o "$out/gmsh/spheres.msh" -q >/dev/null
+/usr/bin/python3 - "$out" <<'PY'
+import sys, meshio, numpy as np
+out = sys.argv[1]
+points = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1]], dtype=float)
+tets = np.array([[0, 1, 2, 3], [1, 2, 3, 4]])
+m = meshio.Mesh(points, [("tetra", tets)], cell_data={"label": [np.array([1, 2], dtype=np.int32)]})
+meshio.vtu.write(out + "/vtu/two_ascii.vtu", m, binary=False)
+meshio.vtu.write(out + "/vtu/two_zlib.vtu", m, binary=True, compression="zlib")
+meshio.vtu.write(out + "/vtu/two_raw.vtu", m, binary=True, compression=None)
+g = meshio.Mesh(points, [("tetra", tets)], cell_data={"gmsh:physical": [np.array([1, 2])], "gmsh:geometrical": [np.array([1, 2])]})
+meshio.gmsh.write(out + "/gmsh/two_ascii.msh", g, fmt_version="4.1", binary=False)
+meshio.gmsh.write(out + "/gmsh/two_binary.msh", g, fmt_version="4.1", binary=True)
+tri = meshio.Mesh(points[:4], [("triangle", np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]))])
+meshio.ply.write(out + "/ply/tet_binary.ply", tri, binary=True)
+meshio.ply.write(out + "/ply/tet_ascii.ply", tri, binary=False)
+PY
+"$bin" cage "$tmp/g.nii" -o "$out/obj/cage.obj" --vertices 12 >/dev/null
+"$bin" cage "$tmp/g.nii" -o "$out/off/cage.off" --vertices 12 >/dev/null
+"$bin" cage "$tmp/g.nii" -o "$out/ply/cage.ply" --vertices 12 >/dev/null
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvt 0 0\nf 1/1 3/1 2/1\nf 1//1 2//1 4//1\nf -4 -1 -2\nf 2 3 4\n' > "$out/obj/tet.obj"
+printf 'OFF\n4 4 6\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n' > "$out/off/tet.off"
+cp ../../assets/poses/*.json "$out/pose/"
+printf '{"selections": [{"name": "all", "sphere": {"center": [0, 0, 0], "radius": 5}, "transform": {"rotation": {"axis": [0, 0, 1], "angle_deg": 10, "center": [0, 0, 0]}, "translation": [1, 2, 3]}}]}' > "$out/pose/sphere.json"
+find "$out" -type f | sort | xargs wc -c | tail -1
