@@ -21,7 +21,7 @@ void addMeshCommand(CLI::App& app) {
   addRemeshOptions(*cmd, *o);
   cmd->callback([o] {
     installStderrProgress(o->quiet);
-    checkRemeshOutputs(*o);
+    checkRemeshArguments(*o);
     const auto t0 = std::chrono::steady_clock::now();
     const LabelGrid grid = readGrid(o->input);
     checkRemeshEstimate(*o, remesh::estimateMeshing(grid, o->remesh.targetLength));

@@ -7,6 +7,7 @@
 #include "geometry/io/mesh_io.h"
 #include "geometry/io/output_path.h"
 #include "geometry/error.h"
+#include "geometry/organ_table.h"
 #include "geometry/remesh/meshing_estimate.h"
 #include "geometry/remesh/remesh.h"
 #include "geometry/remesh/remesh_report.h"
@@ -20,7 +21,8 @@
 namespace vox::app {
 
 struct RemeshCliOptions {
-  std::string input, output, report;
+  std::string input, output, report, organs;
+  OrganTable organTable;  // read from `organs` by checkRemeshArguments
   remesh::RemeshOptions remesh;
   std::string surface = "hpss";
   bool keepImaginary = false;
@@ -49,6 +51,9 @@ inline void addRemeshOptions(CLI::App& cmd, RemeshCliOptions& o) {
   cmd.add_option("--mls-radius", o.remesh.mlsRadius, "Width of the interface model's kernel (mm; default automatic)")
       ->check(numberIn(0, 100000, "mm"));
   cmd.add_option("--threads", o.remesh.threads, "Threads (default 2)")->check(integerIn(1, 64));
+  cmd.add_option("--organs", o.organs,
+                 "Organ table (ID name tissue density): label names in the report, the .msh physical names and the "
+                 ".vtu field data");
   cmd.add_option("--report", o.report, "Also write the quality report as JSON (- for stdout instead of the text)");
   cmd.add_option("--max-memory", o.maxMemoryMb,
                  "Refuse a run whose estimated peak memory exceeds this budget (MB; default the machine's memory)")
@@ -58,10 +63,25 @@ inline void addRemeshOptions(CLI::App& cmd, RemeshCliOptions& o) {
   cmd.add_flag("-q,--quiet", o.quiet, "No progress on stderr");
 }
 
-// Checks the output and report paths before the input is read.
-inline void checkRemeshOutputs(const RemeshCliOptions& o) {
+// Checks the output and report paths and reads the organ table, before the
+// input is read.
+inline void checkRemeshArguments(RemeshCliOptions& o) {
   checkOutputPath(o.output, OutputKind::TetMesh, "--output");
   checkOutputPath(o.report, OutputKind::Json, "--report");
+  if (!o.organs.empty()) o.organTable = OrganTable::read(o.organs);
+}
+
+// Names of the labels `mesh` holds: the organ table's when one was given,
+// else those the input mesh had.
+inline void nameLabels(TetMesh& mesh, const RemeshCliOptions& o, const TetMesh& input) {
+  if (o.organs.empty()) {
+    mesh.labelNames = input.labelNames;
+    return;
+  }
+  mesh.labelNames.clear();
+  for (std::int32_t l : mesh.labels)
+    if (l > 0 && !mesh.labelNames.count(l))
+      if (const Organ* organ = o.organTable.find(l)) mesh.labelNames[l] = organ->name;
 }
 
 // Prints the run's estimated size and refuses, before any work, a length
@@ -94,7 +114,8 @@ inline void runRemesh(RemeshCliOptions& o, const TetMesh& initial, const remesh:
   o.remesh.projectOnInterfaces = o.surface != "none";
   o.remesh.hermite = o.surface == "hpss";
   remesh::RemeshStats stats;
-  const TetMesh output = remesh::remeshTetMesh(initial, o.remesh, &stats, o.keepImaginary, o.input);
+  TetMesh output = remesh::remeshTetMesh(initial, o.remesh, &stats, o.keepImaginary, o.input);
+  nameLabels(output, o, initial);
   if (toWorld) {
     TetMesh world = output;
     tetMeshGridToWorld(world, *toWorld);
@@ -105,6 +126,7 @@ inline void runRemesh(RemeshCliOptions& o, const TetMesh& initial, const remesh:
   remesh::ReportOptions reportOptions;
   reportOptions.distances = !o.noDistances;
   reportOptions.threads = o.remesh.threads;
+  reportOptions.named = !o.organs.empty();
   remesh::RemeshReport report =
       remesh::buildRemeshReport(initial, initialTopology, output, o.remesh.targetLength, stats, reportOptions);
   report.setupSeconds = setupSeconds;

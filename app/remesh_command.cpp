@@ -18,7 +18,7 @@ void addRemeshCommand(CLI::App& app) {
   addRemeshOptions(*cmd, *o);
   cmd->callback([o] {
     installStderrProgress(o->quiet);
-    checkRemeshOutputs(*o);
+    checkRemeshArguments(*o);
     const auto t0 = std::chrono::steady_clock::now();
     const TetMesh input = readTetMesh(o->input);
     checkRemeshEstimate(*o, remesh::estimateMeshing(input, o->remesh.targetLength));

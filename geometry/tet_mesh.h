@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <map>
 #include <span>
 #include <string>
 #include <vector>
@@ -22,6 +23,9 @@ struct TetMesh {
   std::vector<Eigen::Vector3d> positions;  // #V, mm
   std::vector<Tet> tets;                   // #T, indices into positions
   std::vector<std::int32_t> labels;        // #T, one per tet
+  // Optional names of labels (an organ table's): written as Gmsh physical
+  // names and VTU field data, read back from both.
+  std::map<std::int32_t, std::string> labelNames;
 
   std::size_t vertexCount() const { return positions.size(); }
   std::size_t tetCount() const { return tets.size(); }

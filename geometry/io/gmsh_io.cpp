@@ -16,6 +16,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <map>
 #include <numeric>
 #include <unordered_map>
 
@@ -150,6 +151,7 @@ private:
   void readEntities();
   void readNodes();
   void readElements();
+  void readPhysicalNames();
   void skipSection();
   TetMesh assemble();
 
@@ -161,6 +163,7 @@ private:
   std::size_t sizeT_ = 8;
   bool haveNodes_ = false, haveElements_ = false;
   std::unordered_map<std::int32_t, std::int32_t> volumePhysical_;  // volume entity tag -> first physical tag
+  std::map<std::int32_t, std::string> volumeNames_;                // physical tag -> name (dimension 3)
   std::vector<std::uint64_t> nodeTags_;
   std::vector<Eigen::Vector3d> nodes_;
   std::vector<TetRecord> tets_;
@@ -294,8 +297,28 @@ void GmshReader::readElements() {
   expectEnd();
 }
 
+// "dim tag \"name\"" lines, ASCII in binary files too; names of volume
+// physical groups become label names, except our writer's "label_<tag>".
+void GmshReader::readPhysicalNames() {
+  endLine();
+  const std::size_t n = in_.count("physical name count", 8);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::int64_t dim = in_.integer("physical name dimension");
+    const std::int64_t tag = in_.integer("physical tag");
+    std::string_view rest = in_.restOfLine();
+    const std::size_t open = rest.find('"'), close = rest.rfind('"');
+    if (open == std::string_view::npos || close == open)
+      fail("physical name of tag " + std::to_string(tag) + " is not in double quotes");
+    const std::string name(rest.substr(open + 1, close - open - 1));
+    if (dim == 3 && tag >= std::numeric_limits<std::int32_t>::min() && tag <= std::numeric_limits<std::int32_t>::max() &&
+        !name.empty() && name != "label_" + std::to_string(tag))
+      volumeNames_[std::int32_t(tag)] = name;
+  }
+  expectEnd();
+}
+
 void GmshReader::skipSection() {
-  // Sections we do not use ($PhysicalNames, $PartitionedEntities, $Periodic,
+  // Sections we do not use ($PartitionedEntities, $Periodic,
   // $NodeData, $Comments, ...) end at their $End line.
   const std::string end = "$End" + section_;
   const std::size_t at = in_.text().find(end, in_.position());
@@ -318,6 +341,7 @@ TetMesh GmshReader::read() {
     if (section_ == "Entities") readEntities();
     else if (section_ == "Nodes") readNodes();
     else if (section_ == "Elements") readElements();
+    else if (section_ == "PhysicalNames") readPhysicalNames();
     else if (section_ == "MeshFormat") fail("a second $MeshFormat section");
     else skipSection();
   }
@@ -404,6 +428,13 @@ TetMesh GmshReader::assemble() {
     const auto physical = volumePhysical_.find(r.entity);
     mesh.labels[t] = physical != volumePhysical_.end() ? physical->second : r.entity;
   }
+  if (!volumeNames_.empty()) {
+    std::vector<std::int32_t> present(mesh.labels);
+    std::sort(present.begin(), present.end());
+    present.erase(std::unique(present.begin(), present.end()), present.end());
+    for (const auto& [tag, name] : volumeNames_)
+      if (std::binary_search(present.begin(), present.end(), tag)) mesh.labelNames[tag] = name;
+  }
   mesh.validate(path_);
   return mesh;
 }
@@ -418,7 +449,8 @@ TetMesh readGmsh(const std::string& path) {
 void writeGmsh(const std::string& path, const TetMesh& mesh) {
   mesh.validate(path);
   // One volume entity per label (tags 1..k in ascending label order), each
-  // carrying the label as its physical tag and named "label_<n>".
+  // carrying the label as its physical tag, named by mesh.labelNames or
+  // "label_<n>".
   std::vector<std::int32_t> labels(mesh.labels);
   std::sort(labels.begin(), labels.end());
   labels.erase(std::unique(labels.begin(), labels.end()), labels.end());
@@ -450,7 +482,13 @@ void writeGmsh(const std::string& path, const TetMesh& mesh) {
   {
     io::TextOutput out(file.openStdio());
     out << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n" << k << '\n';
-    for (std::int32_t l : labels) out << "3 " << l << " \"label_" << l << "\"\n";
+    for (std::int32_t l : labels) {
+      const auto named = mesh.labelNames.find(l);
+      std::string name = named != mesh.labelNames.end() ? named->second : "label_" + std::to_string(l);
+      // A name is one quoted string on one line.
+      std::replace_if(name.begin(), name.end(), [](char c) { return c == '"' || c == '\n' || c == '\r'; }, '\'');
+      out << "3 " << l << " \"" << name << "\"\n";
+    }
     out << "$EndPhysicalNames\n$Entities\n0 0 0 " << k << '\n';
     for (std::size_t e = 0; e < k; ++e) {
       out << std::int64_t(e + 1);

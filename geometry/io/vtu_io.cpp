@@ -433,6 +433,35 @@ const tinyxml2::XMLElement* labelArray(const VtuFile& f, const tinyxml2::XMLElem
   return nullptr;
 }
 
+// Field data arrays of two integers (label, 3), as writeVtu and meshio write
+// names of volume groups, name labels the mesh holds; other arrays are not
+// label names and are skipped.
+void readLabelNames(const VtuFile& f, const tinyxml2::XMLElement* fieldData, TetMesh& mesh) {
+  if (!fieldData) return;
+  std::vector<std::int32_t> present;
+  for (const auto* a = fieldData->FirstChildElement("DataArray"); a; a = a->NextSiblingElement("DataArray")) {
+    const char* name = a->Attribute("Name");
+    const char* type = a->Attribute("type");
+    const std::optional<Scalar> s = scalarFromName(type ? type : "");
+    if (!name || !*name || !s || !isInteger(*s)) continue;
+    const char* tuples = a->Attribute("NumberOfTuples");
+    if (tuples && std::string_view(tuples) != "2") continue;
+    std::vector<std::int64_t> v;
+    try {
+      v = readDataArray<std::int64_t>(f, a, 2);
+    } catch (const InputError&) {
+      continue;  // not a (label, dimension) pair
+    }
+    if (v[1] != 3 || v[0] < std::numeric_limits<std::int32_t>::min() || v[0] > std::numeric_limits<std::int32_t>::max()) continue;
+    if (present.empty()) {
+      present = mesh.labels;
+      std::sort(present.begin(), present.end());
+      present.erase(std::unique(present.begin(), present.end()), present.end());
+    }
+    if (std::binary_search(present.begin(), present.end(), std::int32_t(v[0]))) mesh.labelNames[std::int32_t(v[0])] = name;
+  }
+}
+
 void readPiece(const VtuFile& f, const tinyxml2::XMLElement* piece, TetMesh& mesh) {
   const std::uint64_t np = unsignedAttribute(f, piece, "NumberOfPoints", 0);
   const std::uint64_t nc = unsignedAttribute(f, piece, "NumberOfCells", 0);
@@ -573,9 +602,41 @@ TetMesh readVtu(const std::string& path) {
   }
   if (!anyPiece) f.fail(grid, "no <Piece> element");
   if (mesh.tets.empty()) throw InputError(path, "no tetrahedra (no VTK_TETRA cells)");
+  readLabelNames(f, grid->FirstChildElement("FieldData"), mesh);
   mesh.validate(path);
   return mesh;
 }
+
+namespace {
+
+std::string xmlEscaped(std::string_view text) {
+  std::string s;
+  for (char c : text) {
+    switch (c) {
+      case '&': s += "&amp;"; break;
+      case '<': s += "&lt;"; break;
+      case '>': s += "&gt;"; break;
+      case '"': s += "&quot;"; break;
+      case '\n': case '\r': case '\t': s += ' '; break;
+      default: s += c;
+    }
+  }
+  return s;
+}
+
+// Label names as field data, one array per name holding (label, 3): meshio's
+// field_data for physical groups (name -> [tag, dimension]), so a meshio
+// conversion to .msh keeps them as physical names; ParaView lists them.
+void writeLabelNames(io::TextOutput& out, const std::map<std::int32_t, std::string>& names) {
+  if (names.empty()) return;
+  out << "    <FieldData>\n";
+  for (const auto& [label, name] : names)
+    out << "      <DataArray type=\"Int32\" Name=\"" << xmlEscaped(name) << "\" NumberOfTuples=\"2\" format=\"ascii\">"
+        << label << " 3</DataArray>\n";
+  out << "    </FieldData>\n";
+}
+
+}  // namespace
 
 void writeVtu(const std::string& path, const TetMesh& mesh) {
   mesh.validate(path);
@@ -595,7 +656,9 @@ void writeVtu(const std::string& path, const TetMesh& mesh) {
     io::TextOutput out(file.openStdio());
     const char* byteOrder = std::endian::native == std::endian::little ? "LittleEndian" : "BigEndian";
     out << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"" << byteOrder
-        << "\" header_type=\"UInt64\">\n  <UnstructuredGrid>\n    <Piece NumberOfPoints=\"" << nv << "\" NumberOfCells=\"" << nt
+        << "\" header_type=\"UInt64\">\n  <UnstructuredGrid>\n";
+    writeLabelNames(out, mesh.labelNames);
+    out << "    <Piece NumberOfPoints=\"" << nv << "\" NumberOfCells=\"" << nt
         << "\">\n      <Points>\n        <DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"appended\" offset=\""
         << pointAt << "\"/>\n      </Points>\n      <Cells>\n"
         << "        <DataArray type=\"Int32\" Name=\"connectivity\" format=\"appended\" offset=\"" << connectivityAt << "\"/>\n"

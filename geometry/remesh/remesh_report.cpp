@@ -28,6 +28,7 @@ RemeshReport buildRemeshReport(const TetMesh& input, const MeshTopology& inputTo
   reportProgress("quality report", 0.5);
   r.junctionCurveSets = inputTopology.junctionCurves.size();
   r.junctionPointSets = inputTopology.junctionPoints.size();
+  r.named = options.named || !output.labelNames.empty();
   std::map<std::int32_t, InterfaceDistance> distances;
   if (options.distances) {
     distances = interfaceDistances(input, output, options.maxDistanceSamples, options.threads);
@@ -36,6 +37,8 @@ RemeshReport buildRemeshReport(const TetMesh& input, const MeshTopology& inputTo
   for (const auto& [label, topo] : inputTopology.labels) {
     LabelReport lr;
     lr.label = label;
+    if (auto it = output.labelNames.find(label); it != output.labelNames.end()) lr.name = it->second;
+    else if (r.named) r.unnamedLabels.push_back(label);
     lr.input = topo;
     if (auto it = outputTopology.labels.find(label); it != outputTopology.labels.end()) lr.output = it->second;
     lr.tets = lr.output.tets;
@@ -89,9 +92,20 @@ std::string reportText(const RemeshReport& r) {
   for (std::size_t i = 0; i < r.topologyDifferences.size() && i < 20; ++i) s += "  " + r.topologyDifferences[i] + "\n";
   add("time                 %.2f s remeshing (%.2f s reading and preparing the input)\n", r.stats.seconds,
       r.setupSeconds);
-  s += "label        tets   volume in -> out (mm^3)    change  comps  euler  hausdorff (mm)\n";
+  if (!r.unnamedLabels.empty()) {
+    s += "unnamed labels      ";
+    for (std::size_t i = 0; i < r.unnamedLabels.size(); ++i) s += (i ? ", " : " ") + std::to_string(r.unnamedLabels[i]);
+    s += " (no name in the organ table)\n";
+  }
+  std::size_t nameWidth = r.named ? 9 : 0;  // at least "(unnamed)"
+  if (r.named)
+    for (const LabelReport& l : r.labels) nameWidth = std::max(nameWidth, std::min<std::size_t>(l.name.size(), 32));
+  s += "label  " + (nameWidth ? (std::string("name") + std::string(nameWidth > 4 ? nameWidth - 4 : 0, ' ') + "  ") : std::string()) +
+       "      tets   volume in -> out (mm^3)    change  comps  euler  hausdorff (mm)\n";
   for (const LabelReport& l : r.labels) {
-    add("%5d  %10zu  %12.1f -> %12.1f  %+7.2f%%  %2zu/%-2zu  %3lld/%-3lld", l.label, l.tets, l.inputVolume, l.outputVolume,
+    add("%5d  ", l.label);
+    if (nameWidth) add("%-*.*s  ", int(nameWidth), int(nameWidth), l.name.empty() ? "(unnamed)" : l.name.c_str());
+    add("%10zu  %12.1f -> %12.1f  %+7.2f%%  %2zu/%-2zu  %3lld/%-3lld", l.tets, l.inputVolume, l.outputVolume,
         100.0 * relativeChange(l.inputVolume, l.outputVolume), l.input.components, l.output.components,
         (long long)l.input.euler, (long long)l.output.euler);
     if (r.distancesMeasured) add("  %.3g", l.distance.hausdorff());
@@ -136,6 +150,7 @@ std::string reportJson(const RemeshReport& r) {
                         {"volume_change", relativeChange(l.inputVolume, l.outputVolume)},
                         {"components", {{"input", l.input.components}, {"output", l.output.components}}},
                         {"euler", {{"input", l.input.euler}, {"output", l.output.euler}}}};
+    if (r.named) e["name"] = l.name.empty() ? nlohmann::json() : nlohmann::json(l.name);
     if (r.distancesMeasured)
       e["interface_distance_mm"] = {{"output_to_input", l.distance.outputToInput},
                                     {"input_to_output", l.distance.inputToOutput},
@@ -143,6 +158,7 @@ std::string reportJson(const RemeshReport& r) {
     labels.push_back(e);
   }
   j["labels"] = labels;
+  if (r.named) j["unnamed_labels"] = r.unnamedLabels;
   nlohmann::json steps = nlohmann::json::array();
   for (const RemeshStep& s : r.stats.steps)
     steps.push_back({{"name", s.name},

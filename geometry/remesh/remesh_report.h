@@ -20,6 +20,7 @@ namespace vox::remesh {
 
 struct LabelReport {
   std::int32_t label = 0;
+  std::string name;  // the output mesh's label name, or empty
   std::size_t tets = 0;
   double inputVolume = 0.0, outputVolume = 0.0;  // mm^3
   LabelTopology input, output;
@@ -34,6 +35,8 @@ struct RemeshReport {
   BoundaryFacetSummary boundaryFacets;
   EdgeLengthSummary edgeLengths;
   std::vector<LabelReport> labels;
+  bool named = false;                        // labels carry names (organ table or input)
+  std::vector<std::int32_t> unnamedLabels;   // when named: labels without one
   bool distancesMeasured = false;
   std::size_t junctionCurveSets = 0, junctionPointSets = 0;  // label sets with 1- / 0-junctions in the input
   std::vector<std::string> topologyDifferences;              // empty: topology preserved
@@ -45,8 +48,10 @@ struct ReportOptions {
   bool distances = true;               // interface Hausdorff distances (CGAL AABB trees)
   std::size_t maxDistanceSamples = 100000;
   int threads = 2;
+  bool named = false;  // names were asked for (--organs): flag labels without one even when none has a name
 };
 
+// Label names are the output mesh's labelNames.
 // `input` holds the domain tets the remesher started from (its volumes and
 // interfaces), `inputTopology` their topology (computeGridTopology of the
 // grid, or computeMeshTopology of the input mesh).

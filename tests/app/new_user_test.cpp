@@ -175,6 +175,51 @@ TEST(NewUser, DeformPrintsTheOrganTableWritesItsCsvAndPlots) {
   EXPECT_GT(std::count(plot.pixels.begin(), plot.pixels.end(), Rgb{52, 101, 164}), 100);
 }
 
+// mesh --organs: the organ names in the printed and JSON reports, the .msh
+// physical names and the .vtu field data; labels the table lacks flagged.
+TEST(NewUser, MeshNamesItsLabelsFromTheOrganTable) {
+  VOX_REQUIRE_VOXMORPH();
+  const std::string dir = test::tempDir();
+  const std::string grid = spheres(dir);
+  std::ofstream(dir + "/organs.dat") << "ID  Organ  Tissue  Density\n1  Outer shell, left  1  1.05\n2  Middle \"core\"  2  1.92\n";
+  // A missing organ table fails before any work, naming the file.
+  expectOneLine(voxmorph("mesh " + test::quote(grid) + " -l 3 --organs " + test::quote(dir + "/absent.dat") + " -o " +
+                         test::quote(dir + "/m.msh")),
+                1, "absent.dat");
+  const test::CommandResult r = voxmorph("mesh " + test::quote(grid) + " -l 3 -q --no-distance --organs " +
+                                         test::quote(dir + "/organs.dat") + " -o " + test::quote(dir + "/m.msh") + " --report " +
+                                         test::quote(dir + "/m.json"));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NE(r.out.find("Outer shell, left"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("unnamed labels"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("(unnamed)"), std::string::npos) << r.out;
+  const nlohmann::json report = nlohmann::json::parse(test::readText(dir + "/m.json"));
+  std::set<int> unnamed;
+  for (const auto& l : report.at("labels")) {
+    const int label = l.at("label");
+    if (label == 1) EXPECT_EQ(l.at("name"), "Outer shell, left");
+    else if (label == 2) EXPECT_EQ(l.at("name"), "Middle \"core\"");
+    else {
+      EXPECT_TRUE(l.at("name").is_null()) << label;
+      unnamed.insert(label);
+    }
+  }
+  EXPECT_FALSE(unnamed.empty());
+  EXPECT_EQ(report.at("unnamed_labels").get<std::set<int>>(), unnamed);
+  const std::string msh = test::readText(dir + "/m.msh");
+  EXPECT_NE(msh.find("3 1 \"Outer shell, left\"\n3 2 \"Middle 'core'\"\n"), std::string::npos) << msh.substr(0, 300);
+  // remesh keeps the names of its input, and .vtu carries them as field data.
+  ASSERT_EQ(voxmorph("remesh " + test::quote(dir + "/m.msh") + " -l 3 -q --no-distance --iterations 1 -o " +
+                     test::quote(dir + "/r.vtu"))
+                .exitCode,
+            0);
+  const std::string vtu = test::readText(dir + "/r.vtu");
+  EXPECT_NE(vtu.find("<FieldData>"), std::string::npos);
+  // (the .msh held the name in one pair of double quotes, so its own became single quotes)
+  EXPECT_NE(vtu.find("Name=\"Middle 'core'\" NumberOfTuples=\"2\" format=\"ascii\">2 3<"), std::string::npos)
+      << vtu.substr(0, 600);
+}
+
 TEST(NewUser, RendersShowShapeFillTheFrameAndCarryALegendAndAScaleBar) {
   VOX_REQUIRE_VOXMORPH();
   const std::string dir = test::tempDir();

@@ -34,4 +34,8 @@ std::string quote(const std::string& s);
 // Every regular file in `dir` (names only), sorted.
 std::string listFiles(const std::string& dir);
 
+// A file's bytes ("" when it cannot be read), and writing bytes to a file.
+std::string readText(const std::string& path);
+void writeText(const std::string& path, const std::string& text);
+
 }  // namespace vox::test

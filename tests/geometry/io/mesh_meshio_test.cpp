@@ -191,5 +191,38 @@ TEST(MeshioWritesWeRead, EveryEncoding) {
   EXPECT_EQ(test::readText(dir + "/binary.msh").rfind("$MeshFormat\n4.1 1 8\n", 0), 0u);
 }
 
+// Label names as meshio sees them: field_data {name: [label, 3]} from our
+// .vtu and .msh, the physical groups of a Gmsh file; and a .msh that meshio
+// converts from our .vtu keeps them as physical names we read back.
+TEST(MeshioReadsOurs, LabelNames) {
+  if (test::python().empty()) GTEST_SKIP() << "python3 not found";
+  const std::string dir = test::tempDir();
+  const TetMesh mesh = test::namedMesh();
+  writeTetMesh(dir + "/ours.vtu", mesh);
+  writeTetMesh(dir + "/ours.msh", mesh);
+  const std::string out = runPython(dir, R"(
+import sys
+import meshio
+for name in sys.argv[1:3]:
+    m = meshio.read(name)
+    for key in sorted(m.field_data):
+        print(key, "|", " ".join(str(int(v)) for v in m.field_data[key]))
+m = meshio.read(sys.argv[1])
+meshio.write(sys.argv[3], m, file_format="gmsh", binary=False)
+)", {dir + "/ours.vtu", dir + "/ours.msh", dir + "/converted.msh"});
+  const std::string vtu =
+      "Adrenal, left | 1 3\nBrain <grey> & \"white\" | 2 3\nLiver | 3 3\nSkin | 2147483647 3\n";
+  // Our .msh names every label (label_<n> where the mesh has no name); meshio lists them all.
+  EXPECT_EQ(out.substr(0, vtu.size()), vtu);
+  EXPECT_NE(out.find("Brain <grey> & 'white' | 2 3\nLiver | 3 3\nSkin | 2147483647 3\nlabel_-1 | -1 3\n", vtu.size()),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find("label_4 | 4 3\n", vtu.size()), std::string::npos) << out;
+  // meshio writes the physical names of the converted file from the .vtu's field data.
+  const std::string converted = test::readText(dir + "/converted.msh");
+  EXPECT_NE(converted.find("3 1 \"Adrenal, left\""), std::string::npos) << converted.substr(0, 400);
+  EXPECT_NE(converted.find("3 3 \"Liver\""), std::string::npos);
+}
+
 }  // namespace
 }  // namespace vox

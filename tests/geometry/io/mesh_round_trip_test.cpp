@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <map>
 
 namespace vox {
 namespace {
@@ -38,6 +39,30 @@ TEST_P(MeshRoundTrip, FailedWriteKeepsThePreviousFile) {
   EXPECT_THROW(writeTetMesh(path, broken), InputError);
   EXPECT_EQ(readText(path), before);
   EXPECT_EQ(test::listFiles(dir), "mesh" + std::string(GetParam()) + "\n");
+}
+
+// Label names travel in .vtu (field data) and .msh (physical names); Medit
+// files have no place for them.
+TEST_P(MeshRoundTrip, LabelNames) {
+  const std::string path = tempDir() + "/named" + GetParam();
+  const TetMesh mesh = test::namedMesh();
+  writeTetMesh(path, mesh);
+  const TetMesh back = readTetMesh(path);
+  expectSameMesh(mesh, back);
+  const std::string format = GetParam();
+  if (format == ".mesh" || format == ".meshb") {
+    EXPECT_TRUE(back.labelNames.empty());
+    return;
+  }
+  std::map<std::int32_t, std::string> expected = mesh.labelNames;
+  if (format == ".msh") expected[2] = "Brain <grey> & 'white'";  // one quoted string per name
+  EXPECT_EQ(back.labelNames, expected);
+  // Names of labels the mesh does not hold are not kept; unnamed labels stay unnamed.
+  TetMesh fewer = mesh;
+  fewer.labelNames[99] = "Not in the mesh";
+  writeTetMesh(path, fewer);
+  EXPECT_EQ(readTetMesh(path).labelNames.count(99), 0u);
+  EXPECT_EQ(readTetMesh(path).labelNames.count(4), 0u);
 }
 
 INSTANTIATE_TEST_SUITE_P(Formats, MeshRoundTrip, ::testing::Values(".mesh", ".meshb", ".vtu", ".msh"),

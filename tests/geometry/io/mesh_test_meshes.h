@@ -5,6 +5,7 @@
 #include "geometry/synth.h"
 #include "geometry/tet_mesh.h"
 #include "geometry/voxel_tetrahedralization.h"
+#include "tests/support/test_environment.h"
 
 #include <gtest/gtest.h>
 
@@ -38,18 +39,6 @@ inline TetMesh labeledMesh() {
   return mesh;
 }
 
-inline void writeText(const std::string& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-}
-
-inline std::string readText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 inline void expectSameMesh(const TetMesh& expected, const TetMesh& actual) {
   ASSERT_EQ(expected.vertexCount(), actual.vertexCount());
   ASSERT_EQ(expected.tetCount(), actual.tetCount());
@@ -59,6 +48,14 @@ inline void expectSameMesh(const TetMesh& expected, const TetMesh& actual) {
     ASSERT_EQ(expected.tets[t], actual.tets[t]) << "tet " << t;
     ASSERT_EQ(expected.labels[t], actual.labels[t]) << "tet " << t;
   }
+}
+
+// labeledMesh() with names for some of its labels: spaces, a comma, XML
+// and quote characters, and the int32 extreme.
+inline TetMesh namedMesh() {
+  TetMesh mesh = labeledMesh();
+  mesh.labelNames = {{1, "Adrenal, left"}, {2, "Brain <grey> & \"white\""}, {3, "Liver"}, {2147483647, "Skin"}};
+  return mesh;
 }
 
 // `read` must throw InputError whose message starts with the path and
