@@ -64,6 +64,7 @@ struct CageCommandOptions {
   std::string input, output, report, organs;
   std::vector<std::string> separations;
   CageOptions cage;
+  std::int64_t maxMemoryMb = 0;  // 0: the machine's memory
   bool quiet = false;
 };
 
@@ -76,6 +77,7 @@ void buildCageCommand(const CageCommandOptions& o) {
   if (!options.separations.empty() && o.organs.empty())
     throw UsageError("--separate", "limb separation needs the grid's organ table (--organs) to find the label groups");
 
+  checkGridFitsMemory(o.input, o.maxMemoryMb, kCageMemory, "build the cage", "the cage needs the whole grid in memory");
   const auto t0 = std::chrono::steady_clock::now();
   const LabelGrid grid = readGrid(o.input);
   for (LimbSeparation& s : options.separations) regionInGridFrame(s.region, grid.geometry(), "--separate");
@@ -127,6 +129,9 @@ void addCageCommand(CLI::App& app) {
   cmd->add_option("-o,--output", o->output, "Output cage (.obj .off .ply)")->required();
   cmd->add_option("--report", o->report, "JSON report (sizes, validity, voxels outside); '-' for stdout");
   cmd->add_option("--organs", o->organs, "Organ table (ID name tissue density): label groups for --separate");
+  cmd->add_option("--max-memory", o->maxMemoryMb,
+                  "Refuse a grid whose in-core work exceeds this budget (MB; default the machine's memory)")
+      ->check(integerIn(64, std::int64_t(1) << 30, "MB"));
   cmd->add_option("--separate", o->separations,
                   "Separate two label groups (trunk, head, right_arm, left_arm, right_leg, left_leg), optionally inside a "
                   "box in mm: right_arm:trunk or right_arm:trunk@xmin,ymin,zmin,xmax,ymax,zmax (repeatable)")

@@ -1,13 +1,18 @@
 #include "app/command_line.h"
 
+#include "geometry/error.h"
 #include "geometry/io/atomic_file.h"
+#include "geometry/io/grid_io.h"
 #include "geometry/progress.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <iostream>
 #include <string>
+#include <sys/resource.h>
 #include <unistd.h>
 
 namespace vox::app {
@@ -104,8 +109,37 @@ CLI::Validator integerIn(std::int64_t lo, std::int64_t hi, const std::string& un
 
 std::int64_t physicalMemoryMb() {
   const long pages = ::sysconf(_SC_PHYS_PAGES), pageSize = ::sysconf(_SC_PAGE_SIZE);
-  if (pages <= 0 || pageSize <= 0) return std::int64_t(1) << 20;
-  return std::int64_t(pages) * std::int64_t(pageSize) >> 20;
+  std::int64_t mb = pages > 0 && pageSize > 0 ? std::int64_t(pages) * std::int64_t(pageSize) >> 20 : std::int64_t(1) << 20;
+  struct rlimit limit {};
+  if (::getrlimit(RLIMIT_AS, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY)
+    mb = std::min<std::int64_t>(mb, std::int64_t(limit.rlim_cur >> 20));
+  std::ifstream cgroup("/sys/fs/cgroup/memory.max");
+  std::string text;
+  if (cgroup >> text && text != "max") {
+    try {
+      mb = std::min<std::int64_t>(mb, std::int64_t(std::stoull(text) >> 20));
+    } catch (const std::exception&) {
+    }
+  }
+  return std::max<std::int64_t>(mb, 1);
+}
+
+std::int64_t checkGridFitsMemory(const std::string& path, std::int64_t maxMemoryMb, GridMemoryCost cost, const std::string& work,
+                                 const std::string& hint) {
+  return checkGridFitsMemory(path, maxMemoryMb, cost.bytesPerVoxel, cost.fixedMb, work, hint);
+}
+
+std::int64_t checkGridFitsMemory(const std::string& path, std::int64_t maxMemoryMb, double bytesPerVoxel,
+                                 std::int64_t fixedMb, const std::string& work, const std::string& hint) {
+  const std::int64_t voxels = openGridSlices(path)->geometry().voxelCount();
+  const auto needMb = std::int64_t(std::ceil(double(voxels) * bytesPerVoxel / double(1 << 20))) + fixedMb;
+  const bool given = maxMemoryMb > 0;
+  const std::int64_t budgetMb = given ? maxMemoryMb : physicalMemoryMb();
+  if (needMb > budgetMb)
+    throw InputError(path, withThousands(std::uint64_t(voxels)) + " voxels need about " + withThousands(std::uint64_t(needMb)) +
+                               " MB to " + work + ", over the " + withThousands(std::uint64_t(budgetMb)) + " MB " +
+                               (given ? "budget (--max-memory)" : "this machine allows") + (hint.empty() ? "" : "; " + hint));
+  return needMb;
 }
 
 std::string withThousands(std::uint64_t n) {

@@ -65,6 +65,8 @@ void deform(const DeformOptions& o) {
   checkOutputPath(o.plots, OutputKind::Png, "--plots");
   if (o.preserveVolumes && o.maxMemoryMb > 0)
     throw UsageError("--preserve-volumes", "needs the posed grid in memory; it cannot be combined with --max-memory");
+  if (o.maxMemoryMb == 0)
+    checkGridFitsMemory(o.input, 0, kDeformMemory, "deform in memory", "run out of core with --max-memory MB");
   gpu::DeformGridRequest request;
   request.input = o.input;
   request.output = o.output;

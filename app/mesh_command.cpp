@@ -23,6 +23,7 @@ void addMeshCommand(CLI::App& app) {
     installStderrProgress(o->quiet);
     checkRemeshArguments(*o);
     const auto t0 = std::chrono::steady_clock::now();
+    checkGridFitsMemory(o->input, o->maxMemoryMb, kMeshGridMemory, "read the grid for meshing", "");
     const LabelGrid grid = readGrid(o->input);
     checkRemeshEstimate(*o, remesh::estimateMeshing(grid, o->remesh.targetLength));
     const remesh::AdaptiveTetrahedralizationOptions decomposition =

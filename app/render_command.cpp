@@ -51,6 +51,7 @@ struct RenderOptions {
   std::string hide;
   std::string organs;
   std::string pose;
+  std::int64_t maxMemoryMb = 0;  // 0: the machine's memory
   bool cpu = false;
   bool verify = false;
   bool legend = false;
@@ -88,6 +89,8 @@ void render(const RenderOptions& o) {
   CuttingPlanes cuts;
   for (const std::string& c : o.cuts) cuts.add(c);
 
+  checkGridFitsMemory(o.input, o.maxMemoryMb, o.pose.empty() ? kRenderMemory : kPosedMemory,
+                      o.pose.empty() ? "render" : "render the pose", "rendering needs the whole grid in memory");
   const LabelGrid grid = readGrid(o.input);
   std::optional<OrganTable> organs;
   if (!o.organs.empty()) organs = OrganTable::read(o.organs);
@@ -177,6 +180,9 @@ void addRenderCommand(CLI::App& app) {
   cmd->add_option("--hide", o->hide, "Labels to hide: \"5,7,10-20\", or organ-name substrings with --organs (\"skin,adipose\")");
   cmd->add_option("--organs", o->organs, "Organ table (ID name tissue density): colours by organ name");
   cmd->add_option("--pose", o->pose, "Pose file (JSON, docs/POSES.md): render the grid posed through its transfer mesh");
+  cmd->add_option("--max-memory", o->maxMemoryMb,
+                  "Refuse a grid whose in-core work exceeds this budget (MB; default the machine's memory)")
+      ->check(integerIn(64, std::int64_t(1) << 30, "MB"));
   cmd->add_flag("--legend", o->legend, "List the organs the image shows, with their colours (names from --organs)");
   cmd->add_flag("--scale-bar", o->scaleBar, "Draw a scale bar (mm, at the depth of the camera's target)");
   cmd->add_flag("--cpu", o->cpu, "Render with the CPU reference instead of the GPU");

@@ -14,6 +14,7 @@ namespace vox::app {
 void addViewCommand(CLI::App& app) {
 #ifdef VOXMORPH_HAS_VIEWER
   auto o = std::make_shared<ViewerOptions>();
+  auto maxMemoryMb = std::make_shared<std::int64_t>(0);
 #else
   auto o = std::make_shared<std::string>();
 #endif
@@ -29,7 +30,12 @@ void addViewCommand(CLI::App& app) {
   cmd->add_option("--width", o->width, "Window width (default 1280)")->check(CLI::Range(720, 8192));
   cmd->add_option("--height", o->height, "Window height (default 720)")->check(CLI::Range(240, 8192));
   cmd->add_flag("!--no-vsync", o->vsync, "Present as fast as frames are made (for timing)");
-  cmd->callback([o] { runViewer(*o); });
+  cmd->add_option("--max-memory", *maxMemoryMb, "Refuse a grid whose in-core work exceeds this budget (MB; default the machine's memory)")
+      ->check(integerIn(64, std::int64_t(1) << 30, "MB"));
+  cmd->callback([o, maxMemoryMb] {
+    checkGridFitsMemory(o->grid, *maxMemoryMb, kPosedMemory, "pose it interactively", "the viewer needs the whole grid in memory");
+    runViewer(*o);
+  });
 #else
   cmd->add_option("grid", *o, "Label grid");
   cmd->callback([] { throw RuntimeFailure("view: this build of voxmorph has no viewer (configure with VOXMORPH_BUILD_VIEWER=ON)"); });

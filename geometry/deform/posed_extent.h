@@ -1,16 +1,12 @@
 #pragma once
-// The extent of the posed grid G' and the rule that bounds it. G' holds the
-// source lattice's voxel centres inside the box of the deformed positions;
-// its size is computed in floating point and converted to integers only once
-// it is known to fit, so a pose that moves vertices astronomically far is an
-// error naming the fault, never a wrapped or collapsed dimension.
-//
+// The rule that bounds the posed grid G' (its extent: raster/posed_extent.h).
 // Growth rule: a pose re-arranges the body, it does not enlarge it, so G'
 // may hold at most kMaxPosedGrowth times the source's voxels; a larger G'
 // (a rotation centre or translation far off) is refused unless the caller
 // allows growth (deform --allow-growth).
 
 #include "geometry/deform/pose.h"
+#include "geometry/raster/posed_extent.h"
 #include "geometry/label_grid.h"
 
 #include <Eigen/Core>
@@ -20,17 +16,6 @@
 namespace vox {
 
 inline constexpr double kMaxPosedGrowth = 8.0;
-
-struct PosedExtent {
-  Eigen::Vector3d first;  // source-lattice index of G's first voxel centre, per axis
-  Eigen::Vector3d dims;   // voxels per axis (whole numbers >= 1)
-  double voxels = 0.0;    // their product
-};
-
-// Throws InputError("deformed positions", ...) when empty or not finite, or
-// when a position lies more than kMaxGridVoxels voxels from the source grid
-// (a lattice index that no integer type of a grid can hold).
-PosedExtent posedExtent(const GridGeometry& source, const std::vector<Eigen::Vector3d>& deformed);
 
 // The selection whose cage handles the pose moved farthest outside the
 // source grid's box, as "selection '<name>'" with its transform

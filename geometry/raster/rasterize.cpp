@@ -1,6 +1,6 @@
 #include "geometry/raster/rasterize.h"
 
-#include "geometry/deform/posed_extent.h"
+#include "geometry/raster/posed_extent.h"
 
 #include "geometry/error.h"
 #include "geometry/parallel.h"
