@@ -5,8 +5,10 @@
 #include "app/remesh_cli.h"
 #include "geometry/io/mesh_io.h"
 #include "geometry/remesh/mesh_topology.h"
+#include "geometry/remesh/remesh_complex.h"
 
 #include <chrono>
+#include <cstdio>
 
 namespace vox::app {
 
@@ -20,7 +22,12 @@ void addRemeshCommand(CLI::App& app) {
     installStderrProgress(o->quiet);
     checkRemeshArguments(*o);
     const auto t0 = std::chrono::steady_clock::now();
-    const TetMesh input = readTetMesh(o->input);
+    TetMesh input = readTetMesh(o->input);
+    // Either orientation: tets of the other convention are turned over here,
+    // so the input's volumes in the report are positive too.
+    if (const std::size_t turned = orientPositively(input); turned > 0 && !o->quiet && o->report != "-")
+      std::fprintf(stderr, "%s: %zu of %zu tets were negatively oriented; turned over\n", o->input.c_str(), turned, input.tetCount());
+    remesh::checkNoFlatTets(input, o->input);
     checkRemeshEstimate(*o, remesh::estimateMeshing(input, o->remesh.targetLength));
     const double setupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     runRemesh(*o, input, remesh::computeMeshTopology(input), setupSeconds);

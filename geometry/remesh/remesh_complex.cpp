@@ -3,23 +3,36 @@
 #include "geometry/error.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace vox::remesh {
+
+void throwFlatTet(const std::string& source, std::size_t tet) {
+  throw InputError(source, "tet " + std::to_string(tet) + " has zero volume (its four vertices are coplanar)");
+}
+
+void checkNoFlatTets(const TetMesh& mesh, const std::string& source) {
+  for (std::size_t t = 0; t < mesh.tetCount(); ++t)
+    if (!(std::abs(signedVolume(mesh.positions, mesh.tets[t])) > 0.0)) throwFlatTet(source, t);
+}
 
 RemeshComplex::RemeshComplex(const TetMesh& mesh, const std::string& source) {
   mesh.validate(source);
   if (mesh.positions.size() >= std::size_t(std::numeric_limits<std::int32_t>::max() / 4) ||
       mesh.tets.size() >= std::size_t(std::numeric_limits<std::int32_t>::max() / 8))
     throw InputError(source, "is too large to remesh (more than 2^28 tets)");
-  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
-    if (mesh.labels[t] < 0) throw InputError(source, "tet " + std::to_string(t) + " has a negative label");
-    if (!(signedVolume(mesh.positions, mesh.tets[t]) > 0.0))
-      throw InputError(source, "tet " + std::to_string(t) + " is inverted or has zero volume");
-  }
-
   positions_ = mesh.positions;
   tets_ = mesh.tets;
+  // Either orientation is accepted: negative tets are turned over; a tet
+  // without volume is the input's fault.
+  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
+    if (mesh.labels[t] < 0) throw InputError(source, "tet " + std::to_string(t) + " has a negative label");
+    const double v = signedVolume(mesh.positions, mesh.tets[t]);
+    if (v < 0.0) std::swap(tets_[t][2], tets_[t][3]);
+    else if (!(v > 0.0)) throwFlatTet(source, t);
+  }
+
   labels_ = mesh.labels;
   neighbors_ = tetFaceAdjacency(tets_, std::int32_t(positions_.size()), source);
 

@@ -34,6 +34,12 @@ struct EdgeRing {
 
 class RemeshComplex;
 
+// Throws InputError(source, "tet N has zero volume ...") for the first tet
+// whose four vertices are coplanar (what RemeshComplex refuses), so a
+// command can refuse it before any other work.
+void checkNoFlatTets(const TetMesh& mesh, const std::string& source);
+[[noreturn]] void throwFlatTet(const std::string& source, std::size_t tet);
+
 // Breadth-first walks of vertex stars that mark tets with a stamp instead of
 // clearing a set. Each walker has its own marks: one walker per thread lets
 // several threads read the same complex at once.
@@ -56,13 +62,14 @@ class RemeshComplex {
 public:
   RemeshComplex() = default;
 
-  // Builds the extended complex of `mesh`. Its tets must be positively
-  // oriented and conforming (each face shared by at most two tets); labels
+  // Builds the extended complex of `mesh`. Its tets must be conforming (each
+  // face shared by at most two tets; negatively oriented tets are turned
+  // over, vertices no tet uses are dropped from the output); labels
   // are > 0 (domain) or 0 (imaginary). Each facet without a neighbour is
   // joined to the dummy vertex; the new dummy tet gets kDummyLabel behind an
   // imaginary tet and the outside label 0 behind a domain tet, so the domain
   // always meets "outside" through label 0. Throws InputError(source, ...)
-  // for degenerate or inverted tets, negative labels, faces shared by more
+  // for zero-volume tets, negative labels, faces shared by more
   // than two tets, or a vertex whose tets are not face-connected.
   explicit RemeshComplex(const TetMesh& mesh, const std::string& source = "mesh");
 

@@ -87,17 +87,37 @@ TEST(RemeshCli, BadInputIsOneLineAndLeavesNoFile) {
   // Usage errors: exit 2.
   EXPECT_EQ(runCommand(voxmorph("mesh " + quote(dir + "/x.nii.gz") + " -l 0 -o " + quote(out))).exitCode, 2);
   EXPECT_EQ(runCommand(voxmorph("mesh " + quote(dir + "/x.nii.gz") + " -l 2 -o " + quote(dir + "/out.obj"))).exitCode, 2);
-  // An inverted tet is the input's fault: named, exit 1, nothing written.
+  // A flat (zero-volume) tet is the input's fault: named, exit 1, nothing written.
   {
-    std::ofstream bad(dir + "/inverted.mesh");
-    bad << "MeshVersionFormatted 2\nDimension 3\nVertices\n4\n0 0 0 0\n1 0 0 0\n0 1 0 0\n0 0 1 0\n"
-           "Tetrahedra\n1\n1 3 2 4 1\nEnd\n";
+    std::ofstream bad(dir + "/flat.mesh");
+    bad << "MeshVersionFormatted 2\nDimension 3\nVertices\n4\n0 0 0 0\n1 0 0 0\n0 1 0 0\n0.25 0.25 0 0\n"
+           "Tetrahedra\n1\n1 2 3 4 1\nEnd\n";
   }
-  r = runCommand(voxmorph("remesh " + quote(dir + "/inverted.mesh") + " -l 1 -q -o " + quote(out)));
+  r = runCommand(voxmorph("remesh " + quote(dir + "/flat.mesh") + " -l 1 -q -o " + quote(out)));
   EXPECT_EQ(r.exitCode, 1);
-  EXPECT_NE(r.err.find("inverted.mesh"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("inverted"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("flat.mesh: tet 0 has zero volume"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   EXPECT_FALSE(fs::exists(out));
+}
+
+// A mesh written with the other orientation convention (every tet negative)
+// remeshes like the original: same topology, positive volumes in the report.
+TEST(RemeshCli, AcceptsEitherOrientation) {
+  const std::string dir = test::tempDir();
+  const std::string grid = dir + "/spheres.nii.gz";
+  ASSERT_EQ(runCommand(voxmorph("synth spheres --size 12 -o " + quote(grid))).exitCode, 0);
+  ASSERT_EQ(runCommand(voxmorph("mesh " + quote(grid) + " -l 2 -q -o " + quote(dir + "/in.mesh"))).exitCode, 0);
+  TetMesh mesh = readTetMesh(dir + "/in.mesh");
+  for (Tet& t : mesh.tets) std::swap(t[0], t[1]);
+  writeTetMesh(dir + "/mirrored.mesh", mesh);
+  const auto r = runCommand(voxmorph("remesh " + quote(dir + "/mirrored.mesh") + " -l 3 --iterations 2 --no-distance -o " +
+                                     quote(dir + "/out.vtu") + " --report " + quote(dir + "/r.json")));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NE(r.err.find("negatively oriented; turned over"), std::string::npos) << r.err;
+  const auto report = nlohmann::json::parse(slurp(dir + "/r.json"));
+  EXPECT_TRUE(report["topology"]["preserved"].get<bool>());
+  EXPECT_EQ(report["inverted_tets"].get<int>(), 0);
+  for (const auto& l : report["labels"]) EXPECT_GT(l["volume_mm3"]["input"].get<double>(), 0.0);
 }
 
 }  // namespace

@@ -31,12 +31,34 @@ TEST(RemeshComplex, ExtendedComplexIsClosedAndRoundTrips) {
   EXPECT_EQ(complex.toTetMesh(true).tetCount(), mesh.tetCount());
 }
 
-TEST(RemeshComplex, RejectsInvertedAndNonManifoldInput) {
+// Either orientation is accepted (a whole mesh written with the other
+// convention, or a mix); a flat tet is the input's fault.
+TEST(RemeshComplex, TurnsNegativeTetsOverAndRefusesFlatOnes) {
+  const TetMesh mesh = tetrahedralizeVoxels(synthesize(SynthKind::NestedSpheres, 8));
+  TetMesh mirrored = mesh;
+  for (std::size_t t = 0; t < mirrored.tetCount(); t += 3) std::swap(mirrored.tets[t][0], mirrored.tets[t][1]);
+  const RemeshComplex a(mesh), b(mirrored);
+  EXPECT_EQ(b.checkConsistency(true), "");
+  const TetMesh out = b.toTetMesh(true);
+  ASSERT_EQ(out.tetCount(), mesh.tetCount());
+  for (std::size_t t = 0; t < out.tetCount(); ++t) EXPECT_GT(signedVolume(out.positions, out.tets[t]), 0.0) << t;
+  EXPECT_EQ(a.liveTetCount(), b.liveTetCount());
+
+  TetMesh flat;
+  flat.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.25, 0.25, 0}};
+  flat.tets = {{0, 1, 2, 3}};
+  flat.labels = {1};
+  try {
+    RemeshComplex c(flat, "flat.mesh");
+    ADD_FAILURE() << "a flat tet was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("tet 0 has zero volume"), std::string::npos) << e.what();
+  }
+}
+
+TEST(RemeshComplex, RejectsNonManifoldInput) {
   TetMesh mesh;
   mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-  mesh.tets = {{0, 2, 1, 3}};
-  mesh.labels = {1};
-  EXPECT_THROW(RemeshComplex(mesh, "bad.mesh"), InputError);
   // Two tets touching at one vertex only: the vertex is pinched.
   mesh.positions.push_back({-1, 0, 0});
   mesh.positions.push_back({0, -1, 0});
