@@ -21,9 +21,10 @@ void addRemeshCommand(CLI::App& app) {
     checkRemeshOutputs(*o);
     const auto t0 = std::chrono::steady_clock::now();
     const TetMesh input = readTetMesh(o->input);
+    const Provenance provenance = commandProvenance({{"mesh", o->input}});
     checkRemeshEstimate(*o, remesh::estimateMeshing(input, o->remesh.targetLength));
     const double setupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    runRemesh(*o, input, remesh::computeMeshTopology(input), setupSeconds);
+    runRemesh(*o, input, remesh::computeMeshTopology(input), setupSeconds, provenance);
   });
 }
 
