@@ -22,7 +22,7 @@ std::string voxmorphGitDescribe();
 std::string voxmorphVersionLine();
 
 struct InputDigest {
-  std::string role;    // "grid", "organs", "pose", "mesh", "cage"
+  std::string role;    // "grid", "grid data", "organs", "pose", "mesh", "cage"
   std::string path;    // as given (a file), or a description of text inputs
   std::string sha256;  // of the file's bytes (or the text's), 64 hex digits
   std::uint64_t bytes = 0;
@@ -42,8 +42,10 @@ std::string shellQuoted(std::string_view argument);
 std::string shellCommandLine(int argc, const char* const* argv);
 
 // Provenance of a run: the current working directory and the digests of the
-// files given as (role, path); pairs with an empty path are skipped. Throws
-// InputError naming a file that cannot be read.
+// files given as (role, path); pairs with an empty path are skipped. A
+// "grid" whose samples live in a separate file (.mhd + .raw, .nhdr +
+// .raw.gz) adds that file as "grid data". Throws InputError naming a file
+// that cannot be read.
 Provenance makeProvenance(std::string commandLine, const std::vector<std::pair<std::string, std::string>>& files);
 // Records an input that is not a file (a pose edited in the viewer) by the
 // digest of its text.

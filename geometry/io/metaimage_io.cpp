@@ -252,6 +252,19 @@ std::unique_ptr<GridSliceWriter> createMetaImageSlices(const std::string& path, 
                                                  dataPath.string(), SampleCompression::None);
 }
 
+std::string metaImageDataFile(const std::string& path) {
+  std::FILE* file = openForReading(path, path);
+  MetaHeader header;
+  try {
+    header = parseMetaHeader(path, readPrefix(file, kMaxHeaderBytes));
+  } catch (...) {
+    std::fclose(file);
+    throw;
+  }
+  std::fclose(file);
+  return toLowerAscii(header.dataFile) == "local" ? std::string() : siblingPath(path, header.dataFile);
+}
+
 LabelGrid readMetaImage(const std::string& path) {
   const auto reader = openMetaImage(path);
   return readAllSlices(*reader);

@@ -318,6 +318,20 @@ std::unique_ptr<GridSliceWriter> createNrrdSlices(const std::string& path, const
                                                  dataPath.string(), SampleCompression::Gzip);
 }
 
+std::string nrrdDataFile(const std::string& path) {
+  std::FILE* file = openForReading(path, path);
+  NrrdHeader header;
+  try {
+    header = parseNrrdHeader(path, readPrefix(file, kMaxHeaderBytes));
+  } catch (...) {
+    std::fclose(file);
+    throw;
+  }
+  std::fclose(file);
+  const std::string* name = header.find({"data file", "datafile"});
+  return name ? siblingPath(path, *name) : std::string();
+}
+
 LabelGrid readNrrd(const std::string& path) {
   const auto reader = openNrrd(path);
   return readAllSlices(*reader);
