@@ -253,15 +253,7 @@ std::unique_ptr<GridSliceWriter> createMetaImageSlices(const std::string& path, 
 }
 
 std::string metaImageDataFile(const std::string& path) {
-  std::FILE* file = openForReading(path, path);
-  MetaHeader header;
-  try {
-    header = parseMetaHeader(path, readPrefix(file, kMaxHeaderBytes));
-  } catch (...) {
-    std::fclose(file);
-    throw;
-  }
-  std::fclose(file);
+  const MetaHeader header = parseMetaHeader(path, readFilePrefix(path, kMaxHeaderBytes));
   return toLowerAscii(header.dataFile) == "local" ? std::string() : siblingPath(path, header.dataFile);
 }
 

@@ -319,15 +319,7 @@ std::unique_ptr<GridSliceWriter> createNrrdSlices(const std::string& path, const
 }
 
 std::string nrrdDataFile(const std::string& path) {
-  std::FILE* file = openForReading(path, path);
-  NrrdHeader header;
-  try {
-    header = parseNrrdHeader(path, readPrefix(file, kMaxHeaderBytes));
-  } catch (...) {
-    std::fclose(file);
-    throw;
-  }
-  std::fclose(file);
+  const NrrdHeader header = parseNrrdHeader(path, readFilePrefix(path, kMaxHeaderBytes));
   const std::string* name = header.find({"data file", "datafile"});
   return name ? siblingPath(path, *name) : std::string();
 }

@@ -1,9 +1,11 @@
 // Provenance (provenance.h): digests of the inputs against coreutils'
-// sha256sum, a detached grid's data file listed beside its header, empty
+// sha256sum, a detached grid's data file listed beside its header (every
+// grid format), empty
 // paths skipped, a missing file named, shell quoting that round-trips
 // through /bin/sh, and the JSON object's fields.
 
 #include "geometry/error.h"
+#include "geometry/io/grid_files.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/provenance.h"
 #include "geometry/synth.h"
@@ -52,6 +54,19 @@ TEST(Provenance, DigestsOfTheInputsAndADetachedGridsDataFile) {
     EXPECT_TRUE(j["git_describe"].is_null());
   else
     EXPECT_EQ(j["git_describe"], voxmorphGitDescribe());
+}
+
+TEST(Provenance, GridFilesListDetachedDataFiles) {
+  const std::string dir = test::tempDir();
+  const LabelGrid grid = synthesize(SynthKind::StickFigure, 16);
+  for (const char* name : {"/g.nii.gz", "/g.mha", "/g.mhd", "/g.nrrd", "/g.nhdr", "/g.inr"}) writeGrid(dir + name, grid);
+  EXPECT_EQ(gridFiles(dir + "/g.nii.gz"), std::vector<std::string>{dir + "/g.nii.gz"});
+  EXPECT_EQ(gridFiles(dir + "/g.mha"), std::vector<std::string>{dir + "/g.mha"});
+  EXPECT_EQ(gridFiles(dir + "/g.mhd"), (std::vector<std::string>{dir + "/g.mhd", dir + "/g.raw"}));
+  EXPECT_EQ(gridFiles(dir + "/g.nrrd"), std::vector<std::string>{dir + "/g.nrrd"});
+  EXPECT_EQ(gridFiles(dir + "/g.nhdr"), (std::vector<std::string>{dir + "/g.nhdr", dir + "/g.raw.gz"}));
+  EXPECT_EQ(gridFiles(dir + "/g.inr"), std::vector<std::string>{dir + "/g.inr"});
+  EXPECT_THROW(gridFiles(dir + "/absent.mhd"), InputError);
 }
 
 TEST(Provenance, MissingInputIsNamed) {
