@@ -80,6 +80,7 @@ void buildCageCommand(const CageCommandOptions& o) {
   checkGridFitsMemory(o.input, o.maxMemoryMb, kCageMemory, "build the cage", "the cage needs the whole grid in memory");
   const auto t0 = std::chrono::steady_clock::now();
   const LabelGrid grid = readGrid(o.input);
+  const Provenance provenance = commandProvenance({{"grid", o.input}, {"organs", o.organs}});
   for (LimbSeparation& s : options.separations) regionInGridFrame(s.region, grid.geometry(), "--separate");
   const LabelGrid groups = options.separations.empty() ? binaryGroupGrid(grid) : labelGroupGrid(grid, OrganTable::read(o.organs));
   const CageResult r = buildCage(groups, options);
@@ -108,7 +109,8 @@ void buildCageCommand(const CageCommandOptions& o) {
                         {"self_intersections", c.selfIntersections},
                         {"genus", c.genus},
                         {"components", c.components},
-                        {"volume_mm3", c.volume}};
+                        {"volume_mm3", c.volume},
+                        {"provenance", nlohmann::json::parse(provenanceJson(provenance))}};
     writeJson(o.report, j);
   }
   if (!o.quiet)

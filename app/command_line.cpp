@@ -54,6 +54,20 @@ void installStderrProgress(bool quiet) {
   });
 }
 
+namespace {
+std::string& commandLineText() {
+  static std::string text;
+  return text;
+}
+}  // namespace
+
+void recordCommandLine(int argc, const char* const* argv) { commandLineText() = shellCommandLine(argc, argv); }
+const std::string& recordedCommandLine() { return commandLineText(); }
+
+Provenance commandProvenance(const std::vector<std::pair<std::string, std::string>>& files) {
+  return makeProvenance(recordedCommandLine(), files);
+}
+
 void writeJson(const std::string& path, const nlohmann::json& json) {
   const std::string text = json.dump(2) + "\n";
   if (path == "-") {

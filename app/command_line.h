@@ -2,11 +2,15 @@
 // Shared pieces of the `voxmorph` subcommands: registration, progress on
 // stderr, JSON output.
 
+#include "geometry/provenance.h"
+
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace vox {
 struct LimbSeparation;
@@ -27,6 +31,14 @@ void addViewCommand(CLI::App& app);
 // Prints progress of long operations on stderr ("stage: 42%"), rewriting the
 // line on a terminal and printing every 10% otherwise.
 void installStderrProgress(bool quiet);
+
+// The command line of this process, shell-quoted; main records it before
+// parsing.
+void recordCommandLine(int argc, const char* const* argv);
+const std::string& recordedCommandLine();
+// Provenance of this command (provenance.h): version, command line and the
+// SHA-256 of the input files given as (role, path), empty paths skipped.
+Provenance commandProvenance(const std::vector<std::pair<std::string, std::string>>& files);
 
 // Writes `json` (indented) atomically to `path`, or to stdout for "-".
 void writeJson(const std::string& path, const nlohmann::json& json);

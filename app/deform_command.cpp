@@ -98,6 +98,7 @@ void deform(const DeformOptions& o) {
     surfaceWorldToGrid(*request.cage, frame);
   }
   gpu::checkDeformGridRequest(request);
+  request.provenance = commandProvenance({{"grid", o.input}, {"organs", o.organs}, {"pose", o.pose}, {"cage", o.cage}});
 
   const DeformationReport report = gpu::deformGrid(request);
   if (!o.report.empty()) {

@@ -11,7 +11,8 @@ int main(int argc, char** argv) {
   CLI::App app{"voxmorph: segmented volumes to multi-material tet meshes, posed grids and images"};
   app.name("voxmorph");
   app.require_subcommand(1);
-  app.set_version_flag("--version", "voxmorph 0.1.0");
+  app.set_version_flag("--version", vox::voxmorphVersionLine());
+  vox::app::recordCommandLine(argc, argv);
   vox::app::addInfoCommand(app);
   vox::app::addSynthCommand(app);
   vox::app::addMeshCommand(app);

@@ -25,12 +25,13 @@ void addMeshCommand(CLI::App& app) {
     const auto t0 = std::chrono::steady_clock::now();
     checkGridFitsMemory(o->input, o->maxMemoryMb, kMeshGridMemory, "read the grid for meshing", "");
     const LabelGrid grid = readGrid(o->input);
+    const Provenance provenance = commandProvenance({{"grid", o->input}});
     checkRemeshEstimate(*o, remesh::estimateMeshing(grid, o->remesh.targetLength));
     const remesh::AdaptiveTetrahedralizationOptions decomposition =
         remesh::adaptiveOptionsForTarget(grid.geometry(), o->remesh.targetLength);
     const TetMesh initial = remesh::tetrahedralizeVoxelsAdaptive(grid, decomposition);
     const double setupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    runRemesh(*o, initial, remesh::computeGridTopology(grid), setupSeconds, &grid.geometry());
+    runRemesh(*o, initial, remesh::computeGridTopology(grid), setupSeconds, provenance, &grid.geometry());
   });
 }
 

@@ -109,8 +109,9 @@ inline void checkRemeshEstimate(const RemeshCliOptions& o, const remesh::Meshing
 // against), writes the output mesh, prints the report and writes its JSON.
 // `toWorld`: the grid whose frame `initial` is in (mesh), written in its
 // world frame (world_frame.h); none for remesh, whose input is in world.
+// `provenance` goes into the report.
 inline void runRemesh(RemeshCliOptions& o, const TetMesh& initial, const remesh::MeshTopology& initialTopology,
-                      double setupSeconds, const GridGeometry* toWorld = nullptr) {
+                      double setupSeconds, const Provenance& provenance, const GridGeometry* toWorld = nullptr) {
   o.remesh.projectOnInterfaces = o.surface != "none";
   o.remesh.hermite = o.surface == "hpss";
   remesh::RemeshStats stats;
@@ -130,6 +131,7 @@ inline void runRemesh(RemeshCliOptions& o, const TetMesh& initial, const remesh:
   remesh::RemeshReport report =
       remesh::buildRemeshReport(initial, initialTopology, output, o.remesh.targetLength, stats, reportOptions);
   report.setupSeconds = setupSeconds;
+  report.provenance = provenance;
   if (o.report == "-") {
     std::cout << remesh::reportJson(report);
     return;

@@ -28,9 +28,10 @@ void addRemeshCommand(CLI::App& app) {
     if (const std::size_t turned = orientPositively(input); turned > 0 && !o->quiet && o->report != "-")
       std::fprintf(stderr, "%s: %zu of %zu tets were negatively oriented; turned over\n", o->input.c_str(), turned, input.tetCount());
     remesh::checkNoFlatTets(input, o->input);
+    const Provenance provenance = commandProvenance({{"mesh", o->input}});
     checkRemeshEstimate(*o, remesh::estimateMeshing(input, o->remesh.targetLength));
     const double setupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    runRemesh(*o, input, remesh::computeMeshTopology(input), setupSeconds);
+    runRemesh(*o, input, remesh::computeMeshTopology(input), setupSeconds, provenance);
   });
 }
 

@@ -9,6 +9,8 @@
 #include <thread>
 #include <vector>
 
+#include <sched.h>
+
 namespace vox {
 
 namespace {
@@ -115,6 +117,10 @@ void runParts(int parts, const std::function<void(int)>& part, std::atomic<bool>
 
 int workerThreads(int requested) {
   if (requested > 0) return requested;
+  // The CPUs this process may run on: a batch job's allocation (Slurm's
+  // cpuset) or taskset's mask, not every CPU of the node.
+  cpu_set_t mask;
+  if (::sched_getaffinity(0, sizeof mask, &mask) == 0 && CPU_COUNT(&mask) > 0) return CPU_COUNT(&mask);
   return std::max(1, int(std::thread::hardware_concurrency()));
 }
 

@@ -18,7 +18,8 @@
 
 namespace vox {
 
-// Threads to use for `requested` (0 or less: every hardware thread).
+// Threads to use for `requested` (0 or less: every CPU the process may run
+// on, as its affinity mask allows).
 int workerThreads(int requested);
 
 // Calls fn(i) for every i in [0, count) from up to workerThreads(threads)

@@ -174,11 +174,13 @@ DeformationReport deformGrid(const DeformGridRequest& o) {
   report.samples = o.samples;
   report.maxMemoryBytes = o.maxMemoryMb << 20;
   report.withMasses = options.organs.has_value();
+  report.provenance = o.provenance;
 
   StageTimer readTimer("read source");
   Source source = openSource(o);
   report.stages.push_back(readTimer.stop());
   report.source = source.geometry();
+  report.restProjection = source.grid ? bodyProjection(*source.grid) : source.outOfCore->bodyProjection();
   report.workingFactor = source.factor;
   report.workingVoxels = source.workingGrid().voxelCount();
 
@@ -230,7 +232,7 @@ DeformationReport deformGrid(const DeformGridRequest& o) {
   }
   makeEngine(engine, source, rest, deformed, o, rasterBudget);
   const Label maxLabel = source.grid ? source.grid->maxLabel() : source.outOfCore->maxLabel();
-  std::vector<std::uint64_t> after;
+  PosedGridMeasures after;
   std::vector<double> deformedVolumes;
   if (o.preserveVolumes) {
     LabelGrid posed = rasterizeAllSlabs(engine.engine());
@@ -253,7 +255,8 @@ DeformationReport deformGrid(const DeformGridRequest& o) {
 
   const std::vector<std::uint64_t> before = source.grid ? computeLabelStats(*source.grid).counts : source.outOfCore->labelCounts();
   const OrganTable* organs = options.organs ? &*options.organs : nullptr;
-  report.labels = labelChanges(before, after, source.geometry().voxelVolume(), organs);
+  report.labels = labelChanges(before, after.counts, source.geometry().voxelVolume(), organs);
+  report.posedProjection = after.projection;
   for (LabelChange& c : report.labels)
     if (c.label < deformedVolumes.size()) c.deformedVolumeVoxels = deformedVolumes[c.label];
   report.wholeBody = wholeBodyChange(report.labels);

@@ -18,6 +18,7 @@
 #include "geometry/deform/deformation_report.h"
 #include "geometry/deform/pose.h"
 #include "geometry/organ_table.h"
+#include "geometry/provenance.h"
 #include "geometry/tri_mesh.h"
 
 #include <cstdint>
@@ -46,6 +47,8 @@ struct DeformGridRequest {
   std::int64_t maxTets = RefinementOptions{}.maxTets;
   int refineIterations = RefinementOptions{}.maxIterations;
   std::string posedCage, posedMesh;  // optional extra outputs, written in the world frame
+  // Copied into the report: the caller's command line and input digests.
+  Provenance provenance;
   // Warnings (a GPU that could not be used, foreground outside the cage).
   std::function<void(const std::string&)> warn;
 };

@@ -808,6 +808,8 @@ void Viewer::startExport(const std::string& path, const std::string& report, con
   request.warn = [](const std::string& m) { std::fprintf(stderr, "view: warning: %s\n", m.c_str()); };
   try {
     gpu::checkDeformGridRequest(request);
+    request.provenance = commandProvenance({{"grid", options_.grid}, {"organs", options_.organs}});
+    addTextInput(request.provenance, "pose", "edited in the viewer (grid frame, as poseToJson writes it)", poseToJson(request.pose));
     checkOutputPath(path);
     if (!report.empty()) checkOutputPath(report);
     if (!png.empty()) {

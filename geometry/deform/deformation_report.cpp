@@ -36,6 +36,11 @@ json toJson(const DistortionHistogram& h) {
           {"above", h.above}, {"mean", h.mean}, {"min", h.min},   {"max", h.max}, {"rms_deviation", h.rmsDeviation}};
 }
 
+json toJson(const BodyProjection& p) {
+  return {{"front_area_mm2", p.frontMm2}, {"side_area_mm2", p.sideMm2}, {"top_area_mm2", p.topMm2}, {"height_mm", p.heightMm},
+          {"foreground_voxels", p.foregroundVoxels}, {"exact", p.exact}};
+}
+
 json toJson(const GridGeometry& g) {
   return {{"dims", {g.dims[0], g.dims[1], g.dims[2]}},
           {"spacing_mm", {g.spacing.x(), g.spacing.y(), g.spacing.z()}},
@@ -275,6 +280,12 @@ std::string deformationReportJson(const DeformationReport& r) {
     whole["mass_change_pct"] = r.wholeBody.massChangePercent;
   }
   root["whole_body"] = whole;
+  root["body_projection"] = {
+      {"frame", "world, RAS+ (x to the subject's right, y anterior, z superior); front: along y onto the x-z plane, side: "
+                "along x onto the y-z plane, top: along z onto the x-y plane; height: extent along z"},
+      {"rest", toJson(r.restProjection)},
+      {"posed", toJson(r.posedProjection)}};
+  root["provenance"] = json::parse(provenanceJson(r.provenance));
   root["warnings"] = deformationWarnings(r);
   if (const auto& c = r.volumeCorrection)
     root["volume_correction"] = {{"boundary_voxels", c->candidates},
@@ -318,6 +329,11 @@ std::string deformationSummary(const DeformationReport& r) {
     << " % volume";
   if (r.withMasses) s << ", " << fixed(r.wholeBody.massChangePercent, 2) << " % mass";
   s << ")\n";
+  const auto areas = [](const BodyProjection& p) {
+    return fixed(p.frontMm2 * 1e-6, 4) + " / " + fixed(p.sideMm2 * 1e-6, 4) + " / " + fixed(p.topMm2 * 1e-6, 4) + " m^2, height " +
+           fixed(p.heightMm, 1) + " mm";
+  };
+  s << "  projected area front / side / top: " << areas(r.restProjection) << " at rest -> " << areas(r.posedProjection) << " posed\n";
   const LabelChange* worst = nullptr;
   std::size_t small = 0;
   for (const LabelChange& c : r.labels) {

@@ -4,14 +4,18 @@
 // vertices and foreground voxels outside the cage), per-label voxel counts
 // with volume and mass change, the whole body's change, the distortion
 // histograms of the thesis' Figure 3.19 and the edge-length distortion of
-// the propagated (outside) TM vertices against the inside ones.
+// the propagated (outside) TM vertices against the inside ones, the body's
+// projected areas and height at rest and posed (body_projection.h), and the
+// run's provenance (provenance.h).
 
 #include "geometry/deform/adaptive_refinement.h"
 #include "geometry/deform/deformation_metrics.h"
 #include "geometry/deform/label_volumes.h"
 #include "geometry/deform/pipeline.h"
+#include "geometry/body_projection.h"
 #include "geometry/label_grid.h"
 #include "geometry/organ_table.h"
+#include "geometry/provenance.h"
 #include "geometry/tet_mesh.h"
 
 #include <Eigen/Core>
@@ -98,6 +102,9 @@ struct DeformationReport {
 
   std::vector<LabelChange> labels;
   WholeBodyChange wholeBody;
+  // Projected areas and height of the source (rest) and of G' (posed).
+  BodyProjection restProjection, posedProjection;
+  Provenance provenance;
   bool withMasses = false;
   // --preserve-volumes: the label-volume correction of G' (label_volumes.h).
   std::optional<LabelVolumeCorrection> volumeCorrection;

@@ -149,11 +149,15 @@ OutOfCoreSource::OutOfCoreSource(const std::string& path, std::int64_t maxDownsa
   // Only an uncompressed NIfTI is sure to seek cheaply; other files are
   // copied to raw as they stream by.
   const std::int64_t sliceVoxels = reader->geometry().sliceVoxels();
+  BodyProjectionAccumulator projection(reader->geometry());
+  std::int64_t slicesRead = 0;
   auto count = [&](const Label* s, std::int64_t n) {
     for (std::int64_t v = 0; v < n * sliceVoxels; ++v) {
       if (s[v] >= labelCounts_.size()) labelCounts_.resize(std::size_t(s[v]) + 1, 0);
       ++labelCounts_[s[v]];
     }
+    projection.addSlices(slicesRead, n, s);
+    slicesRead += n;
   };
   if (endsWith(path, ".nii")) {
     downsampled_ = streamDownsample(*reader, factor_, maxLabel_, count);
@@ -166,6 +170,7 @@ OutOfCoreSource::OutOfCoreSource(const std::string& path, std::int64_t maxDownsa
     });
     slices_ = std::move(spool);
   }
+  projection_ = projection.result();
 }
 
 OutOfCoreSource::~OutOfCoreSource() = default;

@@ -12,6 +12,7 @@
 // The downsampled grid keeps the source's grid frame (its voxel corners are
 // source voxel corners), so a transfer mesh built on it applies to the source.
 
+#include "geometry/body_projection.h"
 #include "geometry/raster/rasterize.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/label_grid.h"
@@ -55,6 +56,8 @@ public:
   // Voxels per label of the full-resolution source (index = label), counted
   // during the read.
   const std::vector<std::uint64_t>& labelCounts() const { return labelCounts_; }
+  // The full-resolution source's body projection, measured during the read.
+  const BodyProjection& bodyProjection() const { return projection_; }
   // Random access to full-resolution slices.
   GridSliceReader& slices() { return *slices_; }
 
@@ -65,6 +68,7 @@ private:
   Label maxLabel_ = 0;
   int factor_ = 1;
   std::vector<std::uint64_t> labelCounts_;
+  BodyProjection projection_;
 };
 
 struct OutOfCoreOptions {

@@ -64,8 +64,9 @@ std::string cageFault(const SurfaceCheck& c) {
   return "non-positive volume";
 }
 
-void LabelCountingRasterizer::rasterizeSlab(std::int64_t z0, std::int64_t z1, Label* out) {
+void MeasuringRasterizer::rasterizeSlab(std::int64_t z0, std::int64_t z1, Label* out) {
   engine_.rasterizeSlab(z0, z1, out);
+  projection_.addSlices(z0, z1 - z0, out);
   const std::int64_t n = (z1 - z0) * outputGeometry().sliceVoxels();
   for (std::int64_t v = 0; v < n; ++v) {
     const Label l = out[v];
@@ -74,10 +75,10 @@ void LabelCountingRasterizer::rasterizeSlab(std::int64_t z0, std::int64_t z1, La
   }
 }
 
-std::vector<std::uint64_t> writePosedGrid(SlabRasterizer& engine, const std::string& path, Label maxLabel) {
-  LabelCountingRasterizer counting(engine);
-  writeDeformedGrid(counting, path, maxLabel);
-  return counting.counts();
+PosedGridMeasures writePosedGrid(SlabRasterizer& engine, const std::string& path, Label maxLabel) {
+  MeasuringRasterizer measuring(engine);
+  writeDeformedGrid(measuring, path, maxLabel);
+  return {measuring.counts(), measuring.projection()};
 }
 
 DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOptions& options) : options_(options) {

@@ -121,4 +121,10 @@ std::unique_ptr<GridSliceWriter> createMetaImageSlices(const std::string& path, 
 std::unique_ptr<GridSliceWriter> createNrrdSlices(const std::string& path, const GridGeometry& geometry, Label maxLabel);
 std::unique_ptr<GridSliceWriter> createInrSlices(const std::string& path, const GridGeometry& geometry, Label maxLabel);
 
+// The detached data file a header names (.mhd's ElementDataFile, .nhdr's
+// "data file"), resolved beside the header; "" when the samples follow the
+// header in the same file.
+std::string metaImageDataFile(const std::string& path);
+std::string nrrdDataFile(const std::string& path);
+
 }  // namespace vox

@@ -1,6 +1,7 @@
 #include "geometry/io/header_text.h"
 
 #include "geometry/error.h"
+#include "geometry/io/byte_stream.h"
 
 #include <algorithm>
 #include <cctype>
@@ -88,6 +89,13 @@ std::string readPrefix(std::FILE* file, std::size_t limit) {
   std::string s(limit, '\0');
   const std::size_t got = std::fread(s.data(), 1, limit, file);
   s.resize(got);
+  return s;
+}
+
+std::string readFilePrefix(const std::string& path, std::size_t limit) {
+  std::FILE* file = openForReading(path, path);
+  std::string s = readPrefix(file, limit);
+  std::fclose(file);
   return s;
 }
 

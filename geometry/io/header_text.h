@@ -31,6 +31,9 @@ std::string realText(double v);
 
 // Up to `limit` bytes from the start of `file` (headers are looked for in them).
 std::string readPrefix(std::FILE* file, std::size_t limit);
+// The same from the file at `path` (InputError naming it when it cannot be
+// opened).
+std::string readFilePrefix(const std::string& path, std::size_t limit);
 
 // The directory of `path` joined with a file name taken from its header.
 std::string siblingPath(const std::string& path, const std::string& name);

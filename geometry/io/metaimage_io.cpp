@@ -252,6 +252,11 @@ std::unique_ptr<GridSliceWriter> createMetaImageSlices(const std::string& path, 
                                                  dataPath.string(), SampleCompression::None);
 }
 
+std::string metaImageDataFile(const std::string& path) {
+  const MetaHeader header = parseMetaHeader(path, readFilePrefix(path, kMaxHeaderBytes));
+  return toLowerAscii(header.dataFile) == "local" ? std::string() : siblingPath(path, header.dataFile);
+}
+
 LabelGrid readMetaImage(const std::string& path) {
   const auto reader = openMetaImage(path);
   return readAllSlices(*reader);

@@ -318,6 +318,12 @@ std::unique_ptr<GridSliceWriter> createNrrdSlices(const std::string& path, const
                                                  dataPath.string(), SampleCompression::Gzip);
 }
 
+std::string nrrdDataFile(const std::string& path) {
+  const NrrdHeader header = parseNrrdHeader(path, readFilePrefix(path, kMaxHeaderBytes));
+  const std::string* name = header.find({"data file", "datafile"});
+  return name ? siblingPath(path, *name) : std::string();
+}
+
 LabelGrid readNrrd(const std::string& path) {
   const auto reader = openNrrd(path);
   return readAllSlices(*reader);

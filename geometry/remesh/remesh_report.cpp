@@ -174,6 +174,7 @@ std::string reportJson(const RemeshReport& r) {
   j["steps"] = steps;
   j["remesh_seconds"] = r.stats.seconds;
   j["setup_seconds"] = r.setupSeconds;
+  j["provenance"] = nlohmann::json::parse(provenanceJson(r.provenance));
   return j.dump(2) + "\n";
 }
 

@@ -3,9 +3,11 @@
 // boundary facet angles, edge lengths against the target, and per label the
 // volume change, components, Euler characteristic and the distance between
 // the input and output interfaces; plus the topology check of the labels and
-// junctions. Printed as text and written as JSON.
+// junctions; and the run's provenance (provenance.h). Printed as text and
+// written as JSON.
 
 #include "geometry/mesh_quality.h"
+#include "geometry/provenance.h"
 #include "geometry/remesh/interface_distance.h"
 #include "geometry/remesh/mesh_topology.h"
 #include "geometry/remesh/remesh.h"
@@ -42,6 +44,7 @@ struct RemeshReport {
   std::vector<std::string> topologyDifferences;              // empty: topology preserved
   RemeshStats stats;
   double setupSeconds = 0.0;  // reading and decomposing the input
+  Provenance provenance;
 };
 
 struct ReportOptions {

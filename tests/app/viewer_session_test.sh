@@ -6,7 +6,8 @@
 # caster's tolerance), the screenshot after undo equals the rest one and the
 # one after redo the slid cut's, byte for byte; the cancelled export left
 # nothing; `voxmorph deform --pose` on the saved pose writes a grid
-# byte-identical to the export.
+# byte-identical to the export; the export's report records the grid's
+# SHA-256 and the edited pose in its provenance.
 set -euo pipefail
 bin=$1 src=$2 work=$3
 rm -rf "$work" && mkdir -p "$work"
@@ -24,6 +25,9 @@ cmp posed_cut_slid.png redone.png
   --preserve-volumes -q
 cmp cli.nii.gz export.nii.gz
 test -s export.json && test -s export.png
+# The export's report records its provenance: the grid's digest and the edited pose.
+grep -q "\"sha256\": \"$(sha256sum "$src/assets/icrp110_am.nii.gz" | cut -c1-64)\"" export.json
+grep -q '"path": "edited in the viewer' export.json
 if [ -n "${VOX_UPDATE_GOLDEN:-}" ]; then  # regenerate, then look at the PNGs
   cp rest.png "$src/assets/golden/viewer_am_rest.png"
   cp posed.png "$src/assets/golden/viewer_am_right_arm_45.png"
