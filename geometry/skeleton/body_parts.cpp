@@ -294,6 +294,19 @@ BodyParts findBones(const LabelGrid& grid, const OrganTable& organs, const std::
     const Eigen::Vector3d ortho = f.anterior - f.anterior.dot(f.superior) * f.superior;
     f.anterior = ortho.norm() > 1e-6 ? ortho.normalized() : f.superior.unitOrthogonal();
   }
+  if (options.snapToGridAxes) {
+    // The grid axis (and sign) nearest each measured direction.
+    const auto nearestAxis = [](const Eigen::Vector3d& d, int skip) {
+      int best = 0;
+      for (int a = 1; a < 3; ++a)
+        if (a != skip && (best == skip || std::abs(d(a)) > std::abs(d(best)))) best = a;
+      return best;
+    };
+    const int up = nearestAxis(f.superior, -1);
+    const int front = nearestAxis(f.anterior, up);
+    f.superior = Eigen::Vector3d::Unit(up) * (f.superior(up) < 0 ? -1.0 : 1.0);
+    f.anterior = Eigen::Vector3d::Unit(front) * (f.anterior(front) < 0 ? -1.0 : 1.0);
+  }
   f.right = f.anterior.cross(f.superior).normalized();
   f.fromBones = superiorMeasured && anteriorMeasured;
   const Centroid midline = sumOf({Bone::CervicalSpine, Bone::ThoracicSpine, Bone::LumbarSpine, Bone::Sacrum, Bone::Sternum, Bone::Cranium,

@@ -4,9 +4,10 @@
 // voxel, measured inside the body.
 //
 //  1. Anatomical frame (grid frame): superior from the pelvis to the head
-//     bones, anterior from the thoracic spine to the sternum, right =
-//     anterior x superior (right-handed, so a mirrored body would be told
-//     apart). Without those bones the ICRP storage convention is assumed
+//     bones, anterior from the thoracic spine to the sternum, each snapped
+//     to the nearest grid axis, right = anterior x superior (right-handed,
+//     so a mirrored body would be told apart). Without those bones the ICRP
+//     storage convention is assumed
 //     (i from the body's right to its left, j front to back, k toes to
 //     vertex). The mid-sagittal plane passes through the centroid of the
 //     midline bones (spine, sacrum, sternum, cranium) with normal `right`.
@@ -115,6 +116,11 @@ struct BodyPartOptions {
   double straddleFraction = 0.1;
   // Paths do not pass through skin (organ names starting with "skin").
   bool skinBlocksPaths = true;
+  // The frame's directions are the grid axes nearest the measured ones:
+  // phantoms are stored along the body, and centroids of bones are off the
+  // body's axes by a few degrees (the ICRP adult male's sternum-to-spine
+  // direction by 4), which would tilt every joint angle.
+  bool snapToGridAxes = true;
 };
 
 // Bones and anatomical frame of `grid` without the assignment (cheap).

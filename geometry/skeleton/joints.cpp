@@ -127,20 +127,18 @@ std::optional<Eigen::Vector3d> acrossTowardsRight(const Eigen::Vector3d& directi
   return u.dot(right) < 0.0 ? Eigen::Vector3d(-u) : u;
 }
 
+// The flexion axis: a hinge found on the bone end, made perpendicular to the
+// bone, else the body's left-right axis itself.
 void setLeftRight(Joint& joint, const std::optional<Eigen::Vector3d>& hinge, const AnatomicalFrame& frame) {
+  joint.anterior = frame.anterior;
+  joint.superior = frame.superior;
   if (hinge) {
     if (const auto u = acrossTowardsRight(*hinge, joint.longAxis, frame.right)) {
       joint.leftRight = *u;
       return;
     }
   }
-  if (const auto u = acrossTowardsRight(frame.right, joint.longAxis, frame.right)) {
-    joint.leftRight = *u;
-  } else {
-    // A limb along the left-right axis (an arm held out sideways at rest):
-    // the flexion axis is then the front-back axis' normal in the body.
-    joint.leftRight = joint.longAxis.cross(frame.anterior).normalized();
-  }
+  joint.leftRight = frame.right;
   joint.axisMethod = "body axis";
 }
 
@@ -350,7 +348,9 @@ Eigen::Vector3d Joint::axis(Dof dof) const {
   const double side = kind().side == Side::Left ? -1.0 : 1.0;
   switch (dof) {
     case Dof::Flexion: return kind().flexionSign * leftRight;
-    case Dof::Abduction: return side * longAxis.cross(leftRight).normalized();
+    // About the front-back axis; the sign follows whether the part hangs
+    // down (limbs) or stands up (neck, head) from the joint.
+    case Dof::Abduction: return (longAxis.dot(superior) < 0.0 ? -side : side) * anterior;
     case Dof::Rotation: return -side * longAxis;
   }
   return leftRight;

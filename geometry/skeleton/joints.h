@@ -24,8 +24,13 @@
 //    wrist's the body's left-right axis.
 //  - neck, head: the centroids of the cervical spine's lower and upper 15 %.
 // Each joint's long axis points from its centre to the next joint down the
-// chain (or the child bone's centroid); the flexion axis is the hinge or
-// left-right axis made perpendicular to it, pointing to the body's right.
+// chain (or the child bone's centroid). The flexion axis is the hinge found
+// on the bone end (made perpendicular to the bone, pointing to the body's
+// right), else the body's left-right axis; abduction turns about the body's
+// front-back axis, rotation about the long axis. Clinical angles are
+// measured against the body's planes, not the bone's rest tilt: a shoulder
+// abduction turns the arm in the frontal plane even though the ICRP arms
+// hang slightly backwards.
 //
 // Angle conventions (degrees; docs/POSES.md):
 //   flexion: about the left-right axis; positive moves the limb forward
@@ -94,7 +99,9 @@ struct Joint {
   JointId id = JointId::Neck;
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();        // grid frame, mm
   Eigen::Vector3d longAxis = Eigen::Vector3d::UnitZ();     // unit, towards the child's far end
-  Eigen::Vector3d leftRight = Eigen::Vector3d::UnitX();    // unit, perpendicular to longAxis, towards the body's right
+  Eigen::Vector3d leftRight = Eigen::Vector3d::UnitX();    // unit flexion axis (up to the joint's sign), towards the body's right
+  Eigen::Vector3d anterior = -Eigen::Vector3d::UnitY();    // the body's front-back axis (abduction)
+  Eigen::Vector3d superior = Eigen::Vector3d::UnitZ();     // the body's up
   double radius = 0.0;       // fitted sphere (shoulder, hip), mm; 0 otherwise
   std::string method;        // how the centre was found ("sphere fit", "distal end", ...)
   std::string axisMethod;    // how leftRight was found ("bone end width", "body axis", "given")
