@@ -1,5 +1,6 @@
 #include "geometry/skeleton/joint_pose.h"
 
+#include "geometry/deform/distance_transform.h"
 #include "geometry/error.h"
 
 #include <Eigen/QR>
@@ -89,7 +90,7 @@ std::array<bool, kPartCount + 1> partsBelow(Part child) {
 }
 
 // Separations of one limb below its highest turned joint: its label group
-// from every other group its moving parts touch inside the region.
+// from every other group near its moving parts inside the region.
 void limbSeparations(std::vector<PoseSeparation>& out, const Skeleton& skeleton, const std::vector<Joint>& joints,
                      const std::vector<PoseJoint>& angles, const std::array<JointId, 3>& limb, const JointPoseOptions& options) {
   const Joint* top = nullptr;
@@ -106,21 +107,20 @@ void limbSeparations(std::vector<PoseSeparation>& out, const Skeleton& skeleton,
   const std::array<bool, kPartCount + 1> moving = partsBelow(child);
   const Eigen::AlignedBox3d box = belowJoint(parts, *top, moving, options);
   if (box.isEmpty()) return;
+  // The groups within reach of the moving parts inside the region: the
+  // cage would wrap them together (it lies a dilation away from both).
+  std::vector<std::uint8_t> mask(std::size_t(g.voxelCount()), 0);
+  for (std::int64_t v = 0; v < g.voxelCount(); ++v)
+    if (const Label l = parts.labels()[std::size_t(v)]; l != 0 && l <= kPartCount && moving[l]) mask[std::size_t(v)] = 1;
+  const ScalarGrid distance = euclideanDistanceTransform(g, mask).distance;
   std::array<std::int64_t, kBodyPartCount + 1> touching{};
-  static constexpr int kSteps[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-  for (std::int64_t k = 0; k < g.dims[2]; ++k)
-    for (std::int64_t j = 0; j < g.dims[1]; ++j)
-      for (std::int64_t i = 0; i < g.dims[0]; ++i) {
-        const Label a = parts.at(i, j, k);
-        if (a == 0 || a > kPartCount) continue;
-        for (const auto& s : kSteps) {
-          const Label b = parts.atOr(i + s[0], j + s[1], k + s[2]);
-          if (b == 0 || b > kPartCount || moving[a] == moving[b]) continue;
-          const Label other = moving[a] ? b : a;
-          if (labelGroupOf(Part(other)) == group || !box.contains(g.voxelCenter(i, j, k))) continue;
-          ++touching[std::size_t(labelGroupOf(Part(other)))];
-        }
-      }
+  for (std::int64_t v = 0; v < g.voxelCount(); ++v) {
+    const Label l = parts.labels()[std::size_t(v)];
+    if (l == 0 || l > kPartCount || moving[l] || labelGroupOf(Part(l)) == group) continue;
+    if (distance.values[std::size_t(v)] > options.nearMm) continue;
+    const Index3 c = g.ijk(v);
+    if (box.contains(g.voxelCenter(c[0], c[1], c[2]))) ++touching[std::size_t(labelGroupOf(Part(l)))];
+  }
   for (int other = 1; other <= kBodyPartCount; ++other)
     if (touching[std::size_t(other)] > 0) {
       PoseSeparation s;

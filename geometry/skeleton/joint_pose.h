@@ -17,7 +17,8 @@
 //    they overlap;
 //  - separations: per limb, below its highest turned joint, the limb's label
 //    group (from the body parts: skeleton::labelGroupsOfParts) is separated
-//    from every other group its moving parts touch, inside the region below
+//    from every other group within nearMm of its moving parts (the cage
+//    would wrap them together), inside the region below
 //    the joint, so the tissue at the joint stays joined in the cage and the
 //    transfer mesh. The pose's own separations follow.
 // A pose's "joint_options" (pose.h) override the zone, the margin, and the
@@ -49,6 +50,7 @@ struct JointPoseOptions {
   double jointMarginMm = 50.0;
   double jointMarginFraction = 0.25;
   double regionPaddingMm = 60.0;  // regions grow by this across the limb (the cage lies ~20 mm out, the inset wedge needs room)
+  double nearMm = 40.0;           // groups this near the moving parts are separated from them (twice the cage's default dilation)
   JointZone jointZone = JointZone::Parent;
 };
 

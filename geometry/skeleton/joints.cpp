@@ -244,22 +244,27 @@ void estimateLimb(std::array<std::optional<Joint>, kJointCount>& found, const Gr
   if (middle) middleShape = shapeOf(g, middle->voxels);
   if (end) endShape = shapeOf(g, end->voxels);
 
-  // Top joint (shoulder, hip), and which end of the upper bone is proximal.
+  // Which end of the upper bone is proximal: the one away from the middle
+  // bone, else the one nearest the parent's bones. The top joint (shoulder,
+  // hip) is fitted at that end, where it comes nearest the parent's bones.
   std::optional<bool> upperProximalHigh;
+  if (upperShape && middleShape) upperProximalHigh = !upperShape->nearerHigh(middleShape->centroid);
   if (upperShape && !parentBones.empty()) {
     const BoneShape& s = *upperShape;
-    std::vector<Eigen::Vector3d> ends = s.end(true, 0.25 * s.length());
-    const std::vector<Eigen::Vector3d> low = s.end(false, 0.25 * s.length());
-    ends.insert(ends.end(), low.begin(), low.end());
+    std::vector<Eigen::Vector3d> ends;
+    for (const bool high : {true, false})
+      if (!upperProximalHigh || *upperProximalHigh == high) {
+        const std::vector<Eigen::Vector3d> e = s.end(high, 0.25 * s.length());
+        ends.insert(ends.end(), e.begin(), e.end());
+      }
     if (const auto contact = nearestTo(ends, parentBones, 40.0)) {
       Joint j;
       j.id = limb.top;
       ballCentre(j, g, *upper, s, *contact, limb.headFraction);
-      upperProximalHigh = s.nearerHigh(*contact);
+      if (!upperProximalHigh) upperProximalHigh = s.nearerHigh(*contact);
       found[std::size_t(limb.top)] = j;
     }
   }
-  if (upperShape && !upperProximalHigh && middleShape) upperProximalHigh = !upperShape->nearerHigh(middleShape->centroid);
 
   // Middle joint (elbow, knee): the upper bone's distal end, hinge from its width.
   if (upperShape && middleShape && upperProximalHigh) {

@@ -10,8 +10,9 @@
 //    off it by more than half a voxel diagonal, three times) to the surface
 //    voxels of the humeral / femoral head: those within 12 % (humerus) or
 //    10 % (femur) of the bone's length of its voxel nearest the trunk's
-//    (pelvis') bones, which is on the head, facing the glenoid
-//    (acetabulum). A fit whose radius is outside 2-20 % of the bone's length,
+//    (pelvis') bones among those of its proximal quarter (the end away from
+//    the forearm / lower-leg bones), which is on the head, facing the
+//    glenoid (acetabulum). A fit whose radius is outside 2-20 % of the bone's length,
 //    or whose sphere misses that nearest voxel by more than a voxel diagonal,
 //    falls back to the centroid of those voxels.
 //  - elbow, knee: the centroid of the humerus' (femur's) distal end, the
