@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <array>
-#include <cctype>
 
 namespace vox::skeleton {
 
@@ -15,28 +14,6 @@ constexpr std::array<const char*, kBoneCount + 1> kBoneNames = {
     "sacrum",    "pelvis",  "ribs",     "sternum",        "clavicle",       "scapula",
     "humerus",   "forearm_bones",       "hand_bones",     "femur",          "lower_leg_bones",
     "foot_bones"};
-
-std::vector<std::string> lowerWords(const std::string& s) {
-  std::vector<std::string> words;
-  std::string w;
-  for (const unsigned char c : s) {
-    if (std::isalpha(c)) {
-      w += char(std::tolower(c));
-    } else if (!w.empty()) {
-      words.push_back(std::move(w));
-      w.clear();
-    }
-  }
-  if (!w.empty()) words.push_back(std::move(w));
-  return words;
-}
-
-bool anyStartsWith(const std::vector<std::string>& words, std::initializer_list<const char*> prefixes) {
-  for (const std::string& w : words)
-    for (const char* p : prefixes)
-      if (w.rfind(p, 0) == 0) return true;
-  return false;
-}
 
 bool has(const std::vector<std::string>& words, const char* word) {
   return std::find(words.begin(), words.end(), word) != words.end();
@@ -67,36 +44,36 @@ bool isPaired(Bone bone) {
 
 Bone classifyBone(const std::string& organName) {
   // Only the words before the first comma name the structure.
-  const std::vector<std::string> w = lowerWords(organName.substr(0, organName.find(',')));
-  if (w.empty() || anyStartsWith(w, {"cartilage", "marrow", "muscle", "skin", "blood", "lymph"})) return Bone::None;
-  if (has(w, "spine") || anyStartsWith(w, {"vertebra"})) {
+  const std::vector<std::string> w = organNameWords(organName.substr(0, organName.find(',')));
+  if (w.empty() || anyWordStartsWith(w, {"cartilage", "marrow", "muscle", "skin", "blood", "lymph"})) return Bone::None;
+  if (has(w, "spine") || anyWordStartsWith(w, {"vertebra"})) {
     if (has(w, "cervical")) return Bone::CervicalSpine;
     if (has(w, "thoracic")) return Bone::ThoracicSpine;
     if (has(w, "lumbar")) return Bone::LumbarSpine;
     return Bone::None;
   }
-  if (anyStartsWith(w, {"humer"})) return Bone::Humerus;
-  if (anyStartsWith(w, {"ulna", "radius", "radii"})) return Bone::ForearmBones;
-  if (anyStartsWith(w, {"wrist", "carp", "metacarp"}) || (anyStartsWith(w, {"hand"}) && anyStartsWith(w, {"bone"})))
+  if (anyWordStartsWith(w, {"humer"})) return Bone::Humerus;
+  if (anyWordStartsWith(w, {"ulna", "radius", "radii"})) return Bone::ForearmBones;
+  if (anyWordStartsWith(w, {"wrist", "carp", "metacarp"}) || (anyWordStartsWith(w, {"hand"}) && anyWordStartsWith(w, {"bone"})))
     return Bone::HandBones;
-  if (anyStartsWith(w, {"clavic"})) return Bone::Clavicle;
-  if (anyStartsWith(w, {"scapul"})) return Bone::Scapula;
-  if (anyStartsWith(w, {"femor", "femur"})) return Bone::Femur;
-  if (anyStartsWith(w, {"tibia", "fibula", "patell"})) return Bone::LowerLegBones;
-  if (anyStartsWith(w, {"ankle", "tars", "metatars", "calcane", "talus"}) ||
-      ((has(w, "foot") || has(w, "feet")) && anyStartsWith(w, {"bone"})))
+  if (anyWordStartsWith(w, {"clavic"})) return Bone::Clavicle;
+  if (anyWordStartsWith(w, {"scapul"})) return Bone::Scapula;
+  if (anyWordStartsWith(w, {"femor", "femur"})) return Bone::Femur;
+  if (anyWordStartsWith(w, {"tibia", "fibula", "patell"})) return Bone::LowerLegBones;
+  if (anyWordStartsWith(w, {"ankle", "tars", "metatars", "calcane", "talus"}) ||
+      ((has(w, "foot") || has(w, "feet")) && anyWordStartsWith(w, {"bone"})))
     return Bone::FootBones;
-  if (anyStartsWith(w, {"crani", "skull"})) return Bone::Cranium;
-  if (anyStartsWith(w, {"mandib"})) return Bone::Mandible;
-  if (anyStartsWith(w, {"sacrum", "coccyx"})) return Bone::Sacrum;
-  if (anyStartsWith(w, {"pelvis", "coxa", "ilium", "ischium", "pubis"})) return Bone::Pelvis;
-  if (anyStartsWith(w, {"rib"})) return Bone::Ribs;
-  if (anyStartsWith(w, {"stern"})) return Bone::Sternum;
+  if (anyWordStartsWith(w, {"crani", "skull"})) return Bone::Cranium;
+  if (anyWordStartsWith(w, {"mandib"})) return Bone::Mandible;
+  if (anyWordStartsWith(w, {"sacrum", "coccyx"})) return Bone::Sacrum;
+  if (anyWordStartsWith(w, {"pelvis", "coxa", "ilium", "ischium", "pubis"})) return Bone::Pelvis;
+  if (anyWordStartsWith(w, {"rib"})) return Bone::Ribs;
+  if (anyWordStartsWith(w, {"stern"})) return Bone::Sternum;
   return Bone::None;
 }
 
 Side sideInName(const std::string& organName) {
-  const std::vector<std::string> w = lowerWords(organName);
+  const std::vector<std::string> w = organNameWords(organName);
   const bool left = has(w, "left"), right = has(w, "right");
   if (left == right) return Side::Axial;
   return left ? Side::Left : Side::Right;
