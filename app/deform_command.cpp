@@ -33,7 +33,7 @@ namespace vox::app {
 namespace {
 
 struct DeformOptions {
-  std::string input, pose, output, report, organs, cage, posedCage, posedMesh, plots;
+  std::string input, pose, output, report, organs, parts, cage, posedCage, posedMesh, plots;
   double flagPercent = kDefaultFlagPercent;
   std::vector<std::string> separations;
   double dilationMm = 20.0;
@@ -89,6 +89,10 @@ void deform(const DeformOptions& o) {
   const GridGeometry frame = openGridSlices(o.input)->geometry();
   request.pose = poseInGridFrame(readPose(o.pose), frame, o.pose);
   if (!o.organs.empty()) request.organs = OrganTable::read(o.organs);
+  request.organsSource = o.organs;
+  request.parts = o.parts;
+  if (!o.parts.empty() && openGridSlices(o.parts)->geometry().dims != frame.dims)
+    throw InputError(o.parts, "has other dims than the grid " + o.input);
   for (const std::string& text : o.separations) {
     request.extraSeparations.push_back(parseSeparation(text));
     regionInGridFrame(request.extraSeparations.back().region, frame, "--separate " + text);
@@ -131,7 +135,10 @@ void addDeformCommand(CLI::App& app) {
   cmd->add_option("--plots", o->plots, "Also draw the distortion and organ volume-change histograms (thesis Figure 3.19) as PNG");
   cmd->add_option("--flag", o->flagPercent, "Flag organs whose volume changes by more than this, % (default 2)")
       ->check(numberIn(0, 1000, "%"));
-  cmd->add_option("--organs", o->organs, "Organ table (ID name tissue density): masses, and label groups for limb separation");
+  cmd->add_option("--organs", o->organs, "Organ table (ID name tissue density): masses, label groups for limb separation, the bones "
+                                         "of a joint pose");
+  cmd->add_option("--parts", o->parts, "Body-part grid (voxmorph parts, corrected) to use for a joint pose instead of the assignment "
+                                       "from the bones (same dims as the grid)");
   auto* cage = cmd->add_option("--cage", o->cage, "Use this cage (.obj .off .ply; closed, outward, no self-intersections)");
   cmd->add_option("--separate", o->separations,
                   "Separate two label groups in the cage and the transfer mesh, optionally inside a box in mm: right_arm:trunk "

@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   vox::app::addRenderCommand(app);
   vox::app::addCageCommand(app);
   vox::app::addDeformCommand(app);
+  vox::app::addPartsCommand(app);
   vox::app::addViewCommand(app);
   try {
     app.parse(argc, argv);

@@ -24,6 +24,7 @@
 #include "geometry/render/raycast_reference.h"
 #include "geometry/render/raycast_scene.h"
 #include "geometry/render/rest_transfer_mesh.h"
+#include "geometry/skeleton/joint_pose.h"
 #include "gpu/context.h"
 #include "gpu/kernels/raycast.h"
 
@@ -52,6 +53,7 @@ struct RenderOptions {
   std::string organs;
   std::string pose;
   std::int64_t maxMemoryMb = 0;  // 0: the machine's memory
+  std::string parts;
   bool cpu = false;
   bool verify = false;
   bool legend = false;
@@ -89,11 +91,21 @@ void render(const RenderOptions& o) {
   CuttingPlanes cuts;
   for (const std::string& c : o.cuts) cuts.add(c);
 
+  std::optional<OrganTable> organs;
+  if (!o.organs.empty()) organs = OrganTable::read(o.organs);
+  std::optional<Pose> worldPose;
+  if (!o.pose.empty()) {
+    worldPose = readPose(o.pose);
+    const bool skeletal = !worldPose->joints.empty() || usesBodyParts(*worldPose) || !o.parts.empty();
+    if (skeletal && !organs)
+      throw InputError(o.pose, "a pose with joints or body parts needs the grid's organ table (--organs) to find the bones");
+    if (skeletal) skeleton::requireBones(*organs, o.organs);
+  } else if (!o.parts.empty()) {
+    throw UsageError("--parts", "needs a --pose");
+  }
   checkGridFitsMemory(o.input, o.maxMemoryMb, o.pose.empty() ? kRenderMemory : kPosedMemory,
                       o.pose.empty() ? "render" : "render the pose", "rendering needs the whole grid in memory");
   const LabelGrid grid = readGrid(o.input);
-  std::optional<OrganTable> organs;
-  if (!o.organs.empty()) organs = OrganTable::read(o.organs);
   Palette palette = organs ? Palette::fromOrgans(*organs, grid.maxLabel()) : Palette(grid.maxLabel());
   if (!o.hide.empty()) palette.hide(o.hide, organs ? &*organs : nullptr);
   const LabelStats stats = computeLabelStats(grid);
@@ -108,8 +120,10 @@ void render(const RenderOptions& o) {
     restMesh = boxTransferMesh(grid, o.input);
     posed = restMesh.positions;
   } else {
-    const Pose pose = poseInGridFrame(readPose(o.pose), grid.geometry(), o.pose);
-    PipelineOptions options = poseOptions(pose, o.pose, organs);
+    const Pose pose = poseInGridFrame(*worldPose, grid.geometry(), o.pose);
+    std::optional<LabelGrid> userParts;
+    if (!o.parts.empty()) userParts = readGrid(o.parts);
+    PipelineOptions options = skeleton::skeletalPoseOptions(pose, o.pose, grid, organs, {o.input, o.organs, o.parts}, std::move(userParts));
     options.envelope = false;
     DeformationPipeline pipeline(grid, options);
     warnForegroundOutside(pipeline.stats().foregroundOutsideCage, !options.cage.separations.empty());
@@ -179,7 +193,9 @@ void addRenderCommand(CLI::App& app) {
       ->allow_extra_args(false);
   cmd->add_option("--hide", o->hide, "Labels to hide: \"5,7,10-20\", or organ-name substrings with --organs (\"skin,adipose\")");
   cmd->add_option("--organs", o->organs, "Organ table (ID name tissue density): colours by organ name");
-  cmd->add_option("--pose", o->pose, "Pose file (JSON, docs/POSES.md): render the grid posed through its transfer mesh");
+  cmd->add_option("--pose", o->pose, "Pose file (JSON, docs/POSES.md): render the grid posed through its transfer mesh (a pose with "
+                                     "joints needs --organs)");
+  cmd->add_option("--parts", o->parts, "Body-part grid (voxmorph parts) for a joint pose instead of the assignment from the bones");
   cmd->add_option("--max-memory", o->maxMemoryMb,
                   "Refuse a grid whose in-core work exceeds this budget (MB; default the machine's memory)")
       ->check(integerIn(64, std::int64_t(1) << 30, "MB"));

@@ -16,9 +16,10 @@ void addSynthCommand(CLI::App& app) {
   };
   auto o = std::make_shared<Options>();
   CLI::App* cmd = app.add_subcommand("synth", "Write a synthetic label grid");
-  cmd->add_option("kind", o->kind, "spheres (3 nested materials) | junctions (1- and 0-junctions) | stick (arms touch the trunk)")
+  cmd->add_option("kind", o->kind, "spheres (3 nested materials) | junctions (1- and 0-junctions) | stick (arms touch the trunk) | "
+                                  "skeleton (the stick with named bones: body parts and joints)")
       ->required()
-      ->check(CLI::IsMember({"spheres", "junctions", "stick"}));
+      ->check(CLI::IsMember({"spheres", "junctions", "stick", "skeleton"}));
   cmd->add_option("-o,--output", o->output, "Output grid (.nii.gz, .mha, .nrrd, .inr ...)")->required();
   cmd->add_option("--size", o->size, "Voxels along the longest axis")->check(integerIn(8, 4096));
   cmd->add_option("--organs", o->organs, "Also write an organ table naming the labels");

@@ -13,6 +13,28 @@
 
 namespace vox {
 
+std::vector<std::string> organNameWords(const std::string& name) {
+  std::vector<std::string> words;
+  std::string w;
+  for (const unsigned char c : name) {
+    if (std::isalpha(c)) {
+      w += char(std::tolower(c));
+    } else if (!w.empty()) {
+      words.push_back(std::move(w));
+      w.clear();
+    }
+  }
+  if (!w.empty()) words.push_back(std::move(w));
+  return words;
+}
+
+bool anyWordStartsWith(const std::vector<std::string>& words, std::initializer_list<const char*> prefixes) {
+  for (const std::string& w : words)
+    for (const char* p : prefixes)
+      if (w.rfind(p, 0) == 0) return true;
+  return false;
+}
+
 std::vector<int> OrganTable::unnamedLabels(const std::vector<std::uint64_t>& counts) const {
   std::vector<int> unnamed;
   for (std::size_t l = 1; l < counts.size(); ++l)

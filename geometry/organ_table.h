@@ -7,6 +7,7 @@
 #include "geometry/label_grid.h"
 
 #include <cstdint>
+#include <initializer_list>
 #include <map>
 #include <string>
 #include <vector>
@@ -21,6 +22,13 @@ struct Organ {
 };
 
 class OrganTable;
+
+// The lowercase alphabetic words of an organ name ("Humeri, upper half,
+// cortical" -> humeri, upper, half, cortical): what name classifications
+// (label groups, bones) match.
+std::vector<std::string> organNameWords(const std::string& name);
+// True when a word starts with one of the prefixes.
+bool anyWordStartsWith(const std::vector<std::string>& words, std::initializer_list<const char*> prefixes);
 
 // "labels without a name in the organ table: 141 (3,880 voxels); their mass
 // is left out of the totals", or "" when every label has a name.

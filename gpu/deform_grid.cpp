@@ -10,6 +10,7 @@
 #include "geometry/io/grid_io.h"
 #include "geometry/io/mesh_io.h"
 #include "geometry/label_stats.h"
+#include "geometry/skeleton/joint_pose.h"
 #include "geometry/world_frame.h"
 #include "gpu/context.h"
 #include "gpu/kernels/field_interpolation.h"
@@ -123,8 +124,23 @@ void warn(const DeformGridRequest& o, const std::string& message) {
   if (o.warn) o.warn(message);
 }
 
-PipelineOptions pipelineOptions(const DeformGridRequest& o) {
-  PipelineOptions options = poseOptions(o.pose, o.poseSource, o.organs);
+// The pipeline's options on the working grid: a pose with joints (or
+// selections by body part, or a user's parts grid) compiled against the
+// skeleton, the cage options and the extra separations.
+PipelineOptions pipelineOptions(const DeformGridRequest& o, const Source& source) {
+  std::optional<LabelGrid> userParts;
+  if (!o.parts.empty()) {
+    LabelGrid parts = readGrid(o.parts);
+    if (parts.dims() != source.geometry().dims)
+      throw InputError(o.parts, "has other dims than the grid " + o.input);
+    if (source.factor > 1) {
+      LabelGridSlices slices(parts);
+      parts = downsampleLabels(slices, source.factor);
+    }
+    userParts = std::move(parts);
+  }
+  PipelineOptions options = skeleton::skeletalPoseOptions(o.pose, o.poseSource, source.workingGrid(), o.organs,
+                                                          {o.input, o.organsSource, o.parts}, std::move(userParts));
   options.cage.dilationMm = o.dilationMm;
   options.cage.targetVertices = o.vertices;
   for (const LimbSeparation& s : o.extraSeparations) {
@@ -149,12 +165,14 @@ void checkDeformGridRequest(const DeformGridRequest& o) {
     throw InputError(o.poseSource, "limb separation needs the grid's organ table (--organs) to find the label groups");
   if (usesLabelGroups(o.pose) && !o.organs)
     throw InputError(o.poseSource, "a selection by label group needs the grid's organ table (--organs)");
+  const bool skeletal = !o.pose.joints.empty() || usesBodyParts(o.pose) || !o.parts.empty();
+  if (skeletal && !o.organs)
+    throw InputError(o.poseSource, "a pose with joints or body parts needs the grid's organ table (--organs) to find the bones");
+  if (skeletal) skeleton::requireBones(*o.organs, o.organsSource);
 }
 
 DeformationReport deformGrid(const DeformGridRequest& o) {
   checkDeformGridRequest(o);
-  const PipelineOptions options = pipelineOptions(o);
-  const bool separated = !options.cage.separations.empty();
 
   Engine engine;
   if (!o.cpu) {
@@ -173,12 +191,16 @@ DeformationReport deformGrid(const DeformGridRequest& o) {
   report.pose = o.poseSource;
   report.samples = o.samples;
   report.maxMemoryBytes = o.maxMemoryMb << 20;
-  report.withMasses = options.organs.has_value();
+  report.withMasses = o.organs.has_value();
   report.provenance = o.provenance;
 
   StageTimer readTimer("read source");
   Source source = openSource(o);
   report.stages.push_back(readTimer.stop());
+  StageTimer skeletonTimer("skeleton");
+  const PipelineOptions options = pipelineOptions(o, source);
+  if (options.bodyParts) report.stages.push_back(skeletonTimer.stop());
+  const bool separated = !options.cage.separations.empty();
   report.source = source.geometry();
   report.restProjection = source.grid ? bodyProjection(*source.grid) : source.outOfCore->bodyProjection();
   report.workingFactor = source.factor;

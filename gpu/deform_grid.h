@@ -2,6 +2,7 @@
 // deformGrid: re-poses a label grid file and writes the posed full-resolution
 // grid (thesis chapters 3 and 4), as `voxmorph deform` and the viewer's export
 // both run it:
+//   a pose with joints compiled against the skeleton (skeleton/joint_pose.h) ->
 //   pre-process (label groups, envelope, cage, transfer mesh, embedding) ->
 //   deformation (ARAP -> Green coordinates -> propagation) ->
 //   deformation-adaptive refinement (eq. 4.5-4.7; field interpolation on the
@@ -35,6 +36,10 @@ struct DeformGridRequest {
   Pose pose;                        // in the grid frame (poseInGridFrame)
   std::string poseSource = "pose";  // names the pose in errors and the report
   std::optional<OrganTable> organs;
+  std::string organsSource = "organ table";      // names the organ table in errors
+  // A body-part grid (skeleton/body_parts.h values, the input's dims) to use
+  // instead of the assignment from the bones; "" for none.
+  std::string parts;
   std::vector<LimbSeparation> extraSeparations;  // beside the pose's own
   std::optional<TriMesh> cage;                   // instead of the automatic cage (grid frame)
   double dilationMm = 20.0;
@@ -54,8 +59,9 @@ struct DeformGridRequest {
 };
 
 // Checks what can be checked cheaply (options that exclude each other, output
-// extensions, separations and label groups without an organ table): throws
-// InputError naming the file or option.
+// extensions, separations and label groups without an organ table, joints
+// without one or with one that names no bones): throws InputError naming
+// the file or option.
 void checkDeformGridRequest(const DeformGridRequest& request);
 
 // Runs the whole deformation and writes request.output (and the optional

@@ -16,28 +16,6 @@ namespace {
 
 constexpr std::array<const char*, kBodyPartCount> kNames = {"trunk", "head", "right_arm", "left_arm", "right_leg", "left_leg"};
 
-std::vector<std::string> lowerWords(const std::string& s) {
-  std::vector<std::string> words;
-  std::string w;
-  for (const unsigned char c : s) {
-    if (std::isalpha(c)) {
-      w += char(std::tolower(c));
-    } else if (!w.empty()) {
-      words.push_back(std::move(w));
-      w.clear();
-    }
-  }
-  if (!w.empty()) words.push_back(std::move(w));
-  return words;
-}
-
-bool anyWordStartsWith(const std::vector<std::string>& words, std::initializer_list<const char*> prefixes) {
-  for (const std::string& w : words)
-    for (const char* p : prefixes)
-      if (w.rfind(p, 0) == 0) return true;
-  return false;
-}
-
 BodyPart limbPart(Limb limb, BodySide side) {
   if (limb == Limb::Arm) return side == BodySide::Left ? BodyPart::LeftArm : BodyPart::RightArm;
   return side == BodySide::Left ? BodyPart::LeftLeg : BodyPart::RightLeg;
@@ -110,7 +88,7 @@ BodyPart bodyPartFromName(const std::string& name, const std::string& source) {
 }
 
 OrganBodyPart classifyOrganName(const std::string& name) {
-  const std::vector<std::string> words = lowerWords(name);
+  const std::vector<std::string> words = organNameWords(name);
   OrganBodyPart part;
   if (anyWordStartsWith(words, {"arm", "humer", "uln", "radi", "wrist", "hand"})) part.limb = Limb::Arm;
   else if (anyWordStartsWith(words, {"leg", "femor", "femur", "tibi", "fibul", "patell", "ankle", "foot", "feet"}))

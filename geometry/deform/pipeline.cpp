@@ -8,6 +8,7 @@
 #include "geometry/error.h"
 #include "geometry/label_stats.h"
 #include "geometry/parallel.h"
+#include "geometry/skeleton/body_parts.h"
 
 #include <algorithm>
 #include <cmath>
@@ -84,18 +85,28 @@ PosedGridMeasures writePosedGrid(SlabRasterizer& engine, const std::string& path
 DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOptions& options) : options_(options) {
   const std::vector<LimbSeparation>& separations = options_.cage.separations;
   const bool groupSelections = options_.pose && usesLabelGroups(*options_.pose);
-  LabelGrid bodyParts;  // S, for selections by label group
+  const bool withGroups = options_.organs || options_.bodyParts;
+  if (options_.bodyParts && options_.bodyParts->dims() != grid.dims())
+    throw InputError("body parts", "the body-part grid's dims differ from the grid's");
+  if (options_.pose && !options_.pose->joints.empty())
+    throw InputError(options_.poseSource, "a pose with joints is compiled against the grid's skeleton first (voxmorph deform and render do; the viewer does not yet)");
+  // S from the body parts when given, else from the organ names.
+  const auto labelGroups = [&] {
+    return options_.bodyParts && (options_.groupsFromParts || !options_.organs) ? skeleton::labelGroupsOfParts(*options_.bodyParts)
+                                                                                : labelGroupGrid(grid, *options_.organs);
+  };
+  LabelGrid selectionGroups;  // S, for selections by label group
   {
     StageTimer timer("label groups");
-    if (groupSelections && !options_.organs)
+    if (groupSelections && !withGroups)
       throw InputError(options_.poseSource, "a selection by label group needs the grid's organ table (--organs)");
     if (separations.empty()) {
       groups_ = binaryGroupGrid(grid);
-      if (options_.organs) bodyParts = labelGroupGrid(grid, *options_.organs);
+      if (withGroups) selectionGroups = labelGroups();
     } else {
-      if (!options_.organs)
+      if (!withGroups)
         throw InputError("separation", "limb separation needs the grid's organ table (--organs) to find the label groups");
-      groups_ = labelGroupGrid(grid, *options_.organs);
+      groups_ = labelGroups();
       std::vector<std::int64_t> count(kBodyPartCount + 1, 0);
       for (const Label l : groups_.labels()) ++count[l];
       std::set<Label> named;
@@ -134,8 +145,9 @@ DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOp
   cage_ = builtCage_;
   // With an organ table every cage vertex knows its nearest label group, so
   // any later pose may select by group.
-  if (options_.organs) cageGroups_ = nearestGroups(builtCage_.positions, separations.empty() ? bodyParts : groups_);
-  if (options_.pose) selectHandles(*options_.pose, builtCage_, options_.poseSource, cageGroups_);
+  if (withGroups) cageGroups_ = nearestGroups(builtCage_.positions, separations.empty() ? selectionGroups : groups_);
+  if (options_.bodyParts) cageBodyParts_ = nearestGroups(builtCage_.positions, *options_.bodyParts);
+  if (options_.pose) selectHandles(*options_.pose, builtCage_, options_.poseSource, cageGroups_, cageBodyParts_);
   if (options_.envelope) {
     StageTimer timer("envelope");
     envelope_ = extractEnvelope(groups_, options_.envelopeOptions);
@@ -300,9 +312,11 @@ std::vector<std::uint8_t> DeformationPipeline::acrossSeparation() const {
 
 void DeformationPipeline::setPose(const Pose& pose, const std::string& source) {
   StageTimer timer("embedding");
-  if (usesLabelGroups(pose) && !options_.organs)
+  if (usesLabelGroups(pose) && !options_.organs && !options_.bodyParts)
     throw InputError(source, "a selection by label group needs the grid's organ table (--organs)");
-  PoseHandles handles = selectHandles(pose, builtCage_, source, cageGroups_);
+  if (!pose.joints.empty())
+    throw InputError(source, "a pose with joints is compiled against the grid's skeleton first (voxmorph deform and render do; the viewer does not yet)");
+  PoseHandles handles = selectHandles(pose, builtCage_, source, cageGroups_, cageBodyParts_);
   // Only the parts of the cage that hold a handle take part.
   const std::vector<std::int32_t> parts = cageParts(builtCage_);
   std::vector<std::uint8_t> held(builtCage_.vertexCount(), 0);

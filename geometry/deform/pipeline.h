@@ -11,8 +11,9 @@
 //
 // Pre-processing, on the working grid G (the source, or its block-downsampled
 // copy for grids larger than the working budget, see kDefaultWorkingVoxels):
-//  - label groups: S from the organ names (label_groups.h) when separations
-//    are requested, else the binary grid B;
+//  - label groups: S from the organ names (label_groups.h), or from the body
+//    parts when given (a joint pose), when separations are requested, else
+//    the binary grid B;
 //  - cage: automatic from S (inset where separations are requested), or the
 //    caller's (validated); foreground voxels outside it are counted;
 //  - envelope of B (optional: only the interactive display needs it);
@@ -78,8 +79,16 @@ double processCpuSeconds();
 
 struct PipelineOptions {
   // Organ table of the grid: label groups for limb separation. Required when
-  // cage.separations is not empty.
+  // cage.separations is not empty (unless bodyParts is given).
   std::optional<OrganTable> organs;
+  // Body parts of the grid (skeleton/body_parts.h, same dims): selections by
+  // body part take the cage vertices nearest each part, and the label groups
+  // (separations, selections by group) are those the parts form
+  // (skeleton::labelGroupsOfParts) instead of those the organ names give.
+  std::optional<LabelGrid> bodyParts;
+  // With bodyParts and an organ table: false takes the label groups from the
+  // organ names all the same (a joint pose's "joint_options": {"groups": "organs"}).
+  bool groupsFromParts = true;
   // Automatic cage; its separations (groups are BodyPart values) also cut
   // the transfer mesh.
   CageOptions cage;
@@ -166,6 +175,8 @@ public:
   const std::vector<std::int32_t>& cageSource() const { return cageSource_; }
   // Per builtCage() vertex: the label group nearest it (empty without groups).
   const std::vector<Label>& cageGroups() const { return cageGroups_; }
+  // Per builtCage() vertex: the body part nearest it (empty without body parts).
+  const std::vector<Label>& cageBodyParts() const { return cageBodyParts_; }
   const Pose& pose() const { return pose_; }
   const PoseHandles& handles() const { return handles_; }
   // Vertices of the built cage left out because their part has no handle.
@@ -181,6 +192,7 @@ private:
 
   PipelineOptions options_;
   std::vector<Label> cageGroups_;          // per built-cage vertex: nearest label group (selections by group)
+  std::vector<Label> cageBodyParts_;       // per built-cage vertex: nearest body part (selections by body part)
   std::vector<std::int32_t> cageSource_;  // per cage_ vertex: its built-cage vertex
   LabelGrid groups_, meshGroups_;  // meshGroups_: S reduced to the separated groups (empty without separations)
   TriMesh builtCage_, cage_, envelope_;

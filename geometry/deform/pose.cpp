@@ -4,6 +4,8 @@
 #include "geometry/deform/label_groups.h"
 #include "geometry/error.h"
 #include "geometry/io/atomic_file.h"
+#include "geometry/skeleton/body_parts.h"
+#include "geometry/skeleton/joints.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -34,7 +36,7 @@ public:
       fail(std::string("invalid JSON: ") + e.what());
     }
     requireObject(root, "the pose");
-    allowKeys(root, "the pose", {"name", "frame", "arap_iterations", "selections", "separations"});
+    allowKeys(root, "the pose", {"name", "frame", "arap_iterations", "selections", "separations", "joints", "joint_options"});
     Pose pose;
     if (root.contains("name")) pose.name = text(root["name"], "'name'");
     if (root.contains("frame")) {
@@ -48,10 +50,14 @@ public:
         fail("'arap_iterations' must be an integer between 0 and 100000");
       pose.arapIterations = it.get<int>();
     }
-    if (!root.contains("selections")) fail("missing 'selections'");
-    const json& selections = root["selections"];
-    if (!selections.is_array() || selections.empty()) fail("'selections' must be a non-empty array");
-    for (std::size_t k = 0; k < selections.size(); ++k) pose.selections.push_back(selection(selections[k], k));
+    if (root.contains("joints")) pose.joints = joints(root["joints"]);
+    if (root.contains("joint_options")) pose.jointOptions = jointOptions(root["joint_options"]);
+    if (!root.contains("selections") && pose.joints.empty()) fail("missing 'selections' (or 'joints')");
+    if (root.contains("selections")) {
+      const json& selections = root["selections"];
+      if (!selections.is_array() || (selections.empty() && pose.joints.empty())) fail("'selections' must be a non-empty array");
+      for (std::size_t k = 0; k < selections.size(); ++k) pose.selections.push_back(selection(selections[k], k));
+    }
     if (root.contains("separations")) {
       const json& separations = root["separations"];
       if (!separations.is_array()) fail("'separations' must be an array");
@@ -98,10 +104,23 @@ private:
     PoseSelection s;
     s.name = j.contains("name") ? text(j["name"], fallback + " 'name'") : fallback;
     const std::string what = "selection '" + s.name + "'";
-    allowKeys(j, what, {"name", "box", "sphere", "points", "part", "group", "fixed", "transform"});
-    if (int(j.contains("box")) + int(j.contains("sphere")) + int(j.contains("points")) != 1)
-      fail(what + " needs exactly one of 'box', 'sphere' and 'points'");
-    if (j.contains("points")) {
+    allowKeys(j, what, {"name", "box", "sphere", "points", "part", "group", "body_parts", "fixed", "transform"});
+    if (j.contains("body_parts")) {
+      const json& parts = j["body_parts"];
+      if (!parts.is_array() || parts.empty()) fail(what + " 'body_parts' must be a non-empty array of body part names");
+      for (const json& p : parts) {
+        const std::string name = text(p, what + " 'body_parts'");
+        const auto part = skeleton::partFromName(name);
+        if (!part) fail(what + " names an unknown body part '" + name + "' (expected one of " + skeleton::partNames() + ")");
+        s.bodyParts.push_back(Label(*part));
+      }
+    }
+    const int shapes = int(j.contains("box")) + int(j.contains("sphere")) + int(j.contains("points"));
+    if (shapes > 1 || (shapes == 0 && s.bodyParts.empty()))
+      fail(what + " needs exactly one of 'box', 'sphere' and 'points' (or 'body_parts' alone)");
+    if (shapes == 0) {
+      s.shape = SelectionShape::Everywhere;
+    } else if (j.contains("points")) {
       const json& points = j["points"];
       if (!points.is_array() || points.empty()) fail(what + " 'points' must be a non-empty array of [x, y, z]");
       s.shape = SelectionShape::Points;
@@ -149,6 +168,72 @@ private:
     return s;
   }
 
+  PoseJointOptions jointOptions(const json& j) const {
+    requireObject(j, "'joint_options'");
+    allowKeys(j, "'joint_options'", {"zone", "margin_mm", "groups"});
+    PoseJointOptions o;
+    if (j.contains("zone")) {
+      o.zone = text(j["zone"], "'joint_options' 'zone'");
+      if (*o.zone != "parent" && *o.zone != "free" && *o.zone != "child")
+        fail("'joint_options' 'zone' must be \"parent\", \"free\" or \"child\", not '" + *o.zone + "'");
+    }
+    if (j.contains("margin_mm")) {
+      o.marginMm = number(j["margin_mm"], "'joint_options' 'margin_mm'");
+      if (*o.marginMm < 0 || *o.marginMm > 1000) fail("'joint_options' 'margin_mm' must be between 0 and 1000");
+    }
+    if (j.contains("groups")) {
+      o.groups = text(j["groups"], "'joint_options' 'groups'");
+      if (*o.groups != "parts" && *o.groups != "organs") fail("'joint_options' 'groups' must be \"parts\" or \"organs\", not '" + *o.groups + "'");
+    }
+    return o;
+  }
+
+  std::vector<PoseJoint> joints(const json& j) const {
+    if (!j.is_object()) fail("'joints' must be an object of joint names");
+    std::vector<PoseJoint> out;
+    std::set<skeleton::JointId> seen;
+    for (const auto& [key, value] : j.items()) {
+      const auto id = skeleton::jointFromName(key);
+      if (!id) fail("unknown joint '" + key + "' (expected one of " + skeleton::jointNames() + ")");
+      if (!seen.insert(*id).second) fail("joint '" + key + "' is given twice");
+      const skeleton::JointKind& kind = skeleton::jointKind(*id);
+      const std::string what = std::string("joint '") + kind.name + "'";
+      if (!value.is_object()) fail(what + " must be an object of angles in degrees");
+      PoseJoint joint;
+      joint.name = kind.name;
+      for (const auto& [dofKey, dofValue] : value.items()) {
+        if (dofKey == "center") {
+          joint.center = vector3(dofValue, what + " 'center'");
+          continue;
+        }
+        if (dofKey == "axis") {
+          const Eigen::Vector3d axis = vector3(dofValue, what + " 'axis'");
+          if (!(axis.norm() > 0)) fail(what + " has a zero 'axis'");
+          joint.axis = axis;
+          continue;
+        }
+        int dof = -1;
+        std::string has;
+        for (int d = 0; d < skeleton::kDofCount; ++d)
+          if (const char* n = kind.dofNames[std::size_t(d)]) {
+            if (dofKey == n) dof = d;
+            has += std::string(has.empty() ? "" : ", ") + n;
+          }
+        if (dof < 0) fail(what + " has no '" + dofKey + "' (it has " + has + ", and 'center' and 'axis')");
+        const double degrees = number(dofValue, what + " " + dofKey);
+        const auto& range = kind.range[std::size_t(dof)];
+        if (degrees < range[0] || degrees > range[1]) {
+          std::ostringstream m;
+          m << what << " " << dofKey << " " << degrees << " is outside its range [" << range[0] << ", " << range[1] << "] degrees";
+          fail(m.str());
+        }
+        joint.degrees[std::size_t(dof)] = degrees;
+      }
+      out.push_back(std::move(joint));
+    }
+    return out;
+  }
+
   std::optional<Eigen::AlignedBox3d> region(const json& j, const char* key, const std::string& what) const {
     if (!j.contains(key)) return std::nullopt;
     const json& region = j[key];
@@ -192,6 +277,7 @@ Eigen::Vector3d PoseTransform::apply(const Eigen::Vector3d& x, double fraction) 
 }
 
 bool PoseSelection::contains(const Eigen::Vector3d& p) const {
+  if (shape == SelectionShape::Everywhere) return true;
   if (shape == SelectionShape::Points) return std::find(points.begin(), points.end(), p) != points.end();
   if (shape == SelectionShape::Box) return (p.array() >= boxMin.array()).all() && (p.array() <= boxMax.array()).all();
   return (p - center).squaredNorm() <= radius * radius;
@@ -221,10 +307,16 @@ std::string poseToJson(const Pose& pose) {
       json points = json::array();
       for (const Eigen::Vector3d& q : s.points) points.push_back(toJson(q));
       j["points"] = points;
-    } else if (s.shape == SelectionShape::Box)
+    } else if (s.shape == SelectionShape::Box) {
       j["box"] = {{"min", toJson(s.boxMin)}, {"max", toJson(s.boxMax)}};
-    else
+    } else if (s.shape == SelectionShape::Sphere) {
       j["sphere"] = {{"center", toJson(s.center)}, {"radius", s.radius}};
+    }
+    if (!s.bodyParts.empty()) {
+      json parts = json::array();
+      for (const Label p : s.bodyParts) parts.push_back(skeleton::partName(skeleton::Part(p)));
+      j["body_parts"] = parts;
+    }
     if (s.fixed) {
       j["fixed"] = true;
     } else {
@@ -237,6 +329,28 @@ std::string poseToJson(const Pose& pose) {
     selections.push_back(std::move(j));
   }
   root["selections"] = std::move(selections);
+  if (!pose.joints.empty()) {
+    json joints = json::object();
+    for (const PoseJoint& pj : pose.joints) {
+      json j = json::object();
+      const auto id = skeleton::jointFromName(pj.name);
+      for (int d = 0; d < skeleton::kDofCount; ++d)
+        if (const char* n = id ? skeleton::jointKind(*id).dofNames[std::size_t(d)] : nullptr; n && pj.degrees[std::size_t(d)] != 0.0)
+          j[n] = pj.degrees[std::size_t(d)];
+      if (pj.center) j["center"] = toJson(*pj.center);
+      if (pj.axis) j["axis"] = toJson(*pj.axis);
+      joints[pj.name] = std::move(j);
+    }
+    root["joints"] = std::move(joints);
+  }
+  const PoseJointOptions& jo = pose.jointOptions;
+  if (jo.zone || jo.marginMm || jo.groups) {
+    json j = json::object();
+    if (jo.zone) j["zone"] = *jo.zone;
+    if (jo.marginMm) j["margin_mm"] = *jo.marginMm;
+    if (jo.groups) j["groups"] = *jo.groups;
+    root["joint_options"] = std::move(j);
+  }
   if (!pose.separations.empty()) {
     json separations = json::array();
     for (const PoseSeparation& s : pose.separations) {
@@ -264,7 +378,12 @@ bool usesLabelGroups(const Pose& pose) {
   return std::any_of(pose.selections.begin(), pose.selections.end(), [](const PoseSelection& s) { return s.group.has_value(); });
 }
 
-PoseHandles selectHandles(const Pose& pose, const TriMesh& cage, const std::string& source, std::span<const Label> vertexGroups) {
+bool usesBodyParts(const Pose& pose) {
+  return std::any_of(pose.selections.begin(), pose.selections.end(), [](const PoseSelection& s) { return !s.bodyParts.empty(); });
+}
+
+PoseHandles selectHandles(const Pose& pose, const TriMesh& cage, const std::string& source, std::span<const Label> vertexGroups,
+                          std::span<const Label> vertexParts) {
   std::vector<std::int32_t> owner(cage.vertexCount(), -1);
   const std::vector<std::int32_t> parts = cageParts(cage);
   for (std::size_t k = 0; k < pose.selections.size(); ++k) {
@@ -280,8 +399,13 @@ PoseHandles selectHandles(const Pose& pose, const TriMesh& cage, const std::stri
     }
     if (s.group && vertexGroups.size() != cage.vertexCount())
       throw InputError(source, "selection '" + s.name + "' selects by label group, which needs the grid's organ table (--organs)");
+    if (!s.bodyParts.empty() && vertexParts.size() != cage.vertexCount())
+      throw InputError(source, "selection '" + s.name + "' selects by body part, which needs the grid's body parts (a joint pose, or --parts)");
     bool any = false;
-    const auto eligible = [&](std::size_t v) { return (part < 0 || parts[v] == part) && (!s.group || vertexGroups[v] == *s.group); };
+    const auto eligible = [&](std::size_t v) {
+      return (part < 0 || parts[v] == part) && (!s.group || vertexGroups[v] == *s.group) &&
+             (s.bodyParts.empty() || std::find(s.bodyParts.begin(), s.bodyParts.end(), vertexParts[v]) != s.bodyParts.end());
+    };
     if (s.shape == SelectionShape::Points) {
       for (const Eigen::Vector3d& q : s.points) {
         std::int32_t nearest = -1;

@@ -17,10 +17,19 @@
 //         "sphere": {"center": [x, y, z], "radius": r},
 //         "part": [x, y, z],                               optional: only the cage part nearest this point
 //         "group": "right_arm",                            optional: only cage vertices nearest that label group
+//         "body_parts": ["right_upper_arm"],               optional: only cage vertices nearest those body parts
+//                                                          (skeleton/body_parts.h); alone (no box / sphere /
+//                                                          points): every cage vertex nearest them
 //         "transform": {
 //           "rotation": {"axis": [x, y, z], "angle_deg": a, "center": [x, y, z]},   optional
 //           "translation": [x, y, z] } }                                              optional
 //     ],
+//     "joints": {                                      optional: joint angles (degrees), compiled
+//       "right_shoulder": {"abduction": 45,              against the grid's skeleton into selections
+//                          "center": [x, y, z]},         and separations (skeleton/joint_pose.h);
+//       "right_elbow": {"flexion": 120} },               "selections" may then be left out
+//     "joint_options": {"zone": "parent",              optional: how joints compile (PoseJointOptions)
+//                       "margin_mm": 50, "groups": "parts"},
 //     "separations": [                                 optional: limb separation (cage and TM)
 //       { "groups": ["right_arm", "trunk"],            two label groups (label_groups.h names)
 //         "region": {"min": [x, y, z], "max": [x, y, z]},    optional; the whole grid when absent
@@ -42,7 +51,10 @@
 // Errors name the file: unreadable file, invalid JSON, unknown or missing
 // keys, wrong types, non-finite numbers, an empty box, a radius <= 0, a zero
 // rotation axis, and a selection that selects no cage vertex:
-//   "<path>: selection 'right arm' selects no cage vertex".
+//   "<path>: selection 'right arm' selects no cage vertex";
+// for joints: an unknown joint or body-part name, an angle the joint lacks
+// (an elbow has no abduction) or outside its range:
+//   "<path>: joint 'right_elbow' flexion 170 is outside its range [0, 150] degrees".
 // Separations are not handles: they tell the pre-processing which label
 // groups the inset cage and the transfer mesh keep apart (thesis 4.2.1), so
 // that a pose that moves a limb away from the trunk carries the separation
@@ -53,6 +65,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <span>
@@ -72,7 +85,8 @@ struct PoseTransform {
   Eigen::Vector3d apply(const Eigen::Vector3d& x, double fraction = 1.0) const;
 };
 
-enum class SelectionShape { Box, Sphere, Points };
+// Everywhere: no shape, only the restrictions (body parts) select.
+enum class SelectionShape { Box, Sphere, Points, Everywhere };
 
 struct PoseSelection {
   std::string name;
@@ -95,8 +109,25 @@ struct PoseSelection {
   // a box around a hanging arm also holds cage vertices of the hip beside
   // it. Needs the organ table that defines the groups.
   std::optional<Label> group;
+  // Restricts the selection to the cage vertices whose nearest foreground
+  // voxel belongs to one of these body parts (skeleton::Part values,
+  // skeleton/body_parts.h). Needs the body-part grid (a joint pose, or a
+  // user's parts grid).
+  std::vector<Label> bodyParts;
 
   bool contains(const Eigen::Vector3d& p) const;
+};
+
+// A joint of the skeleton turned by anatomical angles (skeleton/joints.h
+// states the axes, signs and ranges), with optional overrides of the joint's
+// estimated centre and left-right (flexion) axis, in the pose's frame.
+struct PoseJoint {
+  std::string name;                      // a joint name of skeleton/joints.h ("right_shoulder")
+  std::array<double, 3> degrees{};       // flexion, abduction (lateral_flexion for neck and head), rotation
+  std::optional<Eigen::Vector3d> center;  // mm
+  std::optional<Eigen::Vector3d> axis;    // any length > 0; oriented to the body's right when used
+
+  bool operator==(const PoseJoint&) const = default;
 };
 
 // A limb separation (cage_builder.h) and where it cuts the transfer mesh.
@@ -111,6 +142,19 @@ struct PoseSeparation {
   LimbSeparation cut() const { return {cage.groupA, cage.groupB, cutRegion ? cutRegion : cage.region}; }
 };
 
+// How a pose's joints are compiled (skeleton/joint_pose.h states the
+// defaults): where the cage vertices near a turned joint go ("parent",
+// "free", "child"), how far down the limb that zone and the separations'
+// cut-off reach, and whether the separations' label groups come from the
+// body parts or the organ names.
+struct PoseJointOptions {
+  std::optional<std::string> zone;
+  std::optional<double> marginMm;
+  std::optional<std::string> groups;  // "parts" or "organs"
+
+  bool operator==(const PoseJointOptions&) const = default;
+};
+
 enum class PoseFrame { World, Grid };
 
 struct Pose {
@@ -119,6 +163,10 @@ struct Pose {
   std::vector<PoseSelection> selections;
   int arapIterations = 10;
   std::vector<PoseSeparation> separations;
+  // Joint angles, in file order; compiled into selections and separations
+  // against the grid's skeleton before the pipeline (skeleton/joint_pose.h).
+  std::vector<PoseJoint> joints;
+  PoseJointOptions jointOptions;
 };
 
 // Throws InputError(source, ...) on any fault listed above.
@@ -142,11 +190,14 @@ std::vector<std::int32_t> cageParts(const TriMesh& cage);
 // a selection whose box or sphere holds no cage vertex (before later
 // selections take any of them over). vertexGroups: per cage vertex, the
 // label group nearest it (nearestGroups), needed by selections with a
-// "group" (InputError(source, ...) without it).
+// "group" (InputError(source, ...) without it); vertexParts: per cage
+// vertex, the body part nearest it, needed by selections with "body_parts".
 PoseHandles selectHandles(const Pose& pose, const TriMesh& cage, const std::string& source,
-                          std::span<const Label> vertexGroups = {});
+                          std::span<const Label> vertexGroups = {}, std::span<const Label> vertexParts = {});
 // True when a selection restricts itself to a label group.
 bool usesLabelGroups(const Pose& pose);
+// True when a selection restricts itself to body parts.
+bool usesBodyParts(const Pose& pose);
 
 // Targets of the handles (#handles by 3, rows in handles.vertices order) for
 // the pose applied by `fraction` in [0, 1]: fixed handles stay at their rest

@@ -18,7 +18,7 @@ constexpr double kDegrees = 3.14159265358979323846 / 180.0;
 
 bool sameShape(const PoseSelection& a, const PoseSelection& b) {
   return a.shape == b.shape && a.boxMin == b.boxMin && a.boxMax == b.boxMax && a.center == b.center && a.radius == b.radius &&
-         a.points == b.points && a.fixed == b.fixed && a.part == b.part && a.group == b.group;
+         a.points == b.points && a.fixed == b.fixed && a.part == b.part && a.group == b.group && a.bodyParts == b.bodyParts;
 }
 
 }  // namespace

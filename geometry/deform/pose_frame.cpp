@@ -57,6 +57,10 @@ Pose poseInGridFrame(const Pose& pose, const GridGeometry& grid, const std::stri
     if (s.cage.region) mapBox(grid, *s.cage.region);
     if (s.cutRegion) mapBox(grid, *s.cutRegion);
   }
+  for (PoseJoint& j : p.joints) {
+    if (j.center) j.center = worldToGrid(grid, *j.center);
+    if (j.axis) j.axis = worldToGrid(grid, *j.axis);
+  }
   p.frame = PoseFrame::Grid;
   return p;
 }

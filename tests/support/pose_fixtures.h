@@ -2,13 +2,15 @@
 // The pose files of assets/poses applied to their ICRP phantom ("am_*" to the
 // adult male, "af_*" to the adult female) as `voxmorph deform` applies them
 // (same cage, separations, cuts and handles; no envelope, which only the
-// display needs, and no refinement), with the CPU reference rasterization of
-// the posed grid. Computed once per process and pose.
+// display needs, and no refinement; joint poses compiled against the
+// phantom's skeleton), with the CPU reference rasterization of the posed
+// grid. Computed once per process and pose.
 
 #include "geometry/deform/pipeline.h"
 #include "geometry/raster/rasterize.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/organ_table.h"
+#include "geometry/skeleton/joint_pose.h"
 #include "tests/support/test_environment.h"
 
 #include <algorithm>
@@ -55,8 +57,7 @@ inline const PosedPhantom& posedPhantom(const std::string& pose) {
   p->source = readGrid(assetPath(p->phantom + ".nii.gz"));
   p->organs = OrganTable::read(assetPath(p->phantom + "_organs.dat"));
   const std::string path = assetPath("poses/" + pose);
-  const Pose parsed = readPose(path);
-  PipelineOptions options = poseOptions(readPose(path), path, p->organs);
+  PipelineOptions options = skeleton::skeletalPoseOptions(readPose(path), path, p->source, p->organs, {}, std::nullopt);
   options.envelope = false;
   DeformationPipeline pipeline(p->source, options);
   pipeline.deform();

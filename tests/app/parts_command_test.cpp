@@ -1,0 +1,151 @@
+// voxmorph parts, and joint poses through deform and render, end to end on
+// the synthetic skeleton figure: the parts grid keeps the input's geometry
+// and the report lists every part and joint; a corrected parts grid is
+// accepted back; a joint pose deforms. Bad input (an organ table without
+// bones, a joint pose without an organ table, an angle out of range, a
+// joint the skeleton lacks, a parts grid of other dims) is a one-line
+// error with exit code 1 and no output file.
+
+#include "geometry/io/grid_io.h"
+#include "tests/support/test_environment.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+
+namespace vox {
+namespace {
+
+std::string voxmorph(const std::string& args) { return test::quote(test::voxmorphBinary()) + " " + args; }
+
+struct Figure {
+  std::string dir, grid, organs;
+};
+
+// Written to `dir` (one per test: test::tempDir() empties it).
+Figure figure(const std::string& dir, const std::string& kind, int size) {
+  Figure f;
+  f.dir = dir;
+  f.grid = f.dir + "/" + kind + ".nii.gz";
+  f.organs = f.dir + "/" + kind + ".dat";
+  const auto r = test::runCommand(voxmorph("synth " + kind + " --size " + std::to_string(size) + " -o " + test::quote(f.grid) +
+                                           " --organs " + test::quote(f.organs)));
+  EXPECT_EQ(r.exitCode, 0) << r.err;
+  return f;
+}
+
+std::string writeFile(const std::string& path, const std::string& text) {
+  std::ofstream(path) << text;
+  return path;
+}
+
+void expectOneLineError(const test::CommandResult& r, const std::string& fault) {
+  EXPECT_EQ(r.exitCode, 1) << r.err;
+  EXPECT_NE(r.err.find(fault), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << r.err;
+}
+
+TEST(PartsCommand, WritesThePartsGridAndReport) {
+  VOX_REQUIRE_VOXMORPH();
+  const Figure f = figure(test::tempDir(), "skeleton", 96);
+  const std::string out = f.dir + "/parts.nii.gz", report = f.dir + "/parts.json";
+  const auto r = test::runCommand(voxmorph("parts " + test::quote(f.grid) + " --organs " + test::quote(f.organs) + " -o " + test::quote(out) +
+                                           " --report " + test::quote(report) + " -q"));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const LabelGrid in = readGrid(f.grid), parts = readGrid(out);
+  EXPECT_EQ(parts.dims(), in.dims());
+  EXPECT_EQ(parts.spacing(), in.spacing());
+  EXPECT_EQ(parts.origin(), in.origin());
+  std::int64_t foreground = 0;
+  for (std::size_t v = 0; v < in.labels().size(); ++v) {
+    foreground += in.labels()[v] != 0;
+    ASSERT_EQ(in.labels()[v] != 0, parts.labels()[v] != 0) << v;
+    ASSERT_LE(parts.labels()[v], 16);
+  }
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(report));
+  ASSERT_EQ(j["parts"].size(), 16u);
+  std::int64_t sum = 0;
+  for (const auto& p : j["parts"]) {
+    sum += p["voxels"].get<std::int64_t>();
+    EXPECT_GT(p["voxels"].get<std::int64_t>(), 0) << p["name"];
+    EXPECT_FALSE(p["bones"].empty()) << p["name"];
+  }
+  EXPECT_EQ(sum, foreground);
+  ASSERT_EQ(j["joints"].size(), 14u);
+  EXPECT_EQ(j["joints"][2]["name"], "right_shoulder");
+  EXPECT_EQ(j["joints"][2]["center_mm"].size(), 3u);
+  EXPECT_EQ(j["joints"][2]["degrees_of_freedom"]["abduction"]["range_deg"][1], 180.0);
+
+  // The grid passed back (a user's corrections) is taken as it is.
+  const std::string again = f.dir + "/again.nii.gz";
+  const auto back = test::runCommand(voxmorph("parts " + test::quote(f.grid) + " --organs " + test::quote(f.organs) + " --parts " +
+                                              test::quote(out) + " -o " + test::quote(again) + " -q"));
+  ASSERT_EQ(back.exitCode, 0) << back.err;
+  EXPECT_EQ(readGrid(again).labels(), parts.labels());
+}
+
+TEST(PartsCommand, JointPoseDeformsAndRenders) {
+  VOX_REQUIRE_VOXMORPH();
+  const Figure f = figure(test::tempDir(), "skeleton", 96);
+  const std::string pose = writeFile(f.dir + "/pose.json", R"({"joints": {"right_shoulder": {"abduction": 30}, "right_elbow": {"flexion": 40}}})");
+  const std::string out = f.dir + "/posed.nii.gz", report = f.dir + "/report.json";
+  const auto r = test::runCommand(voxmorph("deform " + test::quote(f.grid) + " --organs " + test::quote(f.organs) + " --pose " + test::quote(pose) +
+                                           " -o " + test::quote(out) + " --report " + test::quote(report) + " --cpu -q"));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(report));
+  std::vector<std::string> names;
+  for (const auto& s : j["selections"]) names.push_back(s["name"]);
+  ASSERT_GE(names.size(), 3u);
+  EXPECT_EQ(names[0], "body parts at rest");
+  EXPECT_NE(std::find(names.begin(), names.end(), "right_elbow: right_forearm, right_hand"), names.end());
+  EXPECT_TRUE(std::filesystem::exists(out));
+  const std::string image = f.dir + "/posed.png";
+  const auto rendered = test::runCommand(voxmorph("render " + test::quote(f.grid) + " --organs " + test::quote(f.organs) + " --pose " +
+                                                  test::quote(pose) + " -o " + test::quote(image) + " --size 80x60 --cpu -q"));
+  EXPECT_EQ(rendered.exitCode, 0) << rendered.err;
+  EXPECT_TRUE(std::filesystem::exists(image));
+}
+
+TEST(PartsCommand, BadInput) {
+  VOX_REQUIRE_VOXMORPH();
+  const std::string dir = test::tempDir();
+  const Figure f = figure(dir, "skeleton", 96);
+  const Figure spheres = figure(dir, "spheres", 16);
+  const Figure stick = figure(dir, "stick", 48);
+  const std::string out = f.dir + "/out.nii.gz";
+  // An organ table that names no bones.
+  expectOneLineError(test::runCommand(voxmorph("parts " + test::quote(spheres.grid) + " --organs " + test::quote(spheres.organs) + " -o " +
+                                               test::quote(out))),
+                     spheres.organs + ": the organ table names no bones");
+  const std::string arm = writeFile(f.dir + "/arm.json", R"({"joints": {"right_shoulder": {"abduction": 30}}})");
+  const std::string deform = "deform " + test::quote(f.grid) + " -o " + test::quote(out) + " --cpu -q --pose ";
+  // A joint pose without the organ table, and with one that names no bones.
+  expectOneLineError(test::runCommand(voxmorph(deform + test::quote(arm))), arm + ": a pose with joints or body parts needs the grid's organ table");
+  expectOneLineError(test::runCommand(voxmorph(deform + test::quote(arm) + " --organs " + test::quote(spheres.organs))),
+                     spheres.organs + ": the organ table names no bones");
+  // An angle out of range; a joint or angle that does not exist.
+  const std::string bent = writeFile(f.dir + "/bent.json", R"({"joints": {"right_elbow": {"flexion": 170}}})");
+  expectOneLineError(test::runCommand(voxmorph(deform + test::quote(bent) + " --organs " + test::quote(f.organs))),
+                     bent + ": joint 'right_elbow' flexion 170 is outside its range [0, 150] degrees");
+  const std::string wing = writeFile(f.dir + "/wing.json", R"({"joints": {"right_wing": {"flexion": 10}}})");
+  expectOneLineError(test::runCommand(voxmorph(deform + test::quote(wing) + " --organs " + test::quote(f.organs))), "unknown joint 'right_wing'");
+  // A joint the skeleton lacks: the stick figure's only bones are its humeri.
+  expectOneLineError(test::runCommand(voxmorph("deform " + test::quote(stick.grid) + " -o " + test::quote(out) + " --cpu -q --pose " +
+                                               test::quote(arm) + " --organs " + test::quote(stick.organs))),
+                     arm + ": the grid's skeleton has no joint 'right_shoulder'");
+  // A parts grid of other dims.
+  expectOneLineError(test::runCommand(voxmorph(deform + test::quote(arm) + " --organs " + test::quote(f.organs) + " --parts " +
+                                               test::quote(spheres.grid))),
+                     spheres.grid + ": has other dims than the grid");
+  // render checks the organ table before reading the grid.
+  expectOneLineError(test::runCommand(voxmorph("render " + test::quote(f.grid) + " --pose " + test::quote(arm) + " -o " +
+                                               test::quote(f.dir + "/x.png") + " --cpu -q")),
+                     "needs the grid's organ table");
+  EXPECT_FALSE(std::filesystem::exists(out));
+  EXPECT_FALSE(std::filesystem::exists(f.dir + "/x.png"));
+}
+
+}  // namespace
+}  // namespace vox
