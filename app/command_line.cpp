@@ -140,13 +140,8 @@ std::int64_t physicalMemoryMb() {
 
 std::int64_t checkGridFitsMemory(const std::string& path, std::int64_t maxMemoryMb, GridMemoryCost cost, const std::string& work,
                                  const std::string& hint) {
-  return checkGridFitsMemory(path, maxMemoryMb, cost.bytesPerVoxel, cost.fixedMb, work, hint);
-}
-
-std::int64_t checkGridFitsMemory(const std::string& path, std::int64_t maxMemoryMb, double bytesPerVoxel,
-                                 std::int64_t fixedMb, const std::string& work, const std::string& hint) {
   const std::int64_t voxels = openGridSlices(path)->geometry().voxelCount();
-  const auto needMb = std::int64_t(std::ceil(double(voxels) * bytesPerVoxel / double(1 << 20))) + fixedMb;
+  const auto needMb = std::int64_t(std::ceil(double(voxels) * cost.bytesPerVoxel / double(1 << 20))) + cost.fixedMb;
   const bool given = maxMemoryMb > 0;
   const std::int64_t budgetMb = given ? maxMemoryMb : physicalMemoryMb();
   if (needMb > budgetMb)

@@ -62,11 +62,6 @@ CLI::Validator integerIn(std::int64_t lo, std::int64_t hi, const std::string& un
 // memory.max).
 std::int64_t physicalMemoryMb();
 
-// Refuses, from the header alone and before `path` is read, a grid whose
-// in-core work needs more than the budget (`maxMemoryMb`, or
-// physicalMemoryMb() when 0): about `bytesPerVoxel` per voxel plus `fixedMb`.
-// Throws InputError(path, "... voxels need about N MB to <work>, over the
-// M MB budget; <hint>"), exit 1. Returns the estimate in MB.
 // In-core work per voxel of the commands that hold a whole grid, with
 // margin over the peak RSS per voxel measured on the ICRP 110 phantoms
 // (docs/RELIABILITY.md, "Memory").
@@ -80,10 +75,13 @@ inline constexpr GridMemoryCost kPosedMemory{64.0, 256};   // render --pose, vie
 inline constexpr GridMemoryCost kDeformMemory{128.0, 128};  // deform in core (without --max-memory)
 inline constexpr GridMemoryCost kMeshGridMemory{4.0, 0};  // mesh: the grid, before the meshing estimate (which has the rest)
 
+// Refuses, from the header alone and before `path` is read, a grid whose
+// in-core work needs more than the budget (`maxMemoryMb`, or
+// physicalMemoryMb() when 0): `cost` per voxel plus its fixed part.
+// Throws InputError(path, "... voxels need about N MB to <work>, over the
+// M MB budget; <hint>"), exit 1. Returns the estimate in MB.
 std::int64_t checkGridFitsMemory(const std::string& path, std::int64_t maxMemoryMb, GridMemoryCost cost, const std::string& work,
                                  const std::string& hint);
-std::int64_t checkGridFitsMemory(const std::string& path, std::int64_t maxMemoryMb, double bytesPerVoxel,
-                                 std::int64_t fixedMb, const std::string& work, const std::string& hint);
 
 // Human-readable number with thousands separators: 7161276 -> "7,161,276".
 std::string withThousands(std::uint64_t n);
