@@ -78,10 +78,9 @@ inline void nameLabels(TetMesh& mesh, const RemeshCliOptions& o, const TetMesh& 
     mesh.labelNames = input.labelNames;
     return;
   }
-  mesh.labelNames.clear();
-  for (std::int32_t l : mesh.labels)
-    if (l > 0 && !mesh.labelNames.count(l))
-      if (const Organ* organ = o.organTable.find(l)) mesh.labelNames[l] = organ->name;
+  std::map<std::int32_t, std::string> names;
+  for (const auto& [id, organ] : o.organTable.organs()) names[id] = organ.name;
+  setLabelNames(mesh, names);
 }
 
 // Prints the run's estimated size and refuses, before any work, a length

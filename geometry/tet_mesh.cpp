@@ -26,6 +26,16 @@ void TetMesh::validate(const std::string& source) const {
   }
 }
 
+void setLabelNames(TetMesh& mesh, const std::map<std::int32_t, std::string>& names) {
+  mesh.labelNames.clear();
+  if (names.empty()) return;
+  std::vector<std::int32_t> held(mesh.labels);
+  std::sort(held.begin(), held.end());
+  held.erase(std::unique(held.begin(), held.end()), held.end());
+  for (const auto& [label, name] : names)
+    if (std::binary_search(held.begin(), held.end(), label)) mesh.labelNames[label] = name;
+}
+
 double signedVolume(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
                     const Eigen::Vector3d& d) {
   return (b - a).cross(c - a).dot(d - a) / 6.0;

@@ -35,6 +35,9 @@ struct TetMesh {
   void validate(const std::string& source) const;
 };
 
+// Sets mesh.labelNames to the entries of `names` whose label the mesh holds.
+void setLabelNames(TetMesh& mesh, const std::map<std::int32_t, std::string>& names);
+
 // Signed volume of (a,b,c,d): positive when d is on the side of (a,b,c)'s
 // counter-clockwise normal, i.e. det(b-a, c-a, d-a) / 6.
 double signedVolume(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,

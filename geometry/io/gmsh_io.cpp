@@ -428,13 +428,7 @@ TetMesh GmshReader::assemble() {
     const auto physical = volumePhysical_.find(r.entity);
     mesh.labels[t] = physical != volumePhysical_.end() ? physical->second : r.entity;
   }
-  if (!volumeNames_.empty()) {
-    std::vector<std::int32_t> present(mesh.labels);
-    std::sort(present.begin(), present.end());
-    present.erase(std::unique(present.begin(), present.end()), present.end());
-    for (const auto& [tag, name] : volumeNames_)
-      if (std::binary_search(present.begin(), present.end(), tag)) mesh.labelNames[tag] = name;
-  }
+  setLabelNames(mesh, volumeNames_);
   mesh.validate(path_);
   return mesh;
 }

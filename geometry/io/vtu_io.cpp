@@ -438,7 +438,7 @@ const tinyxml2::XMLElement* labelArray(const VtuFile& f, const tinyxml2::XMLElem
 // label names and are skipped.
 void readLabelNames(const VtuFile& f, const tinyxml2::XMLElement* fieldData, TetMesh& mesh) {
   if (!fieldData) return;
-  std::vector<std::int32_t> present;
+  std::map<std::int32_t, std::string> names;
   for (const auto* a = fieldData->FirstChildElement("DataArray"); a; a = a->NextSiblingElement("DataArray")) {
     const char* name = a->Attribute("Name");
     const char* type = a->Attribute("type");
@@ -453,13 +453,9 @@ void readLabelNames(const VtuFile& f, const tinyxml2::XMLElement* fieldData, Tet
       continue;  // not a (label, dimension) pair
     }
     if (v[1] != 3 || v[0] < std::numeric_limits<std::int32_t>::min() || v[0] > std::numeric_limits<std::int32_t>::max()) continue;
-    if (present.empty()) {
-      present = mesh.labels;
-      std::sort(present.begin(), present.end());
-      present.erase(std::unique(present.begin(), present.end()), present.end());
-    }
-    if (std::binary_search(present.begin(), present.end(), std::int32_t(v[0]))) mesh.labelNames[std::int32_t(v[0])] = name;
+    names[std::int32_t(v[0])] = name;
   }
+  setLabelNames(mesh, names);
 }
 
 void readPiece(const VtuFile& f, const tinyxml2::XMLElement* piece, TetMesh& mesh) {
