@@ -33,7 +33,7 @@ namespace vox::app {
 namespace {
 
 struct DeformOptions {
-  std::string input, pose, output, report, organs, parts, cage, posedCage, posedMesh, plots;
+  std::string input, pose, output, report, organs, parts, cage, posedCage, posedMesh, plots, collisionMask;
   double flagPercent = kDefaultFlagPercent;
   std::vector<std::string> separations;
   double dilationMm = 20.0;
@@ -43,6 +43,7 @@ struct DeformOptions {
   bool cpu = false;
   bool preserveVolumes = false;
   bool allowGrowth = false;
+  bool rigidBones = false;
   std::int64_t maxTets = RefinementOptions{}.maxTets;
   int refineIterations = RefinementOptions{}.maxIterations;
   bool quiet = false;
@@ -61,6 +62,7 @@ void deform(const DeformOptions& o) {
   checkOutputPath(o.report, OutputKind::Json, "--report");
   checkOutputPath(o.posedCage, OutputKind::Surface, "--posed-cage");
   checkOutputPath(o.posedMesh, OutputKind::TetMesh, "--posed-mesh");
+  checkOutputPath(o.collisionMask, OutputKind::Grid, "--collision-mask");
   checkOutputPath(tablePath(o), OutputKind::Csv, "--report");
   checkOutputPath(o.plots, OutputKind::Png, "--plots");
   if (o.preserveVolumes && o.maxMemoryMb > 0)
@@ -78,10 +80,12 @@ void deform(const DeformOptions& o) {
   request.cpu = o.cpu;
   request.preserveVolumes = o.preserveVolumes;
   request.allowGrowth = o.allowGrowth;
+  request.rigidBones = o.rigidBones;
   request.maxTets = o.maxTets;
   request.refineIterations = o.refineIterations;
   request.posedCage = o.posedCage;
   request.posedMesh = o.posedMesh;
+  request.collisionMask = o.collisionMask;
   request.warn = [](const std::string& message) { std::fprintf(stderr, "voxmorph: warning: %s\n", message.c_str()); };
   // Everything the command can reject cheaply is checked before the work.
   // Poses, cages and --separate boxes are in the world frame (world_frame.h);
@@ -158,9 +162,15 @@ void addDeformCommand(CLI::App& app) {
       ->check(integerIn(256, std::int64_t(1) << 30, "MB"));
   cmd->add_option("--posed-cage", o->posedCage, "Also write the posed cage (.obj .off .ply), to check a pose's handles");
   cmd->add_option("--posed-mesh", o->posedMesh, "Also write the posed transfer mesh (.mesh .vtu .msh)");
+  cmd->add_option("--collision-mask", o->collisionMask,
+                  "With body parts (a joint pose, --parts): also write a grid, 1 where the posed tissue of two body parts overlaps "
+                  "(the posed grid's extent at the working grid's spacing)");
   cmd->add_flag("--preserve-volumes", o->preserveVolumes,
                 "Relabel boundary voxels of the posed grid so that each label keeps the volume the deformation gives it "
                 "(sum of the transfer mesh's Jacobian determinants over its voxels), within about a voxel; in core only");
+  cmd->add_flag("--rigid-bones", o->rigidBones,
+                "With body parts (a joint pose, --parts): hold each part's bones rigid (its forward-kinematics motion, else the rigid fit); "
+                "the tissue between bones turning against each other may fold (docs/POSES.md)");
   cmd->add_flag("--allow-growth", o->allowGrowth,
                 "Accept a posed grid of more than 8 times the source's voxels (a pose that moves parts far from the body)");
   cmd->add_flag("--cpu", o->cpu, "Rasterize and interpolate fields with the CPU reference instead of the GPU");

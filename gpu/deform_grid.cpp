@@ -141,6 +141,7 @@ PipelineOptions pipelineOptions(const DeformGridRequest& o, const Source& source
   }
   PipelineOptions options = skeleton::skeletalPoseOptions(o.pose, o.poseSource, source.workingGrid(), o.organs,
                                                           {o.input, o.organsSource, o.parts}, std::move(userParts));
+  options.rigidBones = o.rigidBones;
   options.cage.dilationMm = o.dilationMm;
   options.cage.targetVertices = o.vertices;
   for (const LimbSeparation& s : o.extraSeparations) {
@@ -159,6 +160,8 @@ void checkDeformGridRequest(const DeformGridRequest& o) {
     throw InputError(o.posedCage, "unknown surface format for --posed-cage (use .obj, .off or .ply)");
   if (o.preserveVolumes && o.maxMemoryMb > 0)
     throw InputError("--preserve-volumes", "needs the posed grid in memory; it cannot be combined with --max-memory");
+  if (!o.collisionMask.empty() && !hasGridExtension(o.collisionMask))
+    throw InputError(o.collisionMask, "unknown grid format for --collision-mask");
   if (!o.posedMesh.empty() && !hasTetMeshExtension(o.posedMesh))
     throw InputError(o.posedMesh, "unknown tet mesh format for --posed-mesh (use .mesh, .meshb, .vtu or .msh)");
   if ((!o.pose.separations.empty() || !o.extraSeparations.empty()) && !o.organs)
@@ -169,6 +172,8 @@ void checkDeformGridRequest(const DeformGridRequest& o) {
   if (skeletal && !o.organs)
     throw InputError(o.poseSource, "a pose with joints or body parts needs the grid's organ table (--organs) to find the bones");
   if (skeletal) skeleton::requireBones(*o.organs, o.organsSource);
+  if (!o.collisionMask.empty() && !skeletal)
+    throw InputError(o.collisionMask, "collisions are between body parts: they need a joint pose, selections by body part or --parts");
 }
 
 DeformationReport deformGrid(const DeformGridRequest& o) {
@@ -225,6 +230,24 @@ DeformationReport deformGrid(const DeformGridRequest& o) {
   }
   report.refinement = pipeline->refine({.maxIterations = o.refineIterations, .maxTets = o.maxTets}, interpolate);
   describePipeline(report, *pipeline);
+  report.rigidBonesRequested = o.rigidBones;
+  std::optional<StageTime> collisionTime;
+  if (const std::optional<LabelGrid>& parts = pipeline->bodyParts()) {
+    StageTimer collisionTimer("collisions");
+    GridGeometry lattice = deformedGridGeometry(source.geometry(), pipeline->deformedTransferMesh());
+    if (source.factor > 1) {
+      for (int a = 0; a < 3; ++a) lattice.dims[std::size_t(a)] = (lattice.dims[std::size_t(a)] + source.factor - 1) / source.factor;
+      lattice.spacing *= double(source.factor);
+    }
+    Collisions collisions = findCollisions(pipeline->transferMesh(), pipeline->deformedTransferMesh(), *parts, lattice,
+                                           !o.collisionMask.empty());
+    if (!o.collisionMask.empty()) {
+      writeGrid(o.collisionMask, collisions.mask);
+      collisions.mask = {};
+    }
+    report.collisions = std::move(collisions);
+    collisionTime = collisionTimer.stop();
+  }
   if (!o.posedCage.empty()) {
     TriMesh posed = pipeline->cage();
     posed.positions = pipeline->deformedCage();
@@ -238,6 +261,7 @@ DeformationReport deformGrid(const DeformGridRequest& o) {
     writeTetMesh(o.posedMesh, posed);
   }
   for (const StageTime& t : pipeline->stats().stages) report.stages.push_back(t);
+  if (collisionTime) report.stages.push_back(*collisionTime);
 
   // The pipeline's grids and coordinates go before the rasterization buffers.
   const TetMesh rest = pipeline->transferMesh();

@@ -48,10 +48,15 @@ struct DeformGridRequest {
   std::int64_t maxMemoryMb = 0;  // 0: in core
   bool cpu = false;
   bool preserveVolumes = false;
+  bool rigidBones = false;   // with body parts: bones held rigid (rigid_bones.h)
   bool allowGrowth = false;  // accept a posed grid of more than 8x the source's voxels (posed_extent.h)
   std::int64_t maxTets = RefinementOptions{}.maxTets;
   int refineIterations = RefinementOptions{}.maxIterations;
   std::string posedCage, posedMesh;  // optional extra outputs, written in the world frame
+  // With body parts: the collision mask (collisions.h, 1 where two parts'
+  // tissue overlaps) on the posed grid's lattice at the working grid's
+  // spacing; "" for none.
+  std::string collisionMask;
   // Copied into the report: the caller's command line and input digests.
   Provenance provenance;
   // Warnings (a GPU that could not be used, foreground outside the cage).

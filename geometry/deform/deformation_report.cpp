@@ -1,5 +1,8 @@
 #include "geometry/deform/deformation_report.h"
 
+#include "geometry/skeleton/body_parts.h"
+#include "geometry/skeleton/bones.h"
+
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -163,6 +166,12 @@ void describePipeline(DeformationReport& report, const DeformationPipeline& pipe
   const auto& deformed = pipeline.deformedTransferMesh();
   report.distortion = distortionHistograms(tm, deformed);
   report.outlierDistortion = outlierEdgeDistortion(tm, deformed, pipeline.transferMeshInside());
+  const RigidBoneGroups& rigid = pipeline.rigidBones();
+  report.rigidGroups = pipeline.deformer().stats().rigidGroups;
+  report.rigidVertices = pipeline.deformer().stats().rigidVertices;
+  report.sharedBoneVertices = rigid.sharedVertices;
+  report.uncoveredBoneVoxels = rigid.uncoveredVoxels;
+  report.bones = measureBoneRigidity(rigid, tm, deformed);
   report.tmInverted = 0;
   double inverted = 0.0, total = 0.0;
   for (const Tet& t : tm.tets) {
@@ -286,6 +295,40 @@ std::string deformationReportJson(const DeformationReport& r) {
       {"rest", toJson(r.restProjection)},
       {"posed", toJson(r.posedProjection)}};
   root["provenance"] = json::parse(provenanceJson(r.provenance));
+  if (!r.bones.empty()) {
+    json bones = json::array();
+    for (const BoneRigidity& b : r.bones)
+      bones.push_back({{"part", skeleton::partName(skeleton::Part(b.key / kBoneKeyStride))},
+                       {"bone", skeleton::boneName(skeleton::Bone(b.key % kBoneKeyStride))},
+                       {"voxels", b.voxels},
+                       {"tm_tets", b.tets},
+                       {"tm_vertices", b.vertices},
+                       {"rigid_vertices", b.rigidVertices},
+                       {"tm_edges", b.edges},
+                       {"max_strain", b.maxStrain},
+                       {"volume_rest_ml", b.restVolumeMm3 * 1e-3},
+                       {"volume_posed_ml", b.posedVolumeMm3 * 1e-3},
+                       {"volume_change_percent", b.volumeChangePercent()}});
+    root["bones"] = {{"held_rigid", r.rigidGroups > 0},
+                     {"rigid_groups", r.rigidGroups},
+                     {"rigid_vertices", r.rigidVertices},
+                     {"free_joint_vertices", r.sharedBoneVertices},
+                     {"uncovered_bone_voxels", r.uncoveredBoneVoxels},
+                     {"per_bone", bones}};
+  }
+  if (const auto& c = r.collisions) {
+    json pairs = json::array();
+    for (const CollisionPair& p : c->pairs)
+      pairs.push_back({{"parts", {skeleton::partName(skeleton::Part(p.partA)), skeleton::partName(skeleton::Part(p.partB))}},
+                       {"voxels", p.voxels},
+                       {"volume_ml", double(p.voxels) * c->lattice.voxelVolume() * 1e-3}});
+    root["collisions"] = {{"lattice", toJson(c->lattice)},
+                          {"body_voxels", c->bodyVoxels},
+                          {"voxels", c->voxels},
+                          {"volume_ml", c->volumeMm3() * 1e-3},
+                          {"body_fraction", c->bodyFraction()},
+                          {"pairs", pairs}};
+  }
   root["warnings"] = deformationWarnings(r);
   if (const auto& c = r.volumeCorrection)
     root["volume_correction"] = {{"boundary_voxels", c->candidates},
@@ -351,6 +394,35 @@ std::string deformationSummary(const DeformationReport& r) {
     s << "  volume correction: " << c->relabelled << " of " << c->candidates << " boundary voxels relabelled; largest gap "
       << "between a label's voxels and its deformed volume " << fixed(c->worstPercentBefore, 2) << " % -> "
       << fixed(c->worstPercentAfter, 2) << " %\n";
+  if (!r.bones.empty()) {
+    const BoneRigidity* strained = nullptr;
+    const BoneRigidity* changed = nullptr;
+    for (const BoneRigidity& b : r.bones) {
+      if (!strained || b.maxStrain > strained->maxStrain) strained = &b;
+      if (!changed || std::abs(b.volumeChangePercent()) > std::abs(changed->volumeChangePercent())) changed = &b;
+    }
+    const auto name = [](const BoneRigidity& b) {
+      return std::string(skeleton::boneName(skeleton::Bone(b.key % kBoneKeyStride))) + " of the " +
+             skeleton::partName(skeleton::Part(b.key / kBoneKeyStride));
+    };
+    if (r.rigidGroups > 0)
+      s << "  rigid bones: " << r.rigidGroups << " parts, " << r.rigidVertices << " TM vertices held rigid, " << r.sharedBoneVertices
+        << " between two parts' bones left free";
+    else
+      s << "  bones (not held rigid)";
+    if (strained)
+      s << "; largest |ln(l'/l)| over a bone's TM edges " << fixed(strained->maxStrain, 4) << " (" << name(*strained)
+        << "), largest bone volume change " << fixed(changed->volumeChangePercent(), 2) << " % (" << name(*changed) << ")";
+    s << "\n";
+  }
+  if (const auto& c = r.collisions) {
+    s << "  collisions: " << c->voxels << " voxels (" << fixed(c->volumeMm3() * 1e-3, 2) << " mL, " << fixed(100.0 * c->bodyFraction(), 3)
+      << " % of the body) hold tissue of two body parts";
+    for (std::size_t k = 0; k < c->pairs.size() && k < 3; ++k)
+      s << (k ? ", " : ": ") << skeleton::partName(skeleton::Part(c->pairs[k].partA)) << " / "
+        << skeleton::partName(skeleton::Part(c->pairs[k].partB)) << " " << c->pairs[k].voxels;
+    s << "\n";
+  }
   s << "  distortion: angle mean " << fixed(r.distortion.angle.mean, 2) << " deg (rms deviation " << fixed(r.distortion.angle.rmsDeviation, 2)
     << "), stretch mean " << fixed(r.distortion.stretch.mean, 4) << " (rms deviation " << fixed(r.distortion.stretch.rmsDeviation, 4) << ")\n";
   return s.str();
@@ -413,6 +485,10 @@ std::vector<std::string> deformationWarnings(const DeformationReport& r) {
                 "x (" + fixed(100.0 * (st.above + st.below), 2) + " % of the volume outside 0.5x-1.5x)");
   if (std::max(an.max - 90.0, 90.0 - an.min) >= kLargeAngleDeviationDeg)
     w.push_back("large distortion: right angles sheared to " + fixed(an.min, 1) + "-" + fixed(an.max, 1) + " degrees");
+  if (r.rigidBonesRequested && r.rigidGroups == 0)
+    w.push_back(r.bones.empty() ? "--rigid-bones: no bones to hold rigid (a joint pose or --parts gives the body parts)"
+                                : "--rigid-bones: no bone could be held rigid: every transfer-mesh vertex at a bone lies near another part's bone "
+                                  "(a transfer mesh too coarse for the skeleton)");
   std::string unnamed;
   std::size_t count = 0;
   for (const LabelChange& c : r.labels)

@@ -9,6 +9,7 @@
 // run's provenance (provenance.h).
 
 #include "geometry/deform/adaptive_refinement.h"
+#include "geometry/deform/collisions.h"
 #include "geometry/deform/deformation_metrics.h"
 #include "geometry/deform/label_volumes.h"
 #include "geometry/deform/pipeline.h"
@@ -96,6 +97,14 @@ struct DeformationReport {
   double tmInvertedVolumeFraction = 0.0;
   std::int64_t uncoveredVoxels = 0;  // working-grid foreground voxels in no tet
   std::vector<CutReport> cuts;
+  // Rigid bones (rigid_bones.h): groups, the TM vertices they place, the
+  // vertices left free between two parts' bones, and per bone its rigidity.
+  bool rigidBonesRequested = false;
+  std::size_t rigidGroups = 0, rigidVertices = 0, sharedBoneVertices = 0;
+  std::int64_t uncoveredBoneVoxels = 0;
+  std::vector<BoneRigidity> bones;
+  // With body parts: tissue of two parts overlapping in the posed body.
+  std::optional<Collisions> collisions;
   RefinementResult refinement;
   DistortionHistograms distortion;
   OutlierDistortion outlierDistortion;

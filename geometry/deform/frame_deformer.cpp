@@ -114,8 +114,44 @@ void FrameDeformer::precompute(const TriMesh& cage, std::span<const Eigen::Vecto
   arap_.precompute(cage, handles);
   stats_.arapFactorMs = millisecondsSince(start);
 
+  // Rigid bone groups, fitted to their Green-coordinate vertices; every
+  // placed vertex is known to the propagation.
+  rigidBones_.precompute(options.rigidGroups, tmInside_, transferMesh.positions);
+  std::vector<std::uint8_t> known = tmInside_;
+  for (std::size_t v = 0; v < known.size(); ++v)
+    if (!rigidBones_.placed().empty() && rigidBones_.placed()[v]) {
+      known[v] = 1;
+      ++stats_.rigidVertices;
+    }
+  const int bandRings = options.rigidBandRings;
+  if (bandRings > 0 && stats_.rigidVertices > 0) {
+    std::vector<std::vector<std::int32_t>> neighbours(transferMesh.vertexCount());
+    for (const Tet& t : transferMesh.tets)
+      for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < 4; ++b)
+          if (a != b) neighbours[std::size_t(t[std::size_t(a)])].push_back(t[std::size_t(b)]);
+    std::vector<std::uint8_t> band(known.size(), 0);
+    std::vector<std::int32_t> front;
+    for (std::size_t v = 0; v < known.size(); ++v)
+      if (rigidBones_.placed()[v]) front.push_back(std::int32_t(v));
+    for (int ring = 0; ring < bandRings; ++ring) {
+      std::vector<std::int32_t> next;
+      for (const std::int32_t v : front)
+        for (const std::int32_t n : neighbours[std::size_t(v)])
+          if (!rigidBones_.placed()[std::size_t(n)] && !band[std::size_t(n)]) {
+            band[std::size_t(n)] = 1;
+            next.push_back(n);
+          }
+      front = std::move(next);
+    }
+    for (std::size_t v = 0; v < known.size(); ++v)
+      if (band[v]) known[v] = 0;
+  }
+  stats_.rigidGroups = rigidBones_.groups();
+  stats_.rigidGroupsDropped = rigidBones_.droppedGroups();
+
   start = Clock::now();
-  propagation_.precompute(transferMesh, tmInside_);
+  propagation_.precompute(transferMesh, known);
   stats_.propagation = propagation_.diagnostics();
   stats_.propagationFactorMs = millisecondsSince(start);
 
@@ -167,7 +203,7 @@ void FrameDeformer::setHandles(std::span<const std::int32_t> handles) {
   stats_.arapFactorMs = millisecondsSince(start);
 }
 
-void FrameDeformer::update(const Eigen::MatrixX3d& handleTargets, int arapIterations) {
+void FrameDeformer::update(const Eigen::MatrixX3d& handleTargets, int arapIterations, std::span<const Eigen::Isometry3d> rigidMotions) {
   const auto frameStart = Clock::now();
   auto start = frameStart;
   const std::vector<Eigen::Vector3d>& cage = arap_.solve(handleTargets, arapIterations);
@@ -191,6 +227,9 @@ void FrameDeformer::update(const Eigen::MatrixX3d& handleTargets, int arapIterat
   applyGreenCoordinates(tmGreen_, frame, tmScratch_, tmInsideRest_);
   for (std::size_t k = 0; k < tmInsideIds_.size(); ++k) transferMesh_[std::size_t(tmInsideIds_[k])] = tmScratch_[k];
   timings_.greenTransferMesh = millisecondsSince(start);
+  start = Clock::now();
+  rigidBones_.apply(transferMesh_, rigidMotions);
+  timings_.rigidBones = millisecondsSince(start);
 
   // The envelope product (memory bound) and the propagation solves (compute
   // bound, they need only the TM) share the cores: one task for the solves,

@@ -16,10 +16,12 @@
 #include "geometry/deform/cage_arap.h"
 #include "geometry/deform/green_coordinates.h"
 #include "geometry/deform/propagation.h"
+#include "geometry/deform/rigid_bones.h"
 #include "geometry/tet_mesh.h"
 #include "geometry/tri_mesh.h"
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <array>
 #include <cstdint>
 #include <span>
@@ -40,6 +42,15 @@ struct FrameDeformerOptions {
   // even when it lies inside the cage (a limb's vertex in the part of an
   // inset cage that belongs to the body beside it).
   std::vector<std::uint8_t> propagateAnyway;
+  // Per TM vertex (empty: none): its rigid bone group (rigid_bones.h) or -1.
+  // Each group moves rigidly with the fit to its Green-coordinate positions,
+  // and the propagation takes its vertices as known.
+  std::vector<std::int32_t> rigidGroups;
+  // The vertices within this many TM edge rings of a rigid group's
+  // vertices (and none of them) are placed by the propagation, from the
+  // rigid bones and the Green-coordinate vertices beyond: the soft tissue
+  // around a bone follows the bone instead of tearing from it.
+  int rigidBandRings = 2;
 };
 
 // Milliseconds spent in each stage of the last update().
@@ -47,6 +58,7 @@ struct FrameTimings {
   double arap = 0;
   double greenTransferMesh = 0;   // TM vertices inside the cage
   double greenEnvelope = 0;       // envelope vertices inside the cage, with the propagation running beside it
+  double rigidBones = 0;          // the rigid fit of the bone groups
   double propagation = 0;         // eq. 4.3-4.4 alone (part of greenEnvelope's time)
   double envelopeOutside = 0;     // envelope vertices carried by the TM
   double total = 0;
@@ -56,6 +68,7 @@ struct FrameDeformerStats {
   std::size_t envelopeInside = 0, envelopeOutside = 0;
   std::size_t transferMeshInside = 0, transferMeshOutside = 0;
   PropagationDiagnostics propagation;
+  std::size_t rigidGroups = 0, rigidVertices = 0, rigidGroupsDropped = 0;
   // precompute() stages, milliseconds.
   double classifyMs = 0, greenEnvelopeMs = 0, greenTransferMeshMs = 0, arapFactorMs = 0, propagationFactorMs = 0,
          attachMs = 0;
@@ -78,7 +91,10 @@ public:
   // One frame. handleTargets: #handles by 3 (handles order). Runs
   // `arapIterations` ARAP iterations warm-started from the previous frame.
   // Handle targets at their rest positions give the rest pose exactly.
-  void update(const Eigen::MatrixX3d& handleTargets, int arapIterations);
+  // rigidMotions: per rigid bone group (options.rigidGroups ids), the motion
+  // its vertices take; empty: each group's fit to its Green-coordinate
+  // positions.
+  void update(const Eigen::MatrixX3d& handleTargets, int arapIterations, std::span<const Eigen::Isometry3d> rigidMotions = {});
 
   const std::vector<Eigen::Vector3d>& cagePositions() const { return arap_.positions(); }
   const std::vector<Eigen::Vector3d>& envelopePositions() const { return envelope_; }
@@ -86,6 +102,8 @@ public:
   // #TM vertices: 1 when inside the cage (placed by Green coordinates).
   const std::vector<std::uint8_t>& transferMeshInside() const { return tmInside_; }
   const std::vector<std::uint8_t>& envelopeInside() const { return envelopeInside_; }
+  // #TM vertices: 1 when a rigid bone group places it.
+  const std::vector<std::uint8_t>& transferMeshRigid() const { return rigidBones_.placed(); }
   const std::vector<std::int32_t>& handles() const { return arap_.handles(); }
   const FrameTimings& timings() const { return timings_; }
   const FrameDeformerStats& stats() const { return stats_; }
@@ -99,6 +117,7 @@ private:
   std::vector<Eigen::Vector3d> envelopeInsideRest_, tmInsideRest_;
   std::vector<std::uint8_t> envelopeInside_, tmInside_;
   RigidityPropagation propagation_;
+  RigidBoneFit rigidBones_;
   // Envelope vertices outside the cage: vertex, TM tet, barycentric weights.
   struct Attachment {
     std::int32_t vertex;

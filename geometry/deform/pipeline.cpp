@@ -9,6 +9,7 @@
 #include "geometry/label_stats.h"
 #include "geometry/parallel.h"
 #include "geometry/skeleton/body_parts.h"
+#include "geometry/skeleton/bones.h"
 
 #include <algorithm>
 #include <cmath>
@@ -153,6 +154,8 @@ DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOp
     envelope_ = extractEnvelope(groups_, options_.envelopeOptions);
     stats_.stages.push_back(timer.stop());
   }
+  if (options_.bodyParts && options_.organs && skeleton::namesBones(*options_.organs))
+    boneKeys_ = boneKeyGrid(grid, *options_.organs, *options_.bodyParts);
   sizing_ = defaultSizingField(groups_.geometry(), options_.sizingFraction);
   {
     StageTimer timer("transfer mesh");
@@ -185,6 +188,8 @@ void DeformationPipeline::precomputeFrame(bool withEnvelope) {
       withEnvelope ? std::span<const Eigen::Vector3d>(envelope_.positions) : std::span<const Eigen::Vector3d>();
   FrameDeformerOptions frame = options_.frame;
   frame.propagateAnyway = acrossSeparation();
+  rigidBones_ = boneKeys_.voxelCount() > 0 ? rigidBoneGroups(transferMesh_, boneKeys_, options_.rigidJointRings) : RigidBoneGroups{};
+  if (options_.rigidBones) frame.rigidGroups = rigidBones_.vertexGroup;
   deformer_.precompute(cage_, envelope, transferMesh_, handles_.vertices, frame);
   if (frame.propagateAnyway.empty() || handles_.vertices.empty()) return;
   // Tears: a limb vertex that Green coordinates leave with the body beside
@@ -193,11 +198,28 @@ void DeformationPipeline::precomputeFrame(bool withEnvelope) {
   // than e. Such vertices are propagated from their group too, and the
   // embedding redone, a few rounds at most.
   for (int round = 0; round < 3; ++round) {
-    deformer_.update(handleTargets(pose_, handles_, cage_, 1.0), pose_.arapIterations);
+    updateFrame(1.0);
     if (markTornVertices(frame.propagateAnyway) == 0) break;
     deformer_.precompute(cage_, envelope, transferMesh_, handles_.vertices, frame);
   }
-  deformer_.update(handleTargets(pose_, handles_, cage_, 0.0), pose_.arapIterations);
+  updateFrame(0.0);
+}
+
+void DeformationPipeline::updateFrame(double fraction) {
+  std::vector<Eigen::Isometry3d> motions;
+  if (!options_.partMotions.empty()) {
+    for (const Label part : rigidBones_.groupPart) {
+      Eigen::Isometry3d m = Eigen::Isometry3d::Identity();
+      if (part < options_.partMotions.size()) {
+        const PoseTransform& t = options_.partMotions[part];
+        const Eigen::Vector3d o = t.apply(Eigen::Vector3d::Zero(), fraction);
+        for (int k = 0; k < 3; ++k) m.linear().col(k) = t.apply(Eigen::Vector3d::Unit(k), fraction) - o;
+        m.translation() = o;
+      }
+      motions.push_back(m);
+    }
+  }
+  deformer_.update(handleTargets(pose_, handles_, cage_, fraction), pose_.arapIterations, motions);
 }
 
 std::size_t DeformationPipeline::markTornVertices(std::vector<std::uint8_t>& propagate) const {
@@ -345,7 +367,7 @@ void DeformationPipeline::deform(double fraction) {
   if (handles_.vertices.empty()) throw RuntimeFailure("DeformationPipeline::deform: no pose set");
   StageTimer timer("deformation");
   fraction_ = fraction;
-  deformer_.update(handleTargets(pose_, handles_, cage_, fraction), pose_.arapIterations);
+  updateFrame(fraction);
   if (deformer_.envelopePositions().size() == envelope_.vertexCount()) deformedEnvelope_ = deformer_.envelopePositions();
   recordStage(timer.stop());
 }
@@ -371,7 +393,7 @@ RefinementResult DeformationPipeline::refine(const RefinementOptions& options, c
             // where the last full frame put it.
             buildTransferMesh();
             precomputeFrame(false);
-            deformer_.update(handleTargets(pose_, handles_, cage_, fraction_), pose_.arapIterations);
+            updateFrame(fraction_);
           },
   };
   RefinementResult result = refineTransferMesh(subject, sizing_, interpolate, options);

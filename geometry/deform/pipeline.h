@@ -38,6 +38,7 @@
 #include "geometry/deform/envelope.h"
 #include "geometry/deform/frame_deformer.h"
 #include "geometry/deform/pose.h"
+#include "geometry/deform/rigid_bones.h"
 #include "geometry/raster/rasterize.h"
 #include "geometry/deform/transfer_mesh.h"
 #include "geometry/body_projection.h"
@@ -89,6 +90,18 @@ struct PipelineOptions {
   // With bodyParts and an organ table: false takes the label groups from the
   // organ names all the same (a joint pose's "joint_options": {"groups": "organs"}).
   bool groupsFromParts = true;
+  // With bodyParts and an organ table that names bones: the TM tets holding
+  // each part's bone voxels move rigidly (rigid_bones.h). Off by default: on
+  // the coarse TM the tets between two bones that turn against each other
+  // fold (docs/POSES.md, rigid bones). The bones' rigidity is measured
+  // (rigidBones()) either way.
+  bool rigidBones = false;
+  int rigidJointRings = 2;  // tet rings left free around the vertices between two parts' bones (rigidBoneGroups)
+  // Per body part (index = skeleton::Part; empty: none): the rigid motion its
+  // bones take (a joint pose's forward kinematics, skeleton/joint_pose.h),
+  // applied by the frame's fraction. Without it each part's bones take the
+  // rigid fit to where the cage puts them.
+  std::vector<PoseTransform> partMotions;
   // Automatic cage; its separations (groups are BodyPart values) also cut
   // the transfer mesh.
   CageOptions cage;
@@ -177,6 +190,11 @@ public:
   const std::vector<Label>& cageGroups() const { return cageGroups_; }
   // Per builtCage() vertex: the body part nearest it (empty without body parts).
   const std::vector<Label>& cageBodyParts() const { return cageBodyParts_; }
+  // The rigid bone groups of the current TM (empty without body parts and
+  // bones); the deformer holds them rigid with options.rigidBones.
+  const RigidBoneGroups& rigidBones() const { return rigidBones_; }
+  // The body-part grid on the working grid (options.bodyParts).
+  const std::optional<LabelGrid>& bodyParts() const { return options_.bodyParts; }
   const Pose& pose() const { return pose_; }
   const PoseHandles& handles() const { return handles_; }
   // Vertices of the built cage left out because their part has no handle.
@@ -186,6 +204,9 @@ public:
 private:
   void buildTransferMesh();
   void precomputeFrame(bool withEnvelope);
+  // One frame of the deformer at `fraction` of the pose (handles and rigid
+  // bone motions).
+  void updateFrame(double fraction);
   std::vector<std::uint8_t> acrossSeparation() const;
   std::size_t markTornVertices(std::vector<std::uint8_t>& propagate) const;
   void recordStage(StageTime time);
@@ -194,6 +215,8 @@ private:
   std::vector<Label> cageGroups_;          // per built-cage vertex: nearest label group (selections by group)
   std::vector<Label> cageBodyParts_;       // per built-cage vertex: nearest body part (selections by body part)
   std::vector<std::int32_t> cageSource_;  // per cage_ vertex: its built-cage vertex
+  LabelGrid boneKeys_;  // rigid_bones.h (empty without rigid bones)
+  RigidBoneGroups rigidBones_;
   LabelGrid groups_, meshGroups_;  // meshGroups_: S reduced to the separated groups (empty without separations)
   TriMesh builtCage_, cage_, envelope_;
   ScalarGrid sizing_;

@@ -212,6 +212,18 @@ PoseTransform screwTransform(const Eigen::Isometry3d& motion, const Eigen::Vecto
   return t;
 }
 
+std::vector<PoseTransform> partTransforms(const Pose& pose, const Skeleton& skeleton, const std::string& source) {
+  const std::vector<Joint> joints = posedJoints(skeleton, pose.joints, source);
+  const PartMotions motions = partMotions(joints, pose.joints);
+  std::vector<PoseTransform> out(motions.size());
+  for (std::size_t p = 0; p < motions.size(); ++p) {
+    const auto id = p == 0 ? std::nullopt : jointMoving(Part(p));
+    const Joint* joint = id ? findJoint(joints, *id) : nullptr;
+    out[p] = screwTransform(motions[p], joint ? joint->centre : Eigen::Vector3d::Zero());
+  }
+  return out;
+}
+
 Pose compileJointPose(const Pose& pose, const Skeleton& skeleton, const std::string& source, const JointPoseOptions& options) {
   const std::vector<Joint> joints = posedJoints(skeleton, pose.joints, source);
   const PartMotions motions = partMotions(joints, pose.joints);
@@ -279,6 +291,7 @@ PipelineOptions skeletalPoseOptions(const Pose& pose, const std::string& poseSou
   if (given.zone) compile.jointZone = *given.zone == "free" ? JointZone::Free : *given.zone == "child" ? JointZone::Child : JointZone::Parent;
   if (given.marginMm) compile.jointMarginMm = *given.marginMm;
   PipelineOptions o = poseOptions(compileJointPose(pose, skeleton, poseSource, compile), poseSource, organs);
+  if (!pose.joints.empty()) o.partMotions = partTransforms(pose, skeleton, poseSource);
   o.bodyParts = std::move(skeleton.parts.parts);
   o.groupsFromParts = given.groups.value_or("parts") == "parts";
   return o;

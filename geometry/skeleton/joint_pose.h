@@ -71,6 +71,12 @@ PartMotions partMotions(const std::vector<Joint>& joints, const std::vector<Pose
 // joint's axis and no translation).
 PoseTransform screwTransform(const Eigen::Isometry3d& motion, const Eigen::Vector3d& near);
 
+// Per part (index = Part): its forward-kinematics motion as a pose
+// transform (screwTransform about the part's own joint centre), applied
+// partially with the pose's fraction; the rigid bones (rigid_bones.h) follow
+// it. Throws InputError(source, ...) as posedJoints.
+std::vector<PoseTransform> partTransforms(const Pose& pose, const Skeleton& skeleton, const std::string& source);
+
 // The pose without joints: compiled selections and separations (above),
 // then the pose's own. Throws InputError(source, ...) as posedJoints.
 Pose compileJointPose(const Pose& pose, const Skeleton& skeleton, const std::string& source, const JointPoseOptions& options = {});

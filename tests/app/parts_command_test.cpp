@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 
@@ -90,11 +91,21 @@ TEST(PartsCommand, JointPoseDeformsAndRenders) {
   VOX_REQUIRE_VOXMORPH();
   const Figure f = figure(test::tempDir(), "skeleton", 96);
   const std::string pose = writeFile(f.dir + "/pose.json", R"({"joints": {"right_shoulder": {"abduction": 30}, "right_elbow": {"flexion": 40}}})");
-  const std::string out = f.dir + "/posed.nii.gz", report = f.dir + "/report.json";
+  const std::string out = f.dir + "/posed.nii.gz", report = f.dir + "/report.json", mask = f.dir + "/collisions.nii.gz";
   const auto r = test::runCommand(voxmorph("deform " + test::quote(f.grid) + " --organs " + test::quote(f.organs) + " --pose " + test::quote(pose) +
-                                           " -o " + test::quote(out) + " --report " + test::quote(report) + " --cpu -q"));
+                                           " -o " + test::quote(out) + " --report " + test::quote(report) + " --collision-mask " +
+                                           test::quote(mask) + " --rigid-bones --cpu -q"));
   ASSERT_EQ(r.exitCode, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(std::ifstream(report));
+  // Collisions and bone measures are reported for a joint pose; the mask
+  // covers the posed extent.
+  ASSERT_TRUE(j.contains("collisions"));
+  EXPECT_GT(j["collisions"]["body_voxels"].get<std::int64_t>(), 0);
+  const LabelGrid collided = readGrid(mask);
+  EXPECT_EQ(j["collisions"]["voxels"].get<std::int64_t>(), std::int64_t(std::count(collided.labels().begin(), collided.labels().end(), Label(1))));
+  ASSERT_TRUE(j.contains("bones"));
+  EXPECT_TRUE(j["bones"].contains("held_rigid"));
+  EXPECT_FALSE(j["bones"]["per_bone"].empty());
   std::vector<std::string> names;
   for (const auto& s : j["selections"]) names.push_back(s["name"]);
   ASSERT_GE(names.size(), 3u);
@@ -139,6 +150,12 @@ TEST(PartsCommand, BadInput) {
   expectOneLineError(test::runCommand(voxmorph(deform + test::quote(arm) + " --organs " + test::quote(f.organs) + " --parts " +
                                                test::quote(spheres.grid))),
                      spheres.grid + ": has other dims than the grid");
+  // A collision mask needs body parts.
+  const std::string still = writeFile(f.dir + "/still.json", R"({"selections": [{"box": {"min": [-1000, -1000, -1000], "max": [1000, 1000, 1000]}, "fixed": true}]})");
+  expectOneLineError(test::runCommand(voxmorph(deform + test::quote(still) + " --organs " + test::quote(f.organs) + " --collision-mask " +
+                                               test::quote(f.dir + "/mask.nii.gz"))),
+                     f.dir + "/mask.nii.gz: collisions are between body parts");
+  EXPECT_FALSE(std::filesystem::exists(f.dir + "/mask.nii.gz"));
   // render checks the organ table before reading the grid.
   expectOneLineError(test::runCommand(voxmorph("render " + test::quote(f.grid) + " --pose " + test::quote(arm) + " -o " +
                                                test::quote(f.dir + "/x.png") + " --cpu -q")),
