@@ -169,7 +169,8 @@ void addDeformCommand(CLI::App& app) {
                 "Relabel boundary voxels of the posed grid so that each label keeps the volume the deformation gives it "
                 "(sum of the transfer mesh's Jacobian determinants over its voxels), within about a voxel; in core only");
   cmd->add_flag("--rigid-bones", o->rigidBones,
-                "With body parts (a joint pose, --parts): hold each part's bones rigid (its forward-kinematics motion, else the rigid fit); "
+                "With body parts (a joint pose, --parts): hold each part's bones rigid (its forward-kinematics motion, else the rigid fit) "
+                "and turn the cage near each turned joint with the moving part (joint_options zone 'child' unless the pose sets it); "
                 "the tissue between bones turning against each other may fold (docs/POSES.md)");
   cmd->add_flag("--allow-growth", o->allowGrowth,
                 "Accept a posed grid of more than 8 times the source's voxels (a pose that moves parts far from the body)");

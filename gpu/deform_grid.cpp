@@ -139,8 +139,13 @@ PipelineOptions pipelineOptions(const DeformGridRequest& o, const Source& source
     }
     userParts = std::move(parts);
   }
+  // Bones held rigid turn about their joint: the cage near the joint turns
+  // with the moving part too (unless the pose says otherwise), so that the
+  // tissue around the bone follows it.
+  skeleton::JointPoseOptions joints;
+  if (o.rigidBones) joints.jointZone = skeleton::JointZone::Child;
   PipelineOptions options = skeleton::skeletalPoseOptions(o.pose, o.poseSource, source.workingGrid(), o.organs,
-                                                          {o.input, o.organsSource, o.parts}, std::move(userParts));
+                                                          {o.input, o.organsSource, o.parts}, std::move(userParts), joints);
   options.rigidBones = o.rigidBones;
   options.cage.dilationMm = o.dilationMm;
   options.cage.targetVertices = o.vertices;

@@ -303,7 +303,7 @@ std::string deformationReportJson(const DeformationReport& r) {
                        {"voxels", b.voxels},
                        {"tm_tets", b.tets},
                        {"tm_vertices", b.vertices},
-                       {"rigid_vertices", b.rigidVertices},
+                       {"rigid_vertices", r.rigidGroups > 0 ? b.rigidVertices : 0},
                        {"tm_edges", b.edges},
                        {"max_strain", b.maxStrain},
                        {"volume_rest_ml", b.restVolumeMm3 * 1e-3},

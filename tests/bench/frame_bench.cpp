@@ -25,6 +25,7 @@
 #include "geometry/deform/green_coordinates.h"
 #include "geometry/deform/pipeline.h"
 #include "geometry/deform/pose.h"
+#include "geometry/skeleton/joint_pose.h"
 #include "geometry/deform/sparse_cholesky.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/voxel_tetrahedralization.h"
@@ -34,6 +35,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <tuple>
 #include <memory>
 #include <optional>
 #include <string>
@@ -182,6 +184,7 @@ void BM_FrameUpdate(benchmark::State& state) {
   state.counters["arap_ms"] = sum.arap / n;
   state.counters["gc_envelope_ms"] = sum.greenEnvelope / n;
   state.counters["propagation_ms"] = sum.propagation / n;
+  state.counters["rigid_ms"] = sum.rigidBones / n;
   state.counters["gc_tm_ms"] = sum.greenTransferMesh / n;
   state.counters["envelope_outside_ms"] = sum.envelopeOutside / n;
   state.counters["total_ms"] = sum.total / n;
@@ -216,18 +219,31 @@ BENCHMARK(BM_FrameUpdate)
 // and a pose of assets/poses applied by a fraction oscillating from frame to
 // frame: the head turn (one TM vertex outside the cage) or the arm raise
 // (inset cage, cut TM, thousands of vertices placed by the propagation).
-// Arguments: ARAP iterations, precision, pose (0 head, 1 arm).
+// The phone-call joint pose (2) compiles against the skeleton (body parts,
+// joints) as `voxmorph deform` does; its fourth argument holds the bones
+// rigid (`--rigid-bones`, with the joint zones turning with the limb).
+// Arguments: ARAP iterations, precision, pose (0 head, 1 arm, 2 phone call), rigid bones.
 void BM_FrameUpdatePipeline(benchmark::State& state) {
-  static std::map<std::pair<int, int>, std::unique_ptr<DeformationPipeline>> pipelines;
+  static std::map<std::tuple<int, int, int>, std::unique_ptr<DeformationPipeline>> pipelines;
   const auto precision = GreenPrecision(state.range(1));
-  const bool arm = state.range(2) == 1;
-  std::unique_ptr<DeformationPipeline>& pipeline = pipelines[{int(precision), int(arm)}];
+  const int which = int(state.range(2));
+  const bool arm = which == 1, phone = which == 2, rigid = state.range(3) == 1;
+  std::unique_ptr<DeformationPipeline>& pipeline = pipelines[{int(precision), which, int(rigid)}];
   static const OrganTable organs = OrganTable::read(std::string(VOX_ASSETS_DIR) + "/icrp110_am_organs.dat");
   if (!pipeline) {
     const LabelGrid grid = readGrid(std::string(VOX_ASSETS_DIR) + "/icrp110_am.nii.gz");
-    const std::string path =
-        std::string(VOX_ASSETS_DIR) + (arm ? "/poses/am_right_arm_raised_45.json" : "/poses/am_head_turned_20.json");
-    PipelineOptions options = poseOptions(readPose(path), path, arm ? std::optional<OrganTable>(organs) : std::nullopt);
+    const std::string path = std::string(VOX_ASSETS_DIR) + (phone ? "/poses/am_phone_call_joints.json"
+                                                            : arm ? "/poses/am_right_arm_raised_45.json"
+                                                                  : "/poses/am_head_turned_20.json");
+    PipelineOptions options;
+    if (phone) {
+      skeleton::JointPoseOptions joints;
+      if (rigid) joints.jointZone = skeleton::JointZone::Child;
+      options = skeleton::skeletalPoseOptions(readPose(path), path, grid, organs, {}, std::nullopt, joints);
+      options.rigidBones = rigid;
+    } else {
+      options = poseOptions(readPose(path), path, arm ? std::optional<OrganTable>(organs) : std::nullopt);
+    }
     options.frame.precision = precision;
     pipeline = std::make_unique<DeformationPipeline>(grid, options);
   }
@@ -244,6 +260,7 @@ void BM_FrameUpdatePipeline(benchmark::State& state) {
     sum.greenTransferMesh += f.greenTransferMesh;
     sum.greenEnvelope += f.greenEnvelope;
     sum.propagation += f.propagation;
+    sum.rigidBones += f.rigidBones;
     sum.total += f.total;
     fastest = std::min(fastest, f.total);
   }
@@ -253,6 +270,7 @@ void BM_FrameUpdatePipeline(benchmark::State& state) {
   state.counters["gc_tm_ms"] = sum.greenTransferMesh / n;
   state.counters["gc_envelope_ms"] = sum.greenEnvelope / n;
   state.counters["propagation_ms"] = sum.propagation / n;
+  state.counters["rigid_ms"] = sum.rigidBones / n;
   state.counters["total_ms"] = sum.total / n;
   state.counters["total_min_ms"] = fastest;
   state.counters["cage_vertices"] = double(pipeline->cage().vertexCount());
@@ -260,13 +278,16 @@ void BM_FrameUpdatePipeline(benchmark::State& state) {
   state.counters["tm_vertices"] = double(pipeline->transferMesh().vertexCount());
   state.counters["tm_out"] = double(st.transferMeshOutside);
   const char* names[] = {"double", "float", "half"};
-  state.SetLabel(std::string(arm ? "arm pose, " : "head pose, ") + names[state.range(1)] + " coordinates, " +
-                 SparseCholesky::backendName());
+  state.counters["rigid_vertices"] = double(st.rigidVertices);
+  state.SetLabel(std::string(phone ? (rigid ? "phone call, rigid bones, " : "phone call, ") : arm ? "arm pose, " : "head pose, ") +
+                 names[state.range(1)] + " coordinates, " + SparseCholesky::backendName());
 }
 BENCHMARK(BM_FrameUpdatePipeline)
-    ->ArgsProduct({{1, 5, 10}, {1, 2}, {0}})
-    ->Args({10, 2, 1})
-    ->Args({10, 1, 1})
+    ->ArgsProduct({{1, 5, 10}, {1, 2}, {0}, {0}})
+    ->Args({10, 2, 1, 0})
+    ->Args({10, 1, 1, 0})
+    ->Args({10, 1, 2, 0})
+    ->Args({10, 1, 2, 1})
     ->Unit(benchmark::kMillisecond)
     ->MinTime(2.0)
     ->UseRealTime();
