@@ -10,12 +10,16 @@
 #include "geometry/deform/pose.h"
 #include "geometry/deform/rigid_bones.h"
 #include "geometry/skeleton/joint_pose.h"
+#include "geometry/io/grid_io.h"
 #include "geometry/synth.h"
+#include "tests/support/test_environment.h"
 
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <filesystem>
+#include <limits>
 #include <random>
 
 namespace vox::skeleton {
@@ -151,6 +155,55 @@ TEST(Collisions, TissueOfTwoPartsMovedOntoEachOtherIsCounted) {
   EXPECT_EQ(std::count(c.mask.labels().begin(), c.mask.labels().end(), Label(1)), c.voxels);
   EXPECT_GT(c.bodyFraction(), 0.0);
   EXPECT_LE(c.bodyFraction(), 1.0);
+}
+
+}  // namespace
+}  // namespace vox::skeleton
+
+namespace vox::skeleton {
+namespace {
+
+// The hard postures of assets/poses/hard (docs/POSES.md) stay valid pose
+// files that compile against the adult male's skeleton, and the phone call
+// puts the right hand beside the head by its kinematics: above the shoulder,
+// clear of the head, near its side.
+TEST(HardPostures, CompileOnTheAdultMaleAndThePhoneCallReachesTheHead) {
+  const LabelGrid grid = readGrid(test::assetPath("icrp110_am.nii.gz"));
+  const OrganTable organs = OrganTable::read(test::assetPath("icrp110_am_organs.dat"));
+  const Skeleton s = buildSkeleton(grid, organs, {});
+  std::vector<std::string> files;
+  for (const auto& e : std::filesystem::directory_iterator(test::assetPath("poses/hard")))
+    if (e.path().extension() == ".json") files.push_back(e.path().string());
+  ASSERT_GE(files.size(), 3u);
+  for (const std::string& f : files) {
+    const Pose pose = readPose(f);
+    EXPECT_FALSE(pose.joints.empty()) << f;
+    const Pose compiled = compileJointPose(pose, s, f);
+    EXPECT_FALSE(compiled.selections.empty()) << f;
+  }
+  const Pose phone = readPose(test::assetPath("poses/hard/am_phone_call_joints.json"));
+  const PartMotions m = partMotions(posedJoints(s, phone.joints, "phone"), phone.joints);
+  const GridGeometry& g = grid.geometry();
+  std::vector<Eigen::Vector3d> hand, head;
+  for (std::int64_t k = 0; k < g.dims[2]; ++k)
+    for (std::int64_t j = 0; j < g.dims[1]; ++j)
+      for (std::int64_t i = 0; i < g.dims[0]; ++i) {
+        const Part p = Part(s.parts.parts.at(i, j, k));
+        if (p == Part::RightHand) hand.push_back(m[std::size_t(p)] * g.voxelCenter(i, j, k));
+        if (p == Part::Head) head.push_back(g.voxelCenter(i, j, k));
+      }
+  ASSERT_FALSE(hand.empty());
+  ASSERT_FALSE(head.empty());
+  Eigen::Vector3d handCentre = Eigen::Vector3d::Zero(), headCentre = Eigen::Vector3d::Zero();
+  for (const auto& p : hand) handCentre += p / double(hand.size());
+  for (const auto& p : head) headCentre += p / double(head.size());
+  double gap = std::numeric_limits<double>::infinity();
+  for (std::size_t a = 0; a < hand.size(); a += 7)
+    for (std::size_t b = 0; b < head.size(); b += 7) gap = std::min(gap, (hand[a] - head[b]).norm());
+  EXPECT_GT(handCentre.z(), s.joint(JointId::RightShoulder)->centre.z());
+  EXPECT_GT(gap, 10.0);
+  EXPECT_LT((handCentre - headCentre).norm(), 160.0) << "hand centre " << handCentre.transpose() << ", head centre " << headCentre.transpose()
+                                                     << ", gap " << gap;
 }
 
 }  // namespace
