@@ -163,7 +163,7 @@ void addDeformCommand(CLI::App& app) {
   cmd->add_option("--posed-cage", o->posedCage, "Also write the posed cage (.obj .off .ply), to check a pose's handles");
   cmd->add_option("--posed-mesh", o->posedMesh, "Also write the posed transfer mesh (.mesh .vtu .msh)");
   cmd->add_option("--collision-mask", o->collisionMask,
-                  "With body parts (a joint pose, --parts): also write a grid, 1 where the posed tissue of two body parts overlaps "
+                  "With body parts (an organ table that names the bones, or --parts): also write a grid, 1 where the posed tissue of two body parts overlaps "
                   "(the posed grid's extent at the working grid's spacing)");
   cmd->add_flag("--preserve-volumes", o->preserveVolumes,
                 "Relabel boundary voxels of the posed grid so that each label keeps the volume the deformation gives it "

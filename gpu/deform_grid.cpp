@@ -146,6 +146,17 @@ PipelineOptions pipelineOptions(const DeformGridRequest& o, const Source& source
   if (o.rigidBones) joints.jointZone = skeleton::JointZone::Child;
   PipelineOptions options = skeleton::skeletalPoseOptions(o.pose, o.poseSource, source.workingGrid(), o.organs,
                                                           {o.input, o.organsSource, o.parts}, std::move(userParts), joints);
+  // Any pose on a grid whose organ table names bones: the body parts too, for
+  // the collision count and the bone measures (the label groups of a pose
+  // without joints stay those of the organ names).
+  if (!options.bodyParts && o.organs && skeleton::namesBones(*o.organs)) {
+    try {
+      options.bodyParts = skeleton::bodyParts(source.workingGrid(), *o.organs, o.input, o.organsSource).parts;
+      options.groupsFromParts = false;
+    } catch (const InputError&) {
+      // A table that names bones the grid does not hold: no body parts.
+    }
+  }
   options.rigidBones = o.rigidBones;
   options.cage.dilationMm = o.dilationMm;
   options.cage.targetVertices = o.vertices;
@@ -177,8 +188,8 @@ void checkDeformGridRequest(const DeformGridRequest& o) {
   if (skeletal && !o.organs)
     throw InputError(o.poseSource, "a pose with joints or body parts needs the grid's organ table (--organs) to find the bones");
   if (skeletal) skeleton::requireBones(*o.organs, o.organsSource);
-  if (!o.collisionMask.empty() && !skeletal)
-    throw InputError(o.collisionMask, "collisions are between body parts: they need a joint pose, selections by body part or --parts");
+  if (!o.collisionMask.empty() && !skeletal && !(o.organs && skeleton::namesBones(*o.organs)))
+    throw InputError(o.collisionMask, "collisions are between body parts: they need an organ table that names the bones (--organs) or --parts");
 }
 
 DeformationReport deformGrid(const DeformGridRequest& o) {

@@ -152,7 +152,9 @@ TEST(PartsCommand, BadInput) {
                      spheres.grid + ": has other dims than the grid");
   // A collision mask needs body parts.
   const std::string still = writeFile(f.dir + "/still.json", R"({"selections": [{"box": {"min": [-1000, -1000, -1000], "max": [1000, 1000, 1000]}, "fixed": true}]})");
-  expectOneLineError(test::runCommand(voxmorph(deform + test::quote(still) + " --organs " + test::quote(f.organs) + " --collision-mask " +
+  expectOneLineError(test::runCommand(voxmorph(deform + test::quote(still) + " --collision-mask " + test::quote(f.dir + "/mask.nii.gz"))),
+                     f.dir + "/mask.nii.gz: collisions are between body parts");
+  expectOneLineError(test::runCommand(voxmorph(deform + test::quote(still) + " --organs " + test::quote(spheres.organs) + " --collision-mask " +
                                                test::quote(f.dir + "/mask.nii.gz"))),
                      f.dir + "/mask.nii.gz: collisions are between body parts");
   EXPECT_FALSE(std::filesystem::exists(f.dir + "/mask.nii.gz"));
