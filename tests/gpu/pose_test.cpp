@@ -211,6 +211,7 @@ TEST_P(PoseFile, RunsEndToEnd) {
     expectRenderEqualsRasterizedRender(p);
     expectGoldenImages(p);
   }
+  if (p.pose == "am_right_arm_raised_45_joints.json") expectGoldenImages(p);
 }
 
 INSTANTIATE_TEST_SUITE_P(Assets, PoseFile, testing::ValuesIn(test::poseFiles()), [](const testing::TestParamInfo<std::string>& info) {
