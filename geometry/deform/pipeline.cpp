@@ -90,7 +90,7 @@ DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOp
   if (options_.bodyParts && options_.bodyParts->dims() != grid.dims())
     throw InputError("body parts", "the body-part grid's dims differ from the grid's");
   if (options_.pose && !options_.pose->joints.empty())
-    throw InputError(options_.poseSource, "a pose with joints is compiled against the grid's skeleton first (voxmorph deform and render do; the viewer does not yet)");
+    throw InputError(options_.poseSource, "a pose with joints is compiled against the grid's skeleton first (voxmorph deform, render and view do)");
   // S from the body parts when given, else from the organ names.
   const auto labelGroups = [&] {
     return options_.bodyParts && (options_.groupsFromParts || !options_.organs) ? skeleton::labelGroupsOfParts(*options_.bodyParts)
@@ -337,7 +337,7 @@ void DeformationPipeline::setPose(const Pose& pose, const std::string& source) {
   if (usesLabelGroups(pose) && !options_.organs && !options_.bodyParts)
     throw InputError(source, "a selection by label group needs the grid's organ table (--organs)");
   if (!pose.joints.empty())
-    throw InputError(source, "a pose with joints is compiled against the grid's skeleton first (voxmorph deform and render do; the viewer does not yet)");
+    throw InputError(source, "a pose with joints is compiled against the grid's skeleton first (voxmorph deform, render and view do)");
   PoseHandles handles = selectHandles(pose, builtCage_, source, cageGroups_, cageBodyParts_);
   // Only the parts of the cage that hold a handle take part.
   const std::vector<std::int32_t> parts = cageParts(builtCage_);

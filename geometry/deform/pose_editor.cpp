@@ -1,6 +1,7 @@
 #include "geometry/deform/pose_editor.h"
 
 #include "geometry/deform/label_groups.h"
+#include "geometry/skeleton/joint_pose.h"
 #include "geometry/error.h"
 #include "geometry/tet_mesh.h"
 
@@ -47,7 +48,19 @@ PoseEditor::PoseEditor(const LabelGrid& grid, std::optional<OrganTable> organs, 
   for (const LimbSeparation& s : extraSeparations) separations_.push_back({s, std::nullopt});
   Pose shaping = setup;
   shaping.separations = separations_;
-  PipelineOptions options = poseOptions(shaping, setupSource, organs_);
+  PipelineOptions options;
+  if (!setup.joints.empty() || usesBodyParts(setup)) {
+    if (!organs_)
+      throw InputError(setupSource, "a pose with joints or body parts needs the grid's organ table (--organs) to find the bones");
+    skeleton_ = std::make_unique<skeleton::Skeleton>(skeleton::buildSkeleton(grid_, *organs_, {"grid", "organ table", "body parts"}));
+    options = poseOptions(skeleton::compileJointPose(shaping, *skeleton_, setupSource), setupSource, organs_);
+    options.bodyParts = skeleton_->parts.parts;
+    options.groupsFromParts = setup.jointOptions.groups.value_or("parts") == "parts";
+    shaping = *options.pose;
+    separations_ = shaping.separations;
+  } else {
+    options = poseOptions(shaping, setupSource, organs_);
+  }
   // The selections are embedded by update(); a pose without any has none.
   options.pose.reset();
   pipeline_ = std::make_unique<DeformationPipeline>(grid_, options);
@@ -55,9 +68,12 @@ PoseEditor::PoseEditor(const LabelGrid& grid, std::optional<OrganTable> organs, 
   state_.pose = shaping;
   // The session works in the grid frame, and saves its poses so.
   state_.pose.frame = PoseFrame::Grid;
-  if (!state_.pose.selections.empty()) selectHandles(state_.pose, pipeline_->builtCage(), setupSource_, pipeline_->cageGroups());
+  if (!state_.pose.selections.empty())
+    selectHandles(state_.pose, pipeline_->builtCage(), setupSource_, pipeline_->cageGroups(), pipeline_->cageBodyParts());
   refreshFigures();
 }
+
+PoseEditor::~PoseEditor() = default;
 
 void PoseEditor::pick(const std::vector<std::int32_t>& vertices, bool add) {
   if (!add) picked_.clear();
@@ -195,10 +211,16 @@ void PoseEditor::setHidden(std::vector<Label> hidden) {
   state_.hidden = std::move(hidden);
 }
 
-void PoseEditor::loadPose(const Pose& pose, const std::string& source) {
+void PoseEditor::loadPose(const Pose& given, const std::string& source) {
+  Pose pose = given;
+  if (!given.joints.empty()) {
+    if (!skeleton_)
+      throw InputError(source, "a pose with joints opens with view --pose (this session was not built from the skeleton)");
+    pose = skeleton::compileJointPose(given, *skeleton_, source);
+  }
   if (pose.separations.size() != separations_.size())
     throw InputError(source, "its limb separations differ from the ones this session was built with; open it with view --pose");
-  selectHandles(pose, pipeline_->builtCage(), source, pipeline_->cageGroups());
+  selectHandles(pose, pipeline_->builtCage(), source, pipeline_->cageGroups(), pipeline_->cageBodyParts());
   push();
   state_.pose = pose;
   state_.pose.frame = PoseFrame::Grid;

@@ -26,6 +26,10 @@
 #include <string>
 #include <vector>
 
+namespace vox::skeleton {
+struct Skeleton;
+}
+
 namespace vox {
 
 // What undo and redo restore.
@@ -49,10 +53,14 @@ struct PoseFigures {
 class PoseEditor {
 public:
   // setup: its separations shape the pre-processing (inset cage, TM cuts),
-  // its selections are the first edit state. Throws what
-  // DeformationPipeline throws (InputError for bad input).
+  // its selections are the first edit state. A setup with joints (or
+  // selections by body part) is compiled against the grid's skeleton first
+  // (skeleton/joint_pose.h, which needs the organ table): the session then
+  // edits the compiled selections, and saves them. Throws what
+  // DeformationPipeline and the compilation throw (InputError for bad input).
   PoseEditor(const LabelGrid& grid, std::optional<OrganTable> organs, const Pose& setup, const std::string& setupSource,
              const std::vector<LimbSeparation>& extraSeparations = {});
+  ~PoseEditor();
 
   const DeformationPipeline& pipeline() const { return *pipeline_; }
   const LabelGrid& grid() const { return grid_; }
@@ -85,7 +93,8 @@ public:
   void setArapIterations(int iterations);
   void setCuts(std::vector<std::string> cuts);
   void setHidden(std::vector<Label> hidden);
-  // Replaces the selections with a pose file's (its separations must be the
+  // Replaces the selections with a pose file's (a joint pose compiled
+  // against the session's skeleton; its separations must be the
   // ones the session was built with: they shape the pre-processing).
   void loadPose(const Pose& pose, const std::string& source);
 
@@ -113,6 +122,7 @@ private:
   std::optional<OrganTable> organs_;
   std::string setupSource_;
   std::vector<PoseSeparation> separations_;
+  std::unique_ptr<skeleton::Skeleton> skeleton_;  // built for a joint pose
   std::unique_ptr<DeformationPipeline> pipeline_;
   TetLabelVoxels tetVoxels_;
   EditState state_;
