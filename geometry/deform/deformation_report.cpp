@@ -333,6 +333,7 @@ std::string deformationReportJson(const DeformationReport& r) {
   if (const auto& c = r.volumeCorrection)
     root["volume_correction"] = {{"boundary_voxels", c->candidates},
                                  {"relabelled_voxels", c->relabelled},
+                                 {"still_boundary_voxels_kept", c->still},
                                  {"sweeps", c->sweeps},
                                  {"deviation_before_voxels", c->deviationBefore},
                                  {"deviation_after_voxels", c->deviationAfter},
@@ -391,7 +392,8 @@ std::string deformationSummary(const DeformationReport& r) {
       << (worst->name.empty() ? "" : " (" + worst->name + ")") << " " << fixed(worst->volumeChangePercent, 2) << " %; " << small
       << " labels under " << kSmallOrganVoxels << " voxels\n";
   if (const auto& c = r.volumeCorrection)
-    s << "  volume correction: " << c->relabelled << " of " << c->candidates << " boundary voxels relabelled; largest gap "
+    s << "  volume correction: " << c->relabelled << " of " << c->candidates << " boundary voxels relabelled (" << c->still
+      << " where the deformation did not move the tissue kept); largest gap "
       << "between a label's voxels and its deformed volume " << fixed(c->worstPercentBefore, 2) << " % -> "
       << fixed(c->worstPercentAfter, 2) << " %\n";
   if (!r.bones.empty()) {

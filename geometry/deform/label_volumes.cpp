@@ -138,6 +138,15 @@ LabelVolumeCorrection preserveLabelVolumes(LabelGrid& posed, const LabelGrid& so
       (out.spacing - posed.spacing()).norm() > 1e-9 * out.spacing.norm())
     throw InputError("posed grid", "its geometry is not the output grid of this deformation");
 
+  // Still tets (every vertex within kStillFraction of a voxel of its rest
+  // position): their voxels are not candidates.
+  const double stillMm = kStillFraction * source.spacing().minCoeff();
+  std::vector<std::uint8_t> still(rest.tetCount(), 1);
+  for (std::size_t t = 0; t < rest.tetCount(); ++t)
+    for (const std::int32_t v : rest.tets[t])
+      if ((deformed[std::size_t(v)] - rest.positions[std::size_t(v)]).norm() >= stillMm) still[t] = 0;
+  std::vector<std::uint64_t> rowStill;
+  std::uint64_t stillVoxels = 0;
   // Candidate moves, per output row so that the order is independent of the threads.
   // (The plan samples once per voxel: its lattice is the output grid.)
   const std::int64_t nx = out.dims[0], ny = out.dims[1];
@@ -149,6 +158,7 @@ LabelVolumeCorrection preserveLabelVolumes(LabelGrid& posed, const LabelGrid& so
     const std::int64_t z0 = slab.z0, z1 = slab.z1;
     rowMoves.assign(std::size_t((z1 - z0) * ny), {});
     rowCandidates.assign(std::size_t((z1 - z0) * ny), 0);
+    rowStill.assign(std::size_t((z1 - z0) * ny), 0);
     parallelFor((z1 - z0) * ny, threads, [&](std::int64_t r) {
       const std::int32_t y = std::int32_t(r % ny), z = std::int32_t(z0 + r / ny);
       std::vector<Move>& row = rowMoves[std::size_t(r)];
@@ -165,6 +175,10 @@ LabelVolumeCorrection preserveLabelVolumes(LabelGrid& posed, const LabelGrid& so
         const std::int64_t voxel = out.index(x, y, z);
         const Label a = posed.data()[voxel];
         if (n == 1 && labels[0] == a) continue;
+        if (still[std::size_t(t)]) {
+          ++rowStill[std::size_t(r)];
+          continue;
+        }
         float wa = 0.0f;
         for (int m = 0; m < n; ++m)
           if (labels[std::size_t(m)] == a) wa = weights[std::size_t(m)];
@@ -177,6 +191,7 @@ LabelVolumeCorrection preserveLabelVolumes(LabelGrid& posed, const LabelGrid& so
     for (std::size_t r = 0; r < rowMoves.size(); ++r) {
       moves.insert(moves.end(), rowMoves[r].begin(), rowMoves[r].end());
       candidates += rowCandidates[r];
+      stillVoxels += rowStill[r];
     }
   });
   std::sort(moves.begin(), moves.end(), [](const Move& a, const Move& b) {
@@ -211,6 +226,7 @@ LabelVolumeCorrection preserveLabelVolumes(LabelGrid& posed, const LabelGrid& so
 
   LabelVolumeCorrection result;
   result.candidates = candidates;
+  result.still = stillVoxels;
   result.deviationBefore = deviation();
   result.worstPercentBefore = worstPercent(counts, goal);
   Label* labels = posed.data();

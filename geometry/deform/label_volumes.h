@@ -65,6 +65,7 @@ std::vector<double> deformedLabelVolumes(const TetLabelVoxels& voxels, const Tet
 
 struct LabelVolumeCorrection {
   std::uint64_t candidates = 0;   // voxels whose source neighbourhood holds another label
+  std::uint64_t still = 0;        // such voxels left alone: their tet did not move (kStillFraction)
   std::uint64_t relabelled = 0;   // voxels whose label changed
   int sweeps = 0;
   double deviationBefore = 0.0;   // sum over labels of |count_l - V'_l|, voxels
@@ -72,6 +73,12 @@ struct LabelVolumeCorrection {
   double worstPercentBefore = 0.0;  // largest |count_l / V'_l - 1| in %, labels > 0 with V'_l >= 0.5
   double worstPercentAfter = 0.0;
 };
+
+// A tet whose vertices all moved by less than this fraction of the finest
+// voxel spacing is still: its output voxels are the source's, and the
+// correction leaves them alone, so tissue far from the moved parts keeps its
+// labels (the Green coordinates move it by a few micrometres).
+inline constexpr double kStillFraction = 0.1;
 
 // Relabels boundary voxels of `posed` (G' rasterized from `source` through
 // rest -> deformed, samples = 1 or more) so that label l > 0 has about
