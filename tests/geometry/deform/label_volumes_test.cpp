@@ -14,6 +14,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <cmath>
 #include <iostream>
 
@@ -118,6 +120,39 @@ TEST(LabelVolumes, RotatedJunctionSphereKeepsEveryLabelWithinOneVoxel) {
 TEST(LabelVolumes, TwistedJunctionSphereKeepsEveryLabelWithinOneVoxel) {
   const Scene& s = junctionSphere();
   correctedGrid(s, deformPositions(s.rest.positions, test::twist(gridCentre(s.source.geometry()), 1.5)), 2, "twist");
+}
+
+// Half of the sphere stays where it is, the other half is squashed: the
+// correction relabels only voxels of tets that moved, so every voxel of the
+// still half keeps the source's label.
+TEST(LabelVolumes, StillTissueKeepsItsLabels) {
+  const Scene& s = junctionSphere();
+  const GridGeometry& g = s.source.geometry();
+  const double mid = gridCentre(g).z();
+  std::vector<Eigen::Vector3d> deformed = s.rest.positions;
+  for (Eigen::Vector3d& p : deformed)
+    if (p.z() > mid) p.z() = mid + 0.8 * (p.z() - mid);
+  LabelGrid posed = rasterizeDeformedGrid(s.source, s.rest, deformed);
+  const std::vector<double> targets = deformedLabelVolumes(s.source, s.rest, deformed);
+  const LabelVolumeCorrection c = preserveLabelVolumes(posed, s.source, s.rest, deformed, targets);
+  EXPECT_GT(c.relabelled, 0u);
+  EXPECT_GT(c.still, 0u);
+  // Output voxels below the lowest vertex that moved are the source's.
+  double lowest = std::numeric_limits<double>::infinity();
+  for (std::size_t v = 0; v < deformed.size(); ++v)
+    if ((deformed[v] - s.rest.positions[v]).norm() > 0.0) lowest = std::min(lowest, s.rest.positions[v].z());
+  const GridGeometry& out = posed.geometry();
+  std::int64_t compared = 0;
+  for (std::int64_t k = 0; k < out.dims[2]; ++k)
+    for (std::int64_t j = 0; j < out.dims[1]; ++j)
+      for (std::int64_t i = 0; i < out.dims[0]; ++i) {
+        const Eigen::Vector3d p = out.voxelCenter(i, j, k);
+        Index3 v;
+        if (p.z() >= lowest - 2.0 * g.spacing.z() || !g.voxelAt(p, v)) continue;
+        ++compared;
+        ASSERT_EQ(posed.at(i, j, k), s.source.at(v[0], v[1], v[2])) << "voxel " << i << " " << j << " " << k;
+      }
+  EXPECT_GT(compared, 1000);
 }
 
 TEST(LabelVolumes, RejectsAGridOfAnotherGeometry) {
