@@ -102,8 +102,6 @@ public:
   // #TM vertices: 1 when inside the cage (placed by Green coordinates).
   const std::vector<std::uint8_t>& transferMeshInside() const { return tmInside_; }
   const std::vector<std::uint8_t>& envelopeInside() const { return envelopeInside_; }
-  // #TM vertices: 1 when a rigid bone group places it.
-  const std::vector<std::uint8_t>& transferMeshRigid() const { return rigidBones_.placed(); }
   const std::vector<std::int32_t>& handles() const { return arap_.handles(); }
   const FrameTimings& timings() const { return timings_; }
   const FrameDeformerStats& stats() const { return stats_; }

@@ -172,6 +172,8 @@ void DeformationPipeline::buildTransferMesh() {
   for (const LimbSeparation& s : options_.cuts ? *options_.cuts : options_.cage.separations)
     stats_.cuts.push_back(cutTransferMesh(transferMesh_, s.groupA, s.groupB, s.region));
   stats_.uncoveredVoxels = countUncoveredVoxels(transferMesh_, groups_);
+  // The bone groups depend on the TM alone: once per TM, not per pose.
+  rigidBones_ = boneKeys_.voxelCount() > 0 ? rigidBoneGroups(transferMesh_, boneKeys_, options_.rigidJointRings) : RigidBoneGroups{};
 }
 
 void DeformationPipeline::recordStage(StageTime time) {
@@ -188,7 +190,6 @@ void DeformationPipeline::precomputeFrame(bool withEnvelope) {
       withEnvelope ? std::span<const Eigen::Vector3d>(envelope_.positions) : std::span<const Eigen::Vector3d>();
   FrameDeformerOptions frame = options_.frame;
   frame.propagateAnyway = acrossSeparation();
-  rigidBones_ = boneKeys_.voxelCount() > 0 ? rigidBoneGroups(transferMesh_, boneKeys_, options_.rigidJointRings) : RigidBoneGroups{};
   if (options_.rigidBones) frame.rigidGroups = rigidBones_.vertexGroup;
   deformer_.precompute(cage_, envelope, transferMesh_, handles_.vertices, frame);
   if (frame.propagateAnyway.empty() || handles_.vertices.empty()) return;
