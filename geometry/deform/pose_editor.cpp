@@ -53,9 +53,7 @@ PoseEditor::PoseEditor(const LabelGrid& grid, std::optional<OrganTable> organs, 
     if (!organs_)
       throw InputError(setupSource, "a pose with joints or body parts needs the grid's organ table (--organs) to find the bones");
     skeleton_ = std::make_unique<skeleton::Skeleton>(skeleton::buildSkeleton(grid_, *organs_, {"grid", "organ table", "body parts"}));
-    options = poseOptions(skeleton::compileJointPose(shaping, *skeleton_, setupSource), setupSource, organs_);
-    options.bodyParts = skeleton_->parts.parts;
-    options.groupsFromParts = setup.jointOptions.groups.value_or("parts") == "parts";
+    options = skeleton::skeletalPoseOptions(shaping, setupSource, *skeleton_, organs_);
     shaping = *options.pose;
     separations_ = shaping.separations;
   } else {
@@ -216,7 +214,7 @@ void PoseEditor::loadPose(const Pose& given, const std::string& source) {
   if (!given.joints.empty()) {
     if (!skeleton_)
       throw InputError(source, "a pose with joints opens with view --pose (this session was not built from the skeleton)");
-    pose = skeleton::compileJointPose(given, *skeleton_, source);
+    pose = skeleton::compileJointPose(given, *skeleton_, source, skeleton::jointPoseOptions(given.jointOptions));
   }
   if (pose.separations.size() != separations_.size())
     throw InputError(source, "its limb separations differ from the ones this session was built with; open it with view --pose");

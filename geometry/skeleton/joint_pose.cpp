@@ -285,15 +285,22 @@ PipelineOptions skeletalPoseOptions(const Pose& pose, const std::string& poseSou
   if (!organs)
     throw InputError(poseSource, pose.joints.empty() ? "selections by body part need the grid's organ table (--organs) to find the bones"
                                                      : "a pose with joints needs the grid's organ table (--organs) to find the bones");
-  Skeleton skeleton = buildSkeleton(grid, *organs, sources, std::move(userParts));
-  JointPoseOptions compile = options;
-  const PoseJointOptions& given = pose.jointOptions;
-  if (given.zone) compile.jointZone = *given.zone == "free" ? JointZone::Free : *given.zone == "child" ? JointZone::Child : JointZone::Parent;
-  if (given.marginMm) compile.jointMarginMm = *given.marginMm;
-  PipelineOptions o = poseOptions(compileJointPose(pose, skeleton, poseSource, compile), poseSource, organs);
+  return skeletalPoseOptions(pose, poseSource, buildSkeleton(grid, *organs, sources, std::move(userParts)), organs, options);
+}
+
+JointPoseOptions jointPoseOptions(const PoseJointOptions& given, JointPoseOptions base) {
+  if (given.zone) base.jointZone = *given.zone == "free" ? JointZone::Free : *given.zone == "child" ? JointZone::Child : JointZone::Parent;
+  if (given.marginMm) base.jointMarginMm = *given.marginMm;
+  return base;
+}
+
+PipelineOptions skeletalPoseOptions(const Pose& pose, const std::string& poseSource, const Skeleton& skeleton,
+                                    const std::optional<OrganTable>& organs, const JointPoseOptions& options) {
+  PipelineOptions o =
+      poseOptions(compileJointPose(pose, skeleton, poseSource, jointPoseOptions(pose.jointOptions, options)), poseSource, organs);
   if (!pose.joints.empty()) o.partMotions = partTransforms(pose, skeleton, poseSource);
-  o.bodyParts = std::move(skeleton.parts.parts);
-  o.groupsFromParts = given.groups.value_or("parts") == "parts";
+  o.bodyParts = skeleton.parts.parts;
+  o.groupsFromParts = pose.jointOptions.groups.value_or("parts") == "parts";
   return o;
 }
 

@@ -90,5 +90,11 @@ Pose compileJointPose(const Pose& pose, const Skeleton& skeleton, const std::str
 PipelineOptions skeletalPoseOptions(const Pose& pose, const std::string& poseSource, const LabelGrid& grid,
                                     const std::optional<OrganTable>& organs, const SkeletonSources& sources,
                                     std::optional<LabelGrid> userParts, const JointPoseOptions& options = {});
+// The same against a skeleton already built (the viewer keeps its skeleton
+// to compile the joint poses loaded later): always compiles.
+PipelineOptions skeletalPoseOptions(const Pose& pose, const std::string& poseSource, const Skeleton& skeleton,
+                                    const std::optional<OrganTable>& organs, const JointPoseOptions& options = {});
+// `base` with a pose's "joint_options" (zone, margin) applied.
+JointPoseOptions jointPoseOptions(const PoseJointOptions& given, JointPoseOptions base = {});
 
 }  // namespace vox::skeleton
