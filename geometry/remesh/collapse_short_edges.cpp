@@ -47,6 +47,7 @@ std::int32_t EdgeCollapser::tryCollapse(std::int32_t u, std::int32_t v, bool app
   classifyNeighborhood(complex_, v, nv_);
   const EdgeRule rule = edgeRule(nu_, nv_, suv, dummy);
   if (rule.condition == EdgeCondition::Exclusion) return -1;
+  if (complex_.hasPinches() && nearPinch()) return -1;
   if (!topologyTests(suv) || !linkCondition()) return -1;
 
   worstBefore_[0] = worstBefore_[1] = kUnknownCosine;
@@ -81,6 +82,17 @@ std::int32_t EdgeCollapser::tryCollapse(std::int32_t u, std::int32_t v, bool app
     return k.vertex;
   }
   return -1;
+}
+
+bool EdgeCollapser::nearPinch() const {
+  // The kept vertex gets the removed one's neighbours: next to a copy of a
+  // pinched vertex that could join two copies (see RemeshComplex::pinchOf).
+  for (const VertexNeighborhood* n : {&nu_, &nv_}) {
+    if (complex_.pinchOf(n->vertex) >= 0) return true;
+    for (std::int32_t w : n->neighbors)
+      if (complex_.pinchOf(w) >= 0) return true;
+  }
+  return false;
 }
 
 bool EdgeCollapser::anyPositionKeepsEdgesShort() const {

@@ -39,6 +39,7 @@ public:
 
 private:
   bool anyPositionKeepsEdgesShort() const;
+  bool nearPinch() const;
   bool topologyTests(const LabelSet& edgeLabels) const;
   bool linkCondition() const;
   bool test1PositiveVolumes(const VertexNeighborhood& removed, const VertexNeighborhood& kept,

@@ -4,10 +4,10 @@
 
 namespace vox::remesh {
 
-VertexKind classifyVertex(int labelCount, int featureEdgeCount) {
+VertexKind classifyVertex(int labelCount, int featureEdgeCount, bool featureEdgesAgree) {
   if (labelCount <= 1) return VertexKind::Inside;
   if (labelCount == 2) return VertexKind::Surface;
-  if (featureEdgeCount == 2) return VertexKind::Feature;
+  if (featureEdgeCount == 2 && featureEdgesAgree) return VertexKind::Feature;
   return VertexKind::Corner;
 }
 
@@ -40,12 +40,17 @@ void classifyNeighborhood(const RemeshComplex& complex, std::int32_t v, VertexNe
     }
   }
   out.featureEdges = 0;
-  bool overflow = out.labels.overflow();
+  bool overflow = out.labels.overflow(), agree = true;
+  const LabelSet* firstFeature = nullptr;
   for (const LabelSet& s : out.edgeLabels) {
-    out.featureEdges += isFeatureEdge(s);
     overflow = overflow || s.overflow();
+    if (!isFeatureEdge(s)) continue;
+    ++out.featureEdges;
+    if (!firstFeature) firstFeature = &s;
+    else agree = agree && *firstFeature == s;
   }
-  out.kind = overflow ? VertexKind::Corner : classifyVertex(out.labels.size(), out.featureEdges);
+  out.kind = overflow || complex.isPinned(v) ? VertexKind::Corner
+                                             : classifyVertex(out.labels.size(), out.featureEdges, agree);
 }
 
 void gatherNeighborhood(const RemeshComplex& complex, std::int32_t v, VertexNeighborhood& out) {

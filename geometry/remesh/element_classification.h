@@ -24,8 +24,11 @@ enum class VertexKind : std::uint8_t {
 // only inside a 1-junction (exactly two feature edges). The free end of a
 // 1-junction (one feature edge), a branching point (three or more, also
 // with |S| = 3) and a point where labels meet without a feature edge are
-// junction points too: corners, which no operation moves or removes.
-VertexKind classifyVertex(int labelCount, int featureEdgeCount);
+// junction points too: corners, which no operation moves or removes. So is
+// a vertex whose two feature edges carry different label sets: one
+// 1-junction ends there and another begins (meshes from other meshers have
+// them where several organs meet).
+VertexKind classifyVertex(int labelCount, int featureEdgeCount, bool featureEdgesAgree = true);
 
 // Feature edges are boundary edges between three or more labels (2.2.4).
 inline bool isFeatureEdge(const LabelSet& edgeLabels) { return edgeLabels.size() >= 3; }

@@ -75,6 +75,15 @@ bool EdgeFlipper::fanCreatesExistingEdge(std::size_t apex) {
   return false;
 }
 
+bool EdgeFlipper::ringNearPinch() const {
+  // A flip joins ring vertices: none may be a copy of a pinched vertex
+  // (see RemeshComplex::pinchOf).
+  if (!complex_.hasPinches()) return false;
+  for (std::int32_t w : ring_.ring)
+    if (complex_.pinchOf(w) >= 0) return true;
+  return false;
+}
+
 bool EdgeFlipper::tryFlipInnerEdge(std::int32_t a, std::int32_t b, bool apply) {
   if (a == complex_.dummyVertex() || b == complex_.dummyVertex()) return false;
   if (!complex_.vertexAlive(a) || !complex_.vertexAlive(b)) return false;
@@ -83,6 +92,7 @@ bool EdgeFlipper::tryFlipInnerEdge(std::int32_t a, std::int32_t b, bool apply) {
   complex_.edgeRing(a, b, t, ring_);
   const std::size_t n = ring_.size();
   if (n > std::size_t(options_.maxRing)) return false;
+  if (ringNearPinch()) return false;
   const std::int32_t label = complex_.label(ring_.tets[0]);
   const auto& P = complex_.positions();
   double current = -1.0;
@@ -141,6 +151,7 @@ bool EdgeFlipper::tryFlipSurfaceEdge(std::int32_t a, std::int32_t b, bool apply)
   complex_.edgeRing(a, b, t, ring_);
   const std::size_t n = ring_.size();
   if (n < 4 || n > std::size_t(options_.maxRing)) return false;
+  if (ringNearPinch()) return false;
   // Exactly two label changes around the edge: the boundary facets (a,b,c)
   // and (a,b,d), each arc at least two tets so (c, d) is not a ring edge.
   std::size_t change[2], changes = 0;
@@ -228,6 +239,7 @@ bool EdgeFlipper::tryFlipFace(std::int32_t t, int k, bool apply) {
   if (complex_.isDummyTet(n) || complex_.label(n) != complex_.label(t)) return false;
   const std::int32_t apexT = complex_.tet(t)[std::size_t(k)];
   const std::int32_t apexN = complex_.tet(n)[std::size_t(complex_.neighborFace(t, k))];
+  if (complex_.pinchOf(apexT) >= 0 || complex_.pinchOf(apexN) >= 0) return false;  // see RemeshComplex::pinchOf
   const auto& P = complex_.positions();
   auto worstOf = [&](const Tet& q) {
     return minDihedralCosine(P[std::size_t(q[0])], P[std::size_t(q[1])], P[std::size_t(q[2])], P[std::size_t(q[3])]);

@@ -60,6 +60,7 @@ private:
   // early once it reaches `bound`.
   double fanWorstCosine(double bound) const;
   bool fanCreatesExistingEdge(std::size_t apex);
+  bool ringNearPinch() const;
   // Edges of v on the x|y interface, and |S(v)|.
   std::pair<int, int> boundaryValence(std::int32_t v, std::int32_t x, std::int32_t y);
 

@@ -122,16 +122,18 @@ MeshTopology computeMeshTopology(const TetMesh& input) {
     for (std::int32_t l : sv)
       if (l > 0) ++counts[l].v;
     int feature = 0;
+    bool agree = true;
     for (std::size_t j = 0; j < nbr.size(); ++j) {
       if (!isFeatureEdge(nbrLabels[j])) continue;
       ++feature;
+      agree = agree && nbrLabels[j] == *std::find_if(nbrLabels.begin(), nbrLabels.end(), isFeatureEdge);
       if (nbr[j] > v) featureEdges.push_back({toVector(nbrLabels[j]), {v, nbr[j]}});
     }
     for (std::size_t j = 0; j < nbr.size(); ++j)
       if (nbr[j] > v)
         for (std::int32_t l : nbrLabels[j])
           if (l > 0) ++counts[l].e;
-    if (classifyVertex(sv.size(), feature) == VertexKind::Corner) ++out.junctionPoints[toVector(sv)];
+    if (classifyVertex(sv.size(), feature, agree) == VertexKind::Corner) ++out.junctionPoints[toVector(sv)];
   }
   for (auto& [label, c] : counts) out.labels[label].euler = c.v - c.e + c.f - c.t;
   countJunctionCurves(featureEdges, out);
@@ -216,11 +218,15 @@ MeshTopology computeGridTopology(const LabelGrid& grid) {
         addCell(s, +1);
         if (s.size() < 3) continue;
         int feature = 0;
-        for (int a = 0; a < 3; ++a) {
-          feature += isFeatureEdge(edgeLabels(a, i, j, k));
-          feature += isFeatureEdge(edgeLabels(a, i - (a == 0), j - (a == 1), k - (a == 2)));
-        }
-        if (classifyVertex(s.size(), feature) == VertexKind::Corner) ++out.junctionPoints[toVector(s)];
+        bool agree = true;
+        LabelSet first;
+        for (int a = 0; a < 3; ++a)
+          for (const LabelSet& e : {edgeLabels(a, i, j, k), edgeLabels(a, i - (a == 0), j - (a == 1), k - (a == 2))}) {
+            if (!isFeatureEdge(e)) continue;
+            if (feature++ == 0) first = e;
+            else agree = agree && e == first;
+          }
+        if (classifyVertex(s.size(), feature, agree) == VertexKind::Corner) ++out.junctionPoints[toVector(s)];
       }
   countJunctionCurves(featureEdges, out);
   return out;

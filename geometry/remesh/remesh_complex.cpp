@@ -2,9 +2,13 @@
 
 #include "geometry/error.h"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
+#include <tuple>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 namespace vox::remesh {
 
@@ -35,6 +39,35 @@ RemeshComplex::RemeshComplex(const TetMesh& mesh, const std::string& source) {
 
   labels_ = mesh.labels;
   neighbors_ = tetFaceAdjacency(tets_, std::int32_t(positions_.size()), source);
+  // Edges met by more than two open facets: parts of the input touch along
+  // them. Their end points are pinned, so the contact stays as it is.
+  std::vector<std::pair<std::int32_t, std::int32_t>> openEdges;
+  for (std::size_t t = 0; t < tets_.size(); ++t)
+    for (int k = 0; k < 4; ++k)
+      if (neighbors_[t][std::size_t(k)] == kNoFace) {
+        const Tri f = tetFace(tets_[t], k);
+        for (int i = 0; i < 3; ++i) openEdges.push_back(std::minmax(f[std::size_t(i)], f[std::size_t((i + 1) % 3)]));
+      }
+  std::sort(openEdges.begin(), openEdges.end());
+  const std::size_t inputVertices = positions_.size();
+  splitPinchedVertices();
+  pinned_.assign(positions_.size() + 1, 0);
+  for (std::size_t v = 0; v < copyOf_.size(); ++v)
+    if (copyOf_[v] >= 0) pinned_[v] = pinned_[std::size_t(copyOf_[v])] = 1;
+  for (std::size_t i = 0; i < openEdges.size();) {
+    std::size_t j = i + 1;
+    while (j < openEdges.size() && openEdges[j] == openEdges[i]) ++j;
+    if (j - i > 2) pinned_[std::size_t(openEdges[i].first)] = pinned_[std::size_t(openEdges[i].second)] = 1;
+    i = j;
+  }
+  // A pinned vertex's copies are pinned with it.
+  for (std::size_t v = inputVertices; v < copyOf_.size(); ++v)
+    if (pinned_[std::size_t(copyOf_[v])]) pinned_[v] = 1;
+  pinchOf_.assign(copyOf_.size(), -1);
+  for (std::size_t v = inputVertices; v < copyOf_.size(); ++v) {
+    pinchOf_[v] = pinchOf_[std::size_t(copyOf_[v])] = copyOf_[v];
+    hasPinches_ = true;
+  }
 
   // Join every open facet to the dummy vertex. Face k of a positive tet is
   // oriented outwards (tetFace), so (face, dummy) is positive "at infinity".
@@ -50,24 +83,14 @@ RemeshComplex::RemeshComplex(const TetMesh& mesh, const std::string& source) {
         cone.push_back({f[0], f[1], f[2], dummy_});
         coneBase.push_back(std::int32_t(4 * t + std::size_t(k)));
       }
-  const auto coneAdjacency = tetFaceAdjacency(cone, std::int32_t(positions_.size()), source);
   for (std::size_t c = 0; c < cone.size(); ++c) {
-    const std::int32_t t = std::int32_t(domainTets + c);
-    tets_.push_back(cone[c]);
     const std::int32_t base = coneBase[c];
+    tets_.push_back(cone[c]);
     labels_.push_back(mesh.labels[std::size_t(base / 4)] == kBackgroundLabel ? kDummyLabel : kBackgroundLabel);
-    std::array<std::int32_t, 4> nb{};
-    for (int k = 0; k < 3; ++k) {
-      const std::int32_t code = coneAdjacency[c][std::size_t(k)];
-      if (code == kNoFace)
-        throw InputError(source, "the outer boundary is not a closed manifold surface near vertex " +
-                                     std::to_string(cone[c][std::size_t((k + 1) % 3)]));
-      nb[std::size_t(k)] = std::int32_t(4 * domainTets) + code;
-    }
-    nb[3] = base;
-    neighbors_.push_back(nb);
-    neighbors_[std::size_t(base / 4)][std::size_t(base % 4)] = 4 * t + 3;
+    neighbors_.push_back({kNoFace, kNoFace, kNoFace, base});
+    neighbors_[std::size_t(base / 4)][std::size_t(base % 4)] = 4 * std::int32_t(domainTets + c) + 3;
   }
+  glueCone(domainTets, source);
 
   vertexTet_.assign(positions_.size(), -1);
   std::vector<std::int32_t> incidence(positions_.size(), 0);
@@ -81,13 +104,193 @@ RemeshComplex::RemeshComplex(const TetMesh& mesh, const std::string& source) {
   std::reverse(freeVertices_.begin(), freeVertices_.end());
 
   // The operations find a vertex's tets by walking through its faces: that
-  // walk must reach all of them (no pinched vertex).
+  // walk must reach all of them.
   std::vector<std::int32_t> star;
   for (std::int32_t v = 0; v < std::int32_t(positions_.size()); ++v) {
     if (v == dummy_ || vertexTet_[std::size_t(v)] < 0) continue;
     incidentTets(v, star);
     if (std::int32_t(star.size()) != incidence[std::size_t(v)])
       throw InputError(source, "vertex " + std::to_string(v) + " is non-manifold (its tets are not connected through faces)");
+  }
+}
+
+void RemeshComplex::splitPinchedVertices() {
+  // The tets around each vertex, grouped by the faces through it: two parts
+  // of the mesh touching at a vertex (or along an edge, at its end points)
+  // form several groups. Each further group gets a copy of the vertex at the
+  // same place, so every star is connected through faces; toTetMesh merges
+  // the copies again, and they are pinned, so they stay together.
+  // Only a vertex on an open facet can be pinched in a mesh whose tets do not
+  // overlap (elsewhere each group's link would be a closed surface around it).
+  const std::size_t nv = positions_.size(), nt = tets_.size();
+  std::vector<std::uint8_t> open(nv, 0);
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 4; ++k)
+      if (neighbors_[t][std::size_t(k)] == kNoFace)
+        for (int i = 0; i < 4; ++i)
+          if (i != k) open[std::size_t(tets_[t][std::size_t(i)])] = 1;
+  std::vector<std::int64_t> first(nv + 1, 0);
+  for (const Tet& q : tets_)
+    for (std::int32_t v : q) first[std::size_t(v) + 1] += open[std::size_t(v)];
+  for (std::size_t v = 0; v < nv; ++v) first[v + 1] += first[v];
+  std::vector<std::int32_t> star(static_cast<std::size_t>(first[nv]));
+  {
+    std::vector<std::int64_t> fill(first.begin(), first.end() - 1);
+    for (std::size_t t = 0; t < nt; ++t)
+      for (std::int32_t v : tets_[t])
+        if (open[std::size_t(v)]) star[std::size_t(fill[std::size_t(v)]++)] = std::int32_t(t);
+  }
+  copyOf_.assign(nv, -1);
+  std::vector<std::uint32_t> seen(nt, 0);
+  std::uint32_t stamp = 0;
+  std::vector<std::int32_t> queue;
+  for (std::size_t v = 0; v < nv; ++v) {
+    const std::int64_t b = first[v], e = first[v + 1];
+    if (e - b < 2) continue;
+    ++stamp;
+    int groups = 0;
+    for (std::int64_t i = b; i < e; ++i) {
+      const std::int32_t t0 = star[std::size_t(i)];
+      if (seen[std::size_t(t0)] == stamp) continue;
+      // A further group: its tets take a copy of v.
+      std::int32_t w = std::int32_t(v);
+      if (groups++ > 0) {
+        w = std::int32_t(positions_.size());
+        positions_.push_back(positions_[v]);
+        copyOf_.push_back(std::int32_t(v));
+      }
+      queue.assign(1, t0);
+      seen[std::size_t(t0)] = stamp;
+      for (std::size_t j = 0; j < queue.size(); ++j) {
+        const std::int32_t t = queue[j];
+        Tet& q = tets_[std::size_t(t)];
+        for (int k = 0; k < 4; ++k) {
+          if (q[std::size_t(k)] == std::int32_t(v)) continue;
+          const std::int32_t code = neighbors_[std::size_t(t)][std::size_t(k)];
+          if (code == kNoFace || seen[std::size_t(code >> 2)] == stamp) continue;
+          seen[std::size_t(code >> 2)] = stamp;
+          queue.push_back(code >> 2);
+        }
+      }
+      if (w != std::int32_t(v))
+        for (std::int32_t t : queue)
+          for (std::int32_t& x : tets_[std::size_t(t)])
+            if (x == std::int32_t(v)) x = w;
+    }
+  }
+}
+
+void RemeshComplex::glueCone(std::size_t domainTets, const std::string& source) {
+  // Face k < 3 of a cone tet (f0, f1, f2, dummy) holds the facet's edge
+  // opposite f_k and the dummy vertex. Along an edge of a closed manifold
+  // boundary two facets meet and their cone tets are glued. Where the
+  // boundary is pinched along an edge (2m facets), the facets are ordered by
+  // angle around the edge and each is glued to its neighbour on the side
+  // away from the domain: the cone tets around the edge then close up like
+  // the outside does, and the edge's end points are pinned.
+  struct Entry {
+    std::int32_t lo, hi;  // the edge
+    std::int32_t face;    // 4 * cone tet + k
+  };
+  std::vector<Entry> entries;
+  for (std::size_t t = domainTets; t < tets_.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const std::int32_t x = tets_[t][std::size_t((k + 1) % 3)], y = tets_[t][std::size_t((k + 2) % 3)];
+      entries.push_back({std::min(x, y), std::max(x, y), std::int32_t(4 * t + std::size_t(k))});
+    }
+  std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) {
+    return std::tie(a.lo, a.hi, a.face) < std::tie(b.lo, b.hi, b.face);
+  });
+  auto glueFaces = [&](std::int32_t f, std::int32_t g) {
+    neighbors_[std::size_t(f >> 2)][std::size_t(f & 3)] = g;
+    neighbors_[std::size_t(g >> 2)][std::size_t(g & 3)] = f;
+  };
+  auto edgeName = [&](std::int32_t x, std::int32_t y) {
+    auto original = [&](std::int32_t v) { return copyOf_[std::size_t(v)] >= 0 ? copyOf_[std::size_t(v)] : v; };
+    return "(" + std::to_string(original(x)) + ", " + std::to_string(original(y)) + ")";
+  };
+  struct Around {
+    double angle;
+    bool domainAhead;  // the domain lies at larger angles
+    std::int32_t face;
+  };
+  std::vector<Around> around;
+  for (std::size_t i = 0; i < entries.size();) {
+    std::size_t j = i + 1;
+    while (j < entries.size() && entries[j].lo == entries[i].lo && entries[j].hi == entries[i].hi) ++j;
+    const std::int32_t x = entries[i].lo, y = entries[i].hi;
+    if (j - i == 2) {
+      glueFaces(entries[i].face, entries[i + 1].face);
+    } else {
+      if ((j - i) % 2 != 0)
+        throw InputError(source, "the outer boundary is not closed at edge " + edgeName(x, y) + " (" +
+                                     std::to_string(j - i) + " open facets meet there)");
+      pinned_[std::size_t(x)] = pinned_[std::size_t(y)] = 1;
+      const Eigen::Vector3d px = positions_[std::size_t(x)];
+      const Eigen::Vector3d axis = (positions_[std::size_t(y)] - px).normalized();
+      Eigen::Vector3d e1 = axis.unitOrthogonal();
+      const Eigen::Vector3d e2 = axis.cross(e1);
+      auto angleOf = [&](std::int32_t v) {
+        const Eigen::Vector3d d = positions_[std::size_t(v)] - px;
+        return std::atan2(d.dot(e2), d.dot(e1));
+      };
+      around.clear();
+      for (std::size_t n = i; n < j; ++n) {
+        const std::int32_t c = entries[n].face >> 2, k = entries[n].face & 3;
+        const std::int32_t z = tets_[std::size_t(c)][std::size_t(k)];
+        const std::int32_t base = neighbors_[std::size_t(c)][3];
+        const std::int32_t q = tets_[std::size_t(base >> 2)][std::size_t(base & 3)];
+        const double a = angleOf(z);
+        double d = angleOf(q) - a;
+        if (d > std::numbers::pi) d -= 2 * std::numbers::pi;
+        if (d <= -std::numbers::pi) d += 2 * std::numbers::pi;
+        around.push_back({a, d > 0.0, entries[n].face});
+      }
+      std::sort(around.begin(), around.end(), [](const Around& a, const Around& b) {
+        return a.angle < b.angle || (a.angle == b.angle && a.face < b.face);
+      });
+      // Outside lies between a facet with the domain behind it and the next
+      // one, which has the domain ahead.
+      const std::size_t m = around.size();
+      for (std::size_t n = 0; n < m; ++n) {
+        const Around& a = around[n];
+        const Around& b = around[(n + 1) % m];
+        if (a.domainAhead == b.domainAhead)
+          throw InputError(source, "the tets around edge " + edgeName(x, y) + " overlap");
+        if (!a.domainAhead) glueFaces(a.face, b.face);
+      }
+    }
+    i = j;
+  }
+  // A boundary vertex whose open facets form more than one fan (two parts
+  // touching at a point from outside, or the end of a pinched edge) is
+  // pinned: it is where the outer boundary is not a surface.
+  std::vector<std::pair<std::int32_t, std::int32_t>> fans;  // (vertex, cone tet)
+  for (std::size_t t = domainTets; t < tets_.size(); ++t)
+    for (int k = 0; k < 3; ++k) fans.push_back({tets_[t][std::size_t(k)], std::int32_t(t)});
+  std::sort(fans.begin(), fans.end());
+  std::vector<std::int32_t> queue;
+  std::vector<std::uint32_t> seen(tets_.size(), 0);
+  std::uint32_t stamp = 0;
+  for (std::size_t i = 0; i < fans.size();) {
+    std::size_t j = i + 1;
+    while (j < fans.size() && fans[j].first == fans[i].first) ++j;
+    const std::int32_t v = fans[i].first;
+    ++stamp;
+    queue.assign(1, fans[i].second);
+    seen[std::size_t(fans[i].second)] = stamp;
+    for (std::size_t n = 0; n < queue.size(); ++n) {
+      const Tet& q = tets_[std::size_t(queue[n])];
+      for (int k = 0; k < 3; ++k) {  // faces holding the dummy vertex
+        if (q[std::size_t(k)] == v) continue;
+        const std::int32_t c = neighbors_[std::size_t(queue[n])][std::size_t(k)] >> 2;
+        if (seen[std::size_t(c)] == stamp) continue;
+        seen[std::size_t(c)] = stamp;
+        queue.push_back(c);
+      }
+    }
+    if (queue.size() != j - i) pinned_[std::size_t(v)] = 1;
+    i = j;
   }
 }
 
@@ -99,9 +302,13 @@ TetMesh RemeshComplex::toTetMesh(bool keepImaginary) const {
     if (labels_[t] > 0) return true;
     return keepImaginary && labels_[t] == kBackgroundLabel && !isDummyTet(std::int32_t(t));
   };
+  // Copies of a pinched vertex are written as the vertex itself.
+  auto original = [&](std::int32_t v) {
+    return std::size_t(v) < copyOf_.size() && copyOf_[std::size_t(v)] >= 0 ? copyOf_[std::size_t(v)] : v;
+  };
   for (std::size_t t = 0; t < tets_.size(); ++t)
     if (kept(t))
-      for (std::int32_t v : tets_[t]) remap[std::size_t(v)] = 0;
+      for (std::int32_t v : tets_[t]) remap[std::size_t(original(v))] = 0;
   std::int32_t next = 0;
   for (std::size_t v = 0; v < positions_.size(); ++v)
     if (remap[v] == 0) {
@@ -111,7 +318,7 @@ TetMesh RemeshComplex::toTetMesh(bool keepImaginary) const {
   for (std::size_t t = 0; t < tets_.size(); ++t)
     if (kept(t)) {
       Tet q = tets_[t];
-      for (auto& v : q) v = remap[std::size_t(v)];
+      for (auto& v : q) v = remap[std::size_t(original(v))];
       out.tets.push_back(q);
       out.labels.push_back(labels_[t]);
     }

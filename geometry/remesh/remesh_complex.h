@@ -68,9 +68,14 @@ public:
   // are > 0 (domain) or 0 (imaginary). Each facet without a neighbour is
   // joined to the dummy vertex; the new dummy tet gets kDummyLabel behind an
   // imaginary tet and the outside label 0 behind a domain tet, so the domain
-  // always meets "outside" through label 0. Throws InputError(source, ...)
-  // for zero-volume tets, negative labels, faces shared by more
-  // than two tets, or a vertex whose tets are not face-connected.
+  // always meets "outside" through label 0. The outer boundary need not be
+  // a manifold surface: parts touching at a vertex get copies of it (one
+  // per group of face-connected tets, merged again by toTetMesh), and along
+  // an edge met by 2m open facets the dummy tets are glued around the edge
+  // by angle, as the outside turns. Such vertices, and those where the open
+  // facets form several fans, are pinned. Throws InputError(source, ...) for
+  // zero-volume tets, negative labels, faces shared by more than two tets,
+  // or tets that overlap around an edge.
   explicit RemeshComplex(const TetMesh& mesh, const std::string& source = "mesh");
 
   // Live tets with label > 0 (and, with keepImaginary, the geometric tets of
@@ -87,6 +92,18 @@ public:
   bool tetAlive(std::int32_t t) const { return tets_[std::size_t(t)][0] >= 0; }
 
   std::int32_t dummyVertex() const { return dummy_; }
+  // A pinned vertex is where the input's outer boundary is not a surface
+  // (see the constructor): no operation moves or removes it (a corner), and
+  // an outer-boundary edge between two pinned vertices is not split.
+  bool isPinned(std::int32_t v) const { return std::size_t(v) < pinned_.size() && pinned_[std::size_t(v)] != 0; }
+  // Where parts of the input touch at a vertex, the complex holds one copy of
+  // it per part: the input's vertex for every copy (and for the vertex
+  // itself), -1 elsewhere. An operation must not make a vertex adjacent to
+  // two copies of one vertex (in the output they are one, and the parts would
+  // touch along a new edge), so collapses and flips next to a copy, and
+  // splits whose new vertex would see two copies, are not made.
+  std::int32_t pinchOf(std::int32_t v) const { return std::size_t(v) < pinchOf_.size() ? pinchOf_[std::size_t(v)] : -1; }
+  bool hasPinches() const { return hasPinches_; }
   // A tet containing the dummy vertex has no geometry.
   bool isDummyTet(std::int32_t t) const {
     const Tet& q = tets_[std::size_t(t)];
@@ -152,6 +169,13 @@ private:
   std::vector<std::int32_t> freeVertices_;
   std::vector<std::int32_t> freeTets_;
   std::int32_t dummy_ = -1;
+  std::vector<std::uint8_t> pinned_;
+  std::vector<std::int32_t> copyOf_;  // a pinched vertex's copies: the vertex they stand for, else -1
+  std::vector<std::int32_t> pinchOf_;  // copies and the vertex they stand for: that vertex, else -1
+  bool hasPinches_ = false;
+
+  void splitPinchedVertices();
+  void glueCone(std::size_t domainTets, const std::string& source);
 
   mutable StarWalker walker_;
 };

@@ -1,12 +1,16 @@
 #include "geometry/error.h"
 #include "geometry/remesh/collapse_short_edges.h"
 #include "geometry/remesh/mesh_topology.h"
+#include "geometry/remesh/remesh.h"
 #include "geometry/remesh/remesh_complex.h"
 #include "geometry/remesh/split_long_edges.h"
 #include "geometry/synth.h"
 #include "geometry/voxel_tetrahedralization.h"
 
 #include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
 
 namespace vox::remesh {
 namespace {
@@ -56,17 +60,92 @@ TEST(RemeshComplex, TurnsNegativeTetsOverAndRefusesFlatOnes) {
   }
 }
 
-TEST(RemeshComplex, RejectsNonManifoldInput) {
+// A labeled tet mesh of blocks of `block`^3 voxels: `blocks` lists block
+// positions and labels; label 0 blocks are cavities kept as label-0 tets,
+// everything else around is left out (no imaginary layer), so parts that
+// touch only along an edge or at a point give a non-manifold outer boundary.
+struct Block {
+  int i, j, k;
+  Label label;
+};
+TetMesh blocksMesh(const std::vector<Block>& blocks, int block) {
+  int n = 0;
+  for (const Block& b : blocks) n = std::max({n, b.i + 1, b.j + 1, b.k + 1});
+  GridGeometry g;
+  g.dims = {n * block, n * block, n * block};
+  LabelGrid grid(g, 0);
+  const Label cavity = 250;
+  for (const Block& b : blocks)
+    for (int z = 0; z < block; ++z)
+      for (int y = 0; y < block; ++y)
+        for (int x = 0; x < block; ++x) grid.at(b.i * block + x, b.j * block + y, b.k * block + z) = b.label ? b.label : cavity;
+  const TetMesh all = tetrahedralizeVoxels(grid);
   TetMesh mesh;
-  mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-  // Two tets touching at one vertex only: the vertex is pinched.
-  mesh.positions.push_back({-1, 0, 0});
-  mesh.positions.push_back({0, -1, 0});
-  mesh.positions.push_back({0, 0, -1});
-  mesh.tets = {{0, 1, 2, 3}, {0, 5, 4, 6}};
-  mesh.labels = {1, 1};
-  ASSERT_GT(signedVolume(mesh.positions, mesh.tets[1]), 0.0);
-  EXPECT_THROW(RemeshComplex(mesh, "pinched.mesh"), InputError);
+  mesh.positions = all.positions;  // unused ones stay: dropped by the remesher
+  for (std::size_t t = 0; t < all.tetCount(); ++t)
+    if (all.labels[t] != 0) {
+      mesh.tets.push_back(all.tets[t]);
+      mesh.labels.push_back(all.labels[t] == cavity ? 0 : all.labels[t]);
+    }
+  return mesh;
+}
+
+// Meshes users bring have outer boundaries that are not manifold: parts that
+// touch along an edge or at a point. They remesh with exact topology, the
+// contact kept, every tet positive.
+TEST(RemeshComplex, NonManifoldOuterBoundariesRemeshWithTheirTopology) {
+  struct Case {
+    const char* name;
+    std::vector<Block> blocks;
+  };
+  const std::vector<Case> cases = {
+      {"edge contact, one label", {{0, 0, 0, 1}, {1, 1, 0, 1}}},
+      {"edge contact, two labels", {{0, 0, 0, 1}, {1, 1, 0, 2}}},
+      {"vertex contact", {{0, 0, 0, 1}, {1, 1, 1, 2}}},
+      {"vertex contact, one label", {{0, 0, 0, 3}, {1, 1, 1, 3}}},
+      // A ring of blocks whose ends touch along an edge: the edge's upper end
+      // has one face-connected star, its lower end two.
+      {"ring closed along an edge", {{0, 0, 0, 1}, {0, 0, 1, 1}, {0, 1, 1, 2}, {1, 1, 1, 2}, {1, 1, 0, 1}}},
+      // Three blocks around one edge, two of them touching the third diagonally,
+      // one holding a cavity (label-0 tets inside the domain).
+      {"edge fan with a cavity", {{0, 0, 0, 1}, {1, 1, 0, 2}, {2, 0, 0, 1}, {1, 0, 0, 0}, {1, 0, 1, 2}, {2, 2, 2, 1}}},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    TetMesh input = blocksMesh(c.blocks, 4);
+    // Every third tet in the other orientation, and a vertex no tet uses.
+    for (std::size_t t = 0; t < input.tetCount(); t += 3) std::swap(input.tets[t][0], input.tets[t][1]);
+    input.positions.push_back({100, 100, 100});
+    const RemeshComplex complex(input, c.name);
+    EXPECT_EQ(complex.checkConsistency(true), "");
+    RemeshOptions options;
+    options.targetLength = 2.0;
+    options.iterations = 4;
+    const TetMesh out = remeshTetMesh(input, options, nullptr, false, c.name);
+    EXPECT_NE(out.tetCount(), 0u);
+    EXPECT_LT(out.positions.size(), input.positions.size()) << "not remeshed";
+    for (std::size_t t = 0; t < out.tetCount(); ++t) ASSERT_GT(signedVolume(out.positions, out.tets[t]), 0.0) << t;
+    EXPECT_EQ(joined(compareTopology(computeMeshTopology(input), computeMeshTopology(out))), "");
+    // No two output vertices at one place: the copies were merged.
+    std::vector<std::array<double, 3>> points;
+    for (const auto& p : out.positions) points.push_back({p.x(), p.y(), p.z()});
+    std::sort(points.begin(), points.end());
+    EXPECT_EQ(std::adjacent_find(points.begin(), points.end()), points.end());
+  }
+}
+
+TEST(RemeshComplex, RefusesAFaceInThreeTets) {
+  // Three tets on one face: the input's fault, one line naming it.
+  TetMesh three;
+  three.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0, 0, -1}, {0.2, 0.2, 1}};
+  three.tets = {{0, 1, 2, 3}, {0, 2, 1, 4}, {0, 1, 2, 5}};
+  three.labels = {1, 1, 1};
+  try {
+    RemeshComplex c(three, "three.mesh");
+    ADD_FAILURE() << "a face in three tets was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("shared by more than two tets"), std::string::npos) << e.what();
+  }
 }
 
 TEST(MeshTopology, GridAndSixTetDecompositionAgree) {
