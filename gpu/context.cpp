@@ -8,6 +8,8 @@
 #include <cctype>
 #include <cstdlib>
 #include <cstring>
+#include <dlfcn.h>
+#include <link.h>
 
 namespace vox::gpu {
 
@@ -34,6 +36,22 @@ const char* resultName(VkResult r) {
     case VK_SUBOPTIMAL_KHR: return "VK_SUBOPTIMAL_KHR";
     default: return "VkResult error";
   }
+}
+
+// Under AddressSanitizer: the Vulkan loader unloads the driver when the last
+// instance goes, and a driver allocation LeakSanitizer reports at exit then
+// has no module name, so tests/sanitizer/lsan.supp cannot name it. Loaded
+// Vulkan drivers are pinned (RTLD_NODELETE) in sanitized builds only.
+static void keepDriversLoadedForLeakReports() {
+#if defined(__SANITIZE_ADDRESS__)
+  dl_iterate_phdr(
+      [](dl_phdr_info* info, std::size_t, void*) {
+        const char* name = info->dlpi_name;
+        if (name && std::strstr(name, "libvulkan_")) dlopen(name, RTLD_NOW | RTLD_NOLOAD | RTLD_NODELETE);
+        return 0;
+      },
+      nullptr);
+#endif
 }
 
 void throwVulkanFailure(const char* call, VkResult r) {
@@ -255,6 +273,7 @@ Context::Context(const ContextOptions& options) {
     dci.ppEnabledExtensionNames = extensions.data();
     VOX_VK(vkCreateDevice(physical_, &dci, nullptr, &device_));
     vkGetDeviceQueue(device_, queueFamily_, 0, &queue_);
+    keepDriversLoadedForLeakReports();
 
     cmdPushDescriptorSet = reinterpret_cast<PFN_vkCmdPushDescriptorSetKHR>(vkGetDeviceProcAddr(device_, "vkCmdPushDescriptorSetKHR"));
     if (!cmdPushDescriptorSet) throw RuntimeFailure("Vulkan: vkCmdPushDescriptorSetKHR is unavailable");

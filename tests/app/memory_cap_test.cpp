@@ -19,8 +19,18 @@
 namespace vox {
 namespace {
 
+// AddressSanitizer reserves terabytes of address space for its shadow, so a
+// sanitized voxmorph cannot start under ulimit -v: there the cases that rely
+// on the process's cap are left out and the --max-memory ones run uncapped.
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kAddressSanitizer = true;
+#else
+constexpr bool kAddressSanitizer = false;
+#endif
+
 std::string capped(const std::string& args, int capMb) {
-  return "ulimit -v " + std::to_string(capMb * 1024) + "; " + test::quote(test::voxmorphBinary()) + " " + args;
+  const std::string cap = kAddressSanitizer ? "" : "ulimit -v " + std::to_string(capMb * 1024) + "; ";
+  return cap + test::quote(test::voxmorphBinary()) + " " + args;
 }
 
 void expectRefused(const test::CommandResult& r, const std::string& work) {
@@ -43,13 +53,15 @@ TEST(MemoryCap, CommandsRefuseAGridBeyondTheBudgetBeforeReadingIt) {
                 "to build the cage, over the 1,024 MB budget (--max-memory)");
   expectRefused(test::runCommand(capped("render " + g + " -o " + test::quote(dir + "/r.png") + " --max-memory 1024", 4096)),
                 "to render, over the 1,024 MB budget");
-  expectRefused(test::runCommand(capped("render " + g + " --pose " + test::quote(pose) + " -o " + test::quote(dir + "/r.png"), 4096)),
-                "MB to render the pose, over the 4,096 MB this machine allows");
-  expectRefused(test::runCommand(capped("view " + g, 4096)), "to pose it interactively");
   expectRefused(test::runCommand(capped("mesh " + g + " -l 2 -o " + test::quote(dir + "/m.vtu") + " --max-memory 256", 4096)),
                 "to read the grid for meshing, over the 256 MB budget");
-  expectRefused(test::runCommand(capped("deform " + g + " --pose " + test::quote(pose) + " -o " + test::quote(dir + "/p.nii.gz"), 4096)),
-                "to deform in memory, over the 4,096 MB this machine allows; run out of core with --max-memory");
+  if (!kAddressSanitizer) {
+    expectRefused(test::runCommand(capped("render " + g + " --pose " + test::quote(pose) + " -o " + test::quote(dir + "/r.png"), 4096)),
+                  "MB to render the pose, over the 4,096 MB this machine allows");
+    expectRefused(test::runCommand(capped("view " + g, 4096)), "to pose it interactively");
+    expectRefused(test::runCommand(capped("deform " + g + " --pose " + test::quote(pose) + " -o " + test::quote(dir + "/p.nii.gz"), 4096)),
+                  "to deform in memory, over the 4,096 MB this machine allows; run out of core with --max-memory");
+  }
   EXPECT_EQ(test::listFiles(dir), "identity.json\nlarge.nii.gz\n");
 }
 
