@@ -41,7 +41,7 @@ struct DeformOptions {
   int samples = 1;
   std::int64_t maxMemoryMb = 0;
   bool cpu = false;
-  bool preserveVolumes = false;
+  std::string volumeTarget;  // --preserve-volumes[=deformed|rest]; "" without it
   bool allowGrowth = false;
   bool rigidBones = false;
   std::int64_t maxTets = RefinementOptions{}.maxTets;
@@ -65,7 +65,8 @@ void deform(const DeformOptions& o) {
   checkOutputPath(o.collisionMask, OutputKind::Grid, "--collision-mask");
   checkOutputPath(tablePath(o), OutputKind::Csv, "--report");
   checkOutputPath(o.plots, OutputKind::Png, "--plots");
-  if (o.preserveVolumes && o.maxMemoryMb > 0)
+  const bool preserveVolumes = !o.volumeTarget.empty();
+  if (preserveVolumes && o.maxMemoryMb > 0)
     throw UsageError("--preserve-volumes", "needs the posed grid in memory; it cannot be combined with --max-memory");
   if (o.maxMemoryMb == 0)
     checkGridFitsMemory(o.input, 0, kDeformMemory, "deform in memory", "run out of core with --max-memory MB");
@@ -78,7 +79,9 @@ void deform(const DeformOptions& o) {
   request.samples = o.samples;
   request.maxMemoryMb = o.maxMemoryMb;
   request.cpu = o.cpu;
-  request.preserveVolumes = o.preserveVolumes;
+  request.preserveVolumes = preserveVolumes;
+  request.volumeTarget = o.volumeTarget == "rest" ? gpu::DeformGridRequest::VolumeTarget::Rest
+                                                  : gpu::DeformGridRequest::VolumeTarget::Deformed;
   request.allowGrowth = o.allowGrowth;
   request.rigidBones = o.rigidBones;
   request.maxTets = o.maxTets;
@@ -165,9 +168,11 @@ void addDeformCommand(CLI::App& app) {
   cmd->add_option("--collision-mask", o->collisionMask,
                   "With body parts (an organ table that names the bones, or --parts): also write a grid, 1 where the posed tissue of two body parts overlaps "
                   "(the posed grid's extent at the working grid's spacing)");
-  cmd->add_flag("--preserve-volumes", o->preserveVolumes,
+  cmd->add_flag("--preserve-volumes{deformed}", o->volumeTarget,
                 "Relabel boundary voxels of the posed grid so that each label keeps the volume the deformation gives it "
-                "(sum of the transfer mesh's Jacobian determinants over its voxels), within about a voxel; in core only");
+                "(sum of the transfer mesh's Jacobian determinants over its voxels), within about a voxel; "
+                "--preserve-volumes=rest: its rest volume instead, so organ masses are kept; in core only")
+      ->check(CLI::IsMember({"deformed", "rest"}));
   cmd->add_flag("--rigid-bones", o->rigidBones,
                 "With body parts (a joint pose, --parts): hold each part's bones rigid (its forward-kinematics motion, else the rigid fit) "
                 "and turn the cage near each turned joint with the moving part (joint_options zone 'child' unless the pose sets it); "

@@ -301,7 +301,10 @@ DeformationReport deformGrid(const DeformGridRequest& o) {
     report.stages.push_back(rasterTimer.stop());
     StageTimer correctionTimer("volume correction");
     deformedVolumes = deformedLabelVolumes(*source.grid, rest, deformed);
-    report.volumeCorrection = preserveLabelVolumes(posed, *source.grid, rest, deformed, deformedVolumes);
+    const bool toRest = o.volumeTarget == DeformGridRequest::VolumeTarget::Rest;
+    const std::vector<double> targets = toRest ? deformedLabelVolumes(*source.grid, rest, rest.positions) : deformedVolumes;
+    report.volumeCorrection = preserveLabelVolumes(posed, *source.grid, rest, deformed, targets);
+    report.volumeCorrection->toRestVolumes = toRest;
     report.stages.push_back(correctionTimer.stop());
     StageTimer writeTimer("write");
     HeldGrid held(std::move(posed));

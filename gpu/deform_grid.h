@@ -48,6 +48,10 @@ struct DeformGridRequest {
   std::int64_t maxMemoryMb = 0;  // 0: in core
   bool cpu = false;
   bool preserveVolumes = false;
+  // What --preserve-volumes brings each label to: the volume the deformation
+  // gives it (Jacobians of the transfer mesh), or its rest volume (the
+  // source's voxels), so organ masses are kept whatever the deformation does.
+  enum class VolumeTarget { Deformed, Rest } volumeTarget = VolumeTarget::Deformed;
   bool rigidBones = false;   // with body parts: bones held rigid (rigid_bones.h)
   bool allowGrowth = false;  // accept a posed grid of more than 8x the source's voxels (posed_extent.h)
   std::int64_t maxTets = RefinementOptions{}.maxTets;

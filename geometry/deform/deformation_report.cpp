@@ -331,7 +331,8 @@ std::string deformationReportJson(const DeformationReport& r) {
   }
   root["warnings"] = deformationWarnings(r);
   if (const auto& c = r.volumeCorrection)
-    root["volume_correction"] = {{"boundary_voxels", c->candidates},
+    root["volume_correction"] = {{"targets", c->toRestVolumes ? "rest" : "deformed"},
+                                 {"boundary_voxels", c->candidates},
                                  {"relabelled_voxels", c->relabelled},
                                  {"still_boundary_voxels_kept", c->still},
                                  {"sweeps", c->sweeps},
@@ -394,7 +395,8 @@ std::string deformationSummary(const DeformationReport& r) {
   if (const auto& c = r.volumeCorrection)
     s << "  volume correction: " << c->relabelled << " of " << c->candidates << " boundary voxels relabelled (" << c->still
       << " where the deformation did not move the tissue kept); largest gap "
-      << "between a label's voxels and its deformed volume " << fixed(c->worstPercentBefore, 2) << " % -> "
+      << "between a label's voxels and its " << (c->toRestVolumes ? "rest" : "deformed") << " volume "
+      << fixed(c->worstPercentBefore, 2) << " % -> "
       << fixed(c->worstPercentAfter, 2) << " %\n";
   if (!r.bones.empty()) {
     const BoneRigidity* strained = nullptr;

@@ -72,6 +72,7 @@ struct LabelVolumeCorrection {
   double deviationAfter = 0.0;
   double worstPercentBefore = 0.0;  // largest |count_l / V'_l - 1| in %, labels > 0 with V'_l >= 0.5
   double worstPercentAfter = 0.0;
+  bool toRestVolumes = false;     // targets: the rest volumes (else the deformed ones)
 };
 
 // A tet whose vertices all moved by less than this fraction of the finest

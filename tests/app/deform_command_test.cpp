@@ -138,6 +138,39 @@ TEST(DeformCommand, PreserveVolumesKeepsEachLabelNearItsDeformedVolume) {
   }
 }
 
+// --preserve-volumes=rest: every label keeps its rest voxel count (organ
+// masses), whatever volume the deformation gives it; the report names the
+// targets and still gives the deformation's own volume per label.
+TEST(DeformCommand, PreserveVolumesAtRestKeepsEachLabelsVoxels) {
+  VOX_REQUIRE_VOXMORPH();
+  const Stick s = stick();
+  const std::string pose = writeFile(s.dir + "/arm.json", kArmPose);
+  const std::string out = s.dir + "/posed.nii.gz", report = s.dir + "/report.json";
+  const auto r = test::runCommand(voxmorph("deform " + test::quote(s.grid) + " --pose " + test::quote(pose) + " --organs " +
+                                           test::quote(s.organs) + " -o " + test::quote(out) + " --report " +
+                                           test::quote(report) + " --preserve-volumes=rest --cpu -q"));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(report));
+  EXPECT_EQ(j["volume_correction"]["targets"], "rest");
+  const LabelGrid posed = readGrid(out);
+  double moved = 0.0;
+  for (const nlohmann::json& l : j["labels"]) {
+    const auto label = l["label"].get<Label>();
+    if (label == 0) continue;
+    const auto n = std::count(posed.labels().begin(), posed.labels().end(), label);
+    const double rest = l["voxels_before"].get<double>();
+    EXPECT_EQ(n, l["voxels_after"].get<std::int64_t>()) << "label " << label;
+    EXPECT_LE(std::abs(double(n) - rest), 1.0) << l.dump();
+    moved = std::max(moved, std::abs(l["deformed_volume_voxels"].get<double>() - rest));
+  }
+  EXPECT_GT(moved, 2.0) << "the deformation changed no label's volume: the test shows nothing";
+  // A value other than deformed / rest is a usage error.
+  const auto bad = test::runCommand(voxmorph("deform " + test::quote(s.grid) + " --pose " + test::quote(pose) + " -o " +
+                                             test::quote(s.dir + "/x.nii.gz") + " --preserve-volumes=mass"));
+  EXPECT_EQ(bad.exitCode, 2) << bad.err;
+  EXPECT_FALSE(std::filesystem::exists(s.dir + "/x.nii.gz"));
+}
+
 TEST(DeformCommand, BadInputIsAOneLineErrorWithoutOutput) {
   VOX_REQUIRE_VOXMORPH();
   const Stick s = stick();
