@@ -8,7 +8,7 @@ A study file is tab-separated text with a header line; lines starting with
   organs    organ table (ID name tissue density), or empty / '-'
   pose      pose file (JSON, docs/POSES.md)
   options   further `voxmorph deform` options, or empty / '-':
-            --preserve-volumes, --samples K, --max-memory MB, --dilation MM,
+            --preserve-volumes[=rest], --samples K, --max-memory MB, --dilation MM,
             --vertices N, --separate A:B[@box], --refine-iterations N,
             --max-tets N, --allow-growth, --cpu, --flag PCT
   output    the row's output folder (unique)
