@@ -349,6 +349,9 @@ private:
   }
 
   void skipElement(const PlyElement& e) {
+    // Records without properties take no bytes, however many the header
+    // declares: nothing to skip (and no file length to bound the count by).
+    if (e.properties.empty()) return;
     for (std::size_t r = 0; r < e.count; ++r)
       for (const PlyProperty& p : e.properties) skipProperty(p);
   }
