@@ -49,24 +49,15 @@ RemeshComplex::RemeshComplex(const TetMesh& mesh, const std::string& source) {
         for (int i = 0; i < 3; ++i) openEdges.push_back(std::minmax(f[std::size_t(i)], f[std::size_t((i + 1) % 3)]));
       }
   std::sort(openEdges.begin(), openEdges.end());
-  const std::size_t inputVertices = positions_.size();
   splitPinchedVertices();
   pinned_.assign(positions_.size() + 1, 0);
-  for (std::size_t v = 0; v < copyOf_.size(); ++v)
-    if (copyOf_[v] >= 0) pinned_[v] = pinned_[std::size_t(copyOf_[v])] = 1;
+  for (std::size_t v = 0; v < pinchOf_.size(); ++v)
+    if (pinchOf_[v] >= 0) pinned_[v] = 1;
   for (std::size_t i = 0; i < openEdges.size();) {
     std::size_t j = i + 1;
     while (j < openEdges.size() && openEdges[j] == openEdges[i]) ++j;
     if (j - i > 2) pinned_[std::size_t(openEdges[i].first)] = pinned_[std::size_t(openEdges[i].second)] = 1;
     i = j;
-  }
-  // A pinned vertex's copies are pinned with it.
-  for (std::size_t v = inputVertices; v < copyOf_.size(); ++v)
-    if (pinned_[std::size_t(copyOf_[v])]) pinned_[v] = 1;
-  pinchOf_.assign(copyOf_.size(), -1);
-  for (std::size_t v = inputVertices; v < copyOf_.size(); ++v) {
-    pinchOf_[v] = pinchOf_[std::size_t(copyOf_[v])] = copyOf_[v];
-    hasPinches_ = true;
   }
 
   // Join every open facet to the dummy vertex. Face k of a positive tet is
@@ -140,7 +131,7 @@ void RemeshComplex::splitPinchedVertices() {
       for (std::int32_t v : tets_[t])
         if (open[std::size_t(v)]) star[std::size_t(fill[std::size_t(v)]++)] = std::int32_t(t);
   }
-  copyOf_.assign(nv, -1);
+  pinchOf_.assign(nv, -1);
   std::vector<std::uint32_t> seen(nt, 0);
   std::uint32_t stamp = 0;
   std::vector<std::int32_t> queue;
@@ -157,7 +148,9 @@ void RemeshComplex::splitPinchedVertices() {
       if (groups++ > 0) {
         w = std::int32_t(positions_.size());
         positions_.push_back(positions_[v]);
-        copyOf_.push_back(std::int32_t(v));
+        pinchOf_.push_back(std::int32_t(v));
+        pinchOf_[v] = std::int32_t(v);
+        hasPinches_ = true;
       }
       queue.assign(1, t0);
       seen[std::size_t(t0)] = stamp;
@@ -206,7 +199,7 @@ void RemeshComplex::glueCone(std::size_t domainTets, const std::string& source) 
     neighbors_[std::size_t(g >> 2)][std::size_t(g & 3)] = f;
   };
   auto edgeName = [&](std::int32_t x, std::int32_t y) {
-    auto original = [&](std::int32_t v) { return copyOf_[std::size_t(v)] >= 0 ? copyOf_[std::size_t(v)] : v; };
+    auto original = [&](std::int32_t v) { return pinchOf(v) >= 0 ? pinchOf(v) : v; };
     return "(" + std::to_string(original(x)) + ", " + std::to_string(original(y)) + ")";
   };
   struct Around {
@@ -303,9 +296,7 @@ TetMesh RemeshComplex::toTetMesh(bool keepImaginary) const {
     return keepImaginary && labels_[t] == kBackgroundLabel && !isDummyTet(std::int32_t(t));
   };
   // Copies of a pinched vertex are written as the vertex itself.
-  auto original = [&](std::int32_t v) {
-    return std::size_t(v) < copyOf_.size() && copyOf_[std::size_t(v)] >= 0 ? copyOf_[std::size_t(v)] : v;
-  };
+  auto original = [&](std::int32_t v) { return pinchOf(v) >= 0 ? pinchOf(v) : v; };
   for (std::size_t t = 0; t < tets_.size(); ++t)
     if (kept(t))
       for (std::int32_t v : tets_[t]) remap[std::size_t(original(v))] = 0;

@@ -170,8 +170,7 @@ private:
   std::vector<std::int32_t> freeTets_;
   std::int32_t dummy_ = -1;
   std::vector<std::uint8_t> pinned_;
-  std::vector<std::int32_t> copyOf_;  // a pinched vertex's copies: the vertex they stand for, else -1
-  std::vector<std::int32_t> pinchOf_;  // copies and the vertex they stand for: that vertex, else -1
+  std::vector<std::int32_t> pinchOf_;  // see pinchOf(); set by splitPinchedVertices
   bool hasPinches_ = false;
 
   void splitPinchedVertices();

@@ -46,14 +46,18 @@ std::int32_t splitEdge(RemeshComplex& complex, std::int32_t a, std::int32_t b, s
 
 namespace {
 
-// Whether the vertex splitting (a, b) would be adjacent to two copies of one
+// Whether splitting the edge of `ring` would change where parts of the input
+// touch: a contact edge (both ends pinned, on the outer boundary) is kept by
+// both sides, and the new vertex may not be adjacent to two copies of one
 // pinched vertex (see RemeshComplex::pinchOf).
-bool seesTwoCopies(const RemeshComplex& complex, std::int32_t a, std::int32_t b, std::int32_t t, EdgeRing& ring) {
-  complex.edgeRing(a, b, t, ring);
+bool changesAContact(const RemeshComplex& complex, const EdgeRing& ring) {
+  if (complex.isPinned(ring.a) && complex.isPinned(ring.b) &&
+      std::any_of(ring.tets.begin(), ring.tets.end(), [&](std::int32_t q) { return complex.isDummyTet(q); }))
+    return true;
   std::vector<std::int32_t> pinches;
   for (std::int32_t w : ring.ring)
     if (complex.pinchOf(w) >= 0) pinches.push_back(complex.pinchOf(w));
-  for (std::int32_t w : {a, b})
+  for (std::int32_t w : {ring.a, ring.b})
     if (complex.pinchOf(w) >= 0) pinches.push_back(complex.pinchOf(w));
   std::sort(pinches.begin(), pinches.end());
   return std::adjacent_find(pinches.begin(), pinches.end()) != pinches.end();
@@ -75,7 +79,7 @@ std::size_t splitLongEdges(RemeshComplex& complex, const EdgeLengthBounds& bound
   std::priority_queue<WeightedEdge, std::vector<WeightedEdge>, decltype(later)> queue(later);
   std::size_t next = 0, splits = 0;
   std::vector<std::int32_t> star;
-  EdgeRing pinnedRing;
+  EdgeRing contactRing;
   const std::int32_t dummy = complex.dummyVertex();
   while (next < edges.size() || !queue.empty()) {
     WeightedEdge e;
@@ -87,13 +91,10 @@ std::size_t splitLongEdges(RemeshComplex& complex, const EdgeLengthBounds& bound
     }
     const std::int32_t t = complex.findEdgeTet(e.a, e.b);
     if (t < 0) continue;
-    if (complex.isPinned(e.a) && complex.isPinned(e.b)) {
-      // Where parts of the input touch along this edge, both sides keep it.
-      complex.edgeRing(e.a, e.b, t, pinnedRing);
-      if (std::any_of(pinnedRing.tets.begin(), pinnedRing.tets.end(), [&](std::int32_t q) { return complex.isDummyTet(q); }))
-        continue;
+    if (complex.hasPinches() || (complex.isPinned(e.a) && complex.isPinned(e.b))) {
+      complex.edgeRing(e.a, e.b, t, contactRing);
+      if (changesAContact(complex, contactRing)) continue;
     }
-    if (complex.hasPinches() && seesTwoCopies(complex, e.a, e.b, t, pinnedRing)) continue;
     const std::int32_t m = splitEdge(complex, e.a, e.b, t);
     ++splits;
     // The halves and the new edges at m may still be too long.

@@ -114,22 +114,38 @@ TEST(DeformCommand, PosesTheArmAndWritesTheReport) {
 // --preserve-volumes: the report's correction brings every label to within
 // about a voxel of its deformed volume, and the written grid holds the
 // counts the report gives.
+// The stick figure's arm pose deformed on the CPU with `preserveOption`: the
+// report and the posed grid.
+struct PosedArm {
+  test::CommandResult run;
+  nlohmann::json report;
+  LabelGrid posed;
+};
+PosedArm posedArm(const Stick& s, const std::string& preserveOption) {
+  PosedArm a;
+  const std::string pose = writeFile(s.dir + "/arm.json", kArmPose);
+  const std::string out = s.dir + "/posed.nii.gz", report = s.dir + "/report.json";
+  a.run = test::runCommand(voxmorph("deform " + test::quote(s.grid) + " --pose " + test::quote(pose) + " --organs " +
+                                    test::quote(s.organs) + " -o " + test::quote(out) + " --report " + test::quote(report) +
+                                    " " + preserveOption + " --cpu -q"));
+  if (a.run.exitCode != 0) return a;
+  a.report = nlohmann::json::parse(std::ifstream(report));
+  a.posed = readGrid(out);
+  return a;
+}
+
 TEST(DeformCommand, PreserveVolumesKeepsEachLabelNearItsDeformedVolume) {
   VOX_REQUIRE_VOXMORPH();
   const Stick s = stick();
-  const std::string pose = writeFile(s.dir + "/arm.json", kArmPose);
-  const std::string out = s.dir + "/posed.nii.gz", report = s.dir + "/report.json";
-  const auto r = test::runCommand(voxmorph("deform " + test::quote(s.grid) + " --pose " + test::quote(pose) + " --organs " +
-                                           test::quote(s.organs) + " -o " + test::quote(out) + " --report " +
-                                           test::quote(report) + " --preserve-volumes --cpu -q"));
-  ASSERT_EQ(r.exitCode, 0) << r.err;
-  const nlohmann::json j = nlohmann::json::parse(std::ifstream(report));
+  const PosedArm a = posedArm(s, "--preserve-volumes");
+  ASSERT_EQ(a.run.exitCode, 0) << a.run.err;
+  const nlohmann::json& j = a.report;
+  const LabelGrid& posed = a.posed;
   ASSERT_TRUE(j.contains("volume_correction"));
   const nlohmann::json& c = j["volume_correction"];
   EXPECT_LE(c["deviation_after_voxels"].get<double>(), c["deviation_before_voxels"].get<double>());
   EXPECT_LE(c["relabelled_voxels"].get<double>(), c["boundary_voxels"].get<double>());
   EXPECT_LT(c["deviation_after_voxels"].get<double>(), 0.1 * c["deviation_before_voxels"].get<double>()) << c.dump();
-  const LabelGrid posed = readGrid(out);
   for (const nlohmann::json& l : j["labels"]) {
     const auto label = l["label"].get<Label>();
     const auto n = std::count(posed.labels().begin(), posed.labels().end(), label);
@@ -144,15 +160,11 @@ TEST(DeformCommand, PreserveVolumesKeepsEachLabelNearItsDeformedVolume) {
 TEST(DeformCommand, PreserveVolumesAtRestKeepsEachLabelsVoxels) {
   VOX_REQUIRE_VOXMORPH();
   const Stick s = stick();
-  const std::string pose = writeFile(s.dir + "/arm.json", kArmPose);
-  const std::string out = s.dir + "/posed.nii.gz", report = s.dir + "/report.json";
-  const auto r = test::runCommand(voxmorph("deform " + test::quote(s.grid) + " --pose " + test::quote(pose) + " --organs " +
-                                           test::quote(s.organs) + " -o " + test::quote(out) + " --report " +
-                                           test::quote(report) + " --preserve-volumes=rest --cpu -q"));
-  ASSERT_EQ(r.exitCode, 0) << r.err;
-  const nlohmann::json j = nlohmann::json::parse(std::ifstream(report));
+  const PosedArm a = posedArm(s, "--preserve-volumes=rest");
+  ASSERT_EQ(a.run.exitCode, 0) << a.run.err;
+  const nlohmann::json& j = a.report;
+  const LabelGrid& posed = a.posed;
   EXPECT_EQ(j["volume_correction"]["targets"], "rest");
-  const LabelGrid posed = readGrid(out);
   double moved = 0.0;
   for (const nlohmann::json& l : j["labels"]) {
     const auto label = l["label"].get<Label>();
@@ -165,7 +177,7 @@ TEST(DeformCommand, PreserveVolumesAtRestKeepsEachLabelsVoxels) {
   }
   EXPECT_GT(moved, 2.0) << "the deformation changed no label's volume: the test shows nothing";
   // A value other than deformed / rest is a usage error.
-  const auto bad = test::runCommand(voxmorph("deform " + test::quote(s.grid) + " --pose " + test::quote(pose) + " -o " +
+  const auto bad = test::runCommand(voxmorph("deform " + test::quote(s.grid) + " --pose " + test::quote(s.dir + "/arm.json") + " -o " +
                                              test::quote(s.dir + "/x.nii.gz") + " --preserve-volumes=mass"));
   EXPECT_EQ(bad.exitCode, 2) << bad.err;
   EXPECT_FALSE(std::filesystem::exists(s.dir + "/x.nii.gz"));

@@ -67,8 +67,12 @@ std::string listFiles(const std::string& dir) {
   std::vector<std::string> names;
   for (const auto& e : fs::directory_iterator(dir)) names.push_back(e.path().filename().string());
   std::sort(names.begin(), names.end());
+  return joinLines(names);
+}
+
+std::string joinLines(const std::vector<std::string>& lines) {
   std::string out;
-  for (const auto& n : names) out += n + "\n";
+  for (const auto& l : lines) out += l + "\n";
   return out;
 }
 

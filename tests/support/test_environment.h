@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace vox::test {
 
@@ -33,6 +34,8 @@ std::string quote(const std::string& s);
 
 // Every regular file in `dir` (names only), sorted.
 std::string listFiles(const std::string& dir);
+// The lines, each ended by '\n' ("" for none): readable failure messages of lists.
+std::string joinLines(const std::vector<std::string>& lines);
 
 // A file's bytes ("" when it cannot be read), and writing bytes to a file.
 std::string readText(const std::string& path);

@@ -7,6 +7,8 @@
 #include "geometry/synth.h"
 #include "geometry/voxel_tetrahedralization.h"
 
+#include "tests/support/test_environment.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -14,12 +16,6 @@
 
 namespace vox::remesh {
 namespace {
-
-std::string joined(const std::vector<std::string>& lines) {
-  std::string s;
-  for (const auto& l : lines) s += l + "\n";
-  return s;
-}
 
 TEST(RemeshComplex, ExtendedComplexIsClosedAndRoundTrips) {
   const LabelGrid grid = synthesize(SynthKind::NestedSpheres, 10);
@@ -125,7 +121,7 @@ TEST(RemeshComplex, NonManifoldOuterBoundariesRemeshWithTheirTopology) {
     EXPECT_NE(out.tetCount(), 0u);
     EXPECT_LT(out.positions.size(), input.positions.size()) << "not remeshed";
     for (std::size_t t = 0; t < out.tetCount(); ++t) ASSERT_GT(signedVolume(out.positions, out.tets[t]), 0.0) << t;
-    EXPECT_EQ(joined(compareTopology(computeMeshTopology(input), computeMeshTopology(out))), "");
+    EXPECT_EQ(test::joinLines(compareTopology(computeMeshTopology(input), computeMeshTopology(out))), "");
     // No two output vertices at one place: the copies were merged.
     std::vector<std::array<double, 3>> points;
     for (const auto& p : out.positions) points.push_back({p.x(), p.y(), p.z()});
@@ -153,7 +149,7 @@ TEST(MeshTopology, GridAndSixTetDecompositionAgree) {
     const LabelGrid grid = synthesize(kind, 20);
     const MeshTopology fromGrid = computeGridTopology(grid);
     const MeshTopology fromMesh = computeMeshTopology(tetrahedralizeVoxels(grid, {.includeBackground = false}));
-    EXPECT_EQ(joined(compareTopology(fromGrid, fromMesh)), "") << synthKindName(kind);
+    EXPECT_EQ(test::joinLines(compareTopology(fromGrid, fromMesh)), "") << synthKindName(kind);
     EXPECT_EQ(fromGrid.featureEdges, fromMesh.featureEdges) << synthKindName(kind);
   }
 }
@@ -186,7 +182,7 @@ TEST(SplitLongEdges, KeepsComplexValidAndTopology) {
   EXPECT_GT(splits, 0u);
   EXPECT_GT(complex.liveTetCount(), before);
   EXPECT_EQ(complex.checkConsistency(true), "");
-  EXPECT_EQ(joined(compareTopology(computeGridTopology(grid), computeMeshTopology(complex.toTetMesh()))), "");
+  EXPECT_EQ(test::joinLines(compareTopology(computeGridTopology(grid), computeMeshTopology(complex.toTetMesh()))), "");
 }
 
 TEST(CollapseShortEdges, KeepsComplexValidAndTopology) {
@@ -199,7 +195,7 @@ TEST(CollapseShortEdges, KeepsComplexValidAndTopology) {
     EXPECT_GT(collapses, 0u) << synthKindName(kind);
     EXPECT_LT(complex.liveTetCount(), before) << synthKindName(kind);
     EXPECT_EQ(complex.checkConsistency(true), "") << synthKindName(kind);
-    EXPECT_EQ(joined(compareTopology(computeGridTopology(grid), computeMeshTopology(complex.toTetMesh()))), "")
+    EXPECT_EQ(test::joinLines(compareTopology(computeGridTopology(grid), computeMeshTopology(complex.toTetMesh()))), "")
         << synthKindName(kind);
   }
 }

@@ -17,19 +17,12 @@
 
 #include <algorithm>
 #include <array>
-#include <cstdio>
 #include <filesystem>
 #include <map>
 #include <set>
 
 namespace vox::remesh {
 namespace {
-
-std::string joined(const std::vector<std::string>& lines) {
-  std::string s;
-  for (const auto& l : lines) s += l + "\n";
-  return s;
-}
 
 // Mesh_3 volume mesh of `grid` (nearest-voxel labels, 0 beyond the grid; the
 // border voxels must be 0) with tets of about `sizeMm`.
@@ -72,7 +65,7 @@ void remeshThroughFormats(const TetMesh& mesh, double targetLength, const std::s
     std::size_t inverted = 0;
     for (std::size_t t = 0; t < out.tetCount(); ++t) inverted += !(signedVolume(out.positions, out.tets[t]) > 0.0);
     EXPECT_EQ(inverted, 0u);
-    EXPECT_EQ(joined(compareTopology(computeMeshTopology(input), computeMeshTopology(out))), "");
+    EXPECT_EQ(test::joinLines(compareTopology(computeMeshTopology(input), computeMeshTopology(out))), "");
   }
 }
 
@@ -121,25 +114,14 @@ TEST(RemeshInputs, Mesh3OfAnAdultMaleCropRemeshes) {
 
 // The tools' own output, made in the test: they must be installed (./run
 // installs gmsh and tetgen); without them the test is skipped.
-std::string toolOrSkip(const std::string& tool) {
-  return test::runCommand("command -v " + tool).exitCode == 0 ? tool : std::string();
-}
-
-std::size_t pinnedIn(const TetMesh& mesh) { return pinnedVertices(RemeshComplex(mesh, "input")); }
-
-void writeText(const std::string& path, const std::string& text) {
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  ASSERT_NE(f, nullptr) << path;
-  std::fputs(text.c_str(), f);
-  std::fclose(f);
-}
+bool installed(const std::string& tool) { return test::runCommand("command -v " + tool).exitCode == 0; }
 
 // Gmsh (OpenCASCADE): unit boxes touching along an edge, at a corner and on
 // a face, one holding a ball: six volumes, one label each (entity tags).
 TEST(RemeshInputs, GmshVolumesTouchingAlongAnEdgeAndAtACorner) {
-  if (toolOrSkip("gmsh").empty()) GTEST_SKIP() << "gmsh not installed";
+  if (!installed("gmsh")) GTEST_SKIP() << "gmsh not installed";
   const std::string dir = test::tempDir();
-  writeText(dir + "/parts.geo", R"(SetFactory("OpenCASCADE");
+  test::writeText(dir + "/parts.geo", R"(SetFactory("OpenCASCADE");
 Box(1) = {0, 0, 0, 1, 1, 1};
 Box(2) = {1, 1, 0, 1, 1, 1};
 Box(3) = {0, -1, 0, 1, 1, 1};
@@ -152,14 +134,14 @@ Mesh.SaveAll = 1;
   const auto run = test::runCommand("gmsh -3 -format msh41 -o " + dir + "/parts.msh " + dir + "/parts.geo");
   ASSERT_EQ(run.exitCode, 0) << run.out << run.err;
   const TetMesh mesh = readTetMesh(dir + "/parts.msh");
-  EXPECT_GT(pinnedIn(mesh), 0u);
+  EXPECT_GT(pinnedVertices(RemeshComplex(mesh, "input")), 0u);
   remeshThroughFormats(mesh, 0.12, "gmsh_parts", {".msh"});
 }
 
 // TetGen: a PLC of unit boxes (regions 1-4 by attribute) touching along an
 // edge, at a corner and on a face.
 TEST(RemeshInputs, TetGenRegionsTouchingAlongAnEdgeAndAtACorner) {
-  if (toolOrSkip("tetgen").empty()) GTEST_SKIP() << "tetgen not installed";
+  if (!installed("tetgen")) GTEST_SKIP() << "tetgen not installed";
   const std::vector<std::array<int, 3>> boxes = {{0, 0, 0}, {1, 1, 0}, {0, -1, 0}, {-1, 1, 1}};
   std::map<std::array<int, 3>, int> nodes;
   std::set<std::array<int, 4>> facets;
@@ -193,14 +175,14 @@ TEST(RemeshInputs, TetGenRegionsTouchingAlongAnEdgeAndAtACorner) {
     poly += std::to_string(r + 1) + " " + std::to_string(boxes[r][0] + 0.5) + " " + std::to_string(boxes[r][1] + 0.5) + " " +
             std::to_string(boxes[r][2] + 0.5) + " " + std::to_string(r + 1) + " 0\n";
   const std::string dir = test::tempDir();
-  writeText(dir + "/boxes.poly", poly);
+  test::writeText(dir + "/boxes.poly", poly);
   // -p PLC, -q quality, -A region attributes, -a volume bound, -g Medit output, -Q quiet.
   const auto run = test::runCommand("tetgen -pqAa0.002gQ " + dir + "/boxes.poly");
   ASSERT_EQ(run.exitCode, 0) << run.out << run.err;
   const TetMesh mesh = readTetMesh(dir + "/boxes.1.mesh");
   ASSERT_GT(mesh.tetCount(), 1000u);
   for (std::int32_t l = 1; l <= 4; ++l) EXPECT_NE(std::find(mesh.labels.begin(), mesh.labels.end(), l), mesh.labels.end()) << l;
-  EXPECT_GT(pinnedIn(mesh), 0u);
+  EXPECT_GT(pinnedVertices(RemeshComplex(mesh, "input")), 0u);
   remeshThroughFormats(mesh, 0.15, "tetgen_boxes", {".mesh"});
 }
 

@@ -11,6 +11,8 @@
 #include "geometry/synth.h"
 #include "geometry/voxel_tetrahedralization.h"
 
+#include "tests/support/test_environment.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -18,12 +20,6 @@
 
 namespace vox::remesh {
 namespace {
-
-std::string joined(const std::vector<std::string>& lines) {
-  std::string s;
-  for (const auto& l : lines) s += l + "\n";
-  return s;
-}
 
 struct Outcome {
   TetMesh initial;
@@ -53,7 +49,7 @@ void expectValidAndTopologyKept(const Outcome& o, const std::string& what) {
   double minVolume = std::numeric_limits<double>::infinity();
   for (const Tet& t : o.output.tets) minVolume = std::min(minVolume, signedVolume(o.output.positions, t));
   EXPECT_GT(minVolume, 0.0) << what;
-  EXPECT_EQ(joined(compareTopology(o.topology, computeMeshTopology(o.output))), "") << what;
+  EXPECT_EQ(test::joinLines(compareTopology(o.topology, computeMeshTopology(o.output))), "") << what;
 }
 
 TEST(Remesh, JunctionSphereKeepsLabelsJunctionsAndCorners) {
@@ -167,7 +163,7 @@ TEST(Remesh, RemeshesAnExistingMeshAndRejectsABadLength) {
   options.targetLength = 2.0;
   options.iterations = 4;
   const TetMesh output = remeshTetMesh(input, options);
-  EXPECT_EQ(joined(compareTopology(computeMeshTopology(input), computeMeshTopology(output))), "");
+  EXPECT_EQ(test::joinLines(compareTopology(computeMeshTopology(input), computeMeshTopology(output))), "");
   EXPECT_EQ(summarizeTetQuality(output).inverted, 0u);
   options.targetLength = -1.0;
   EXPECT_THROW(remeshTetMesh(input, options), InputError);
@@ -179,7 +175,7 @@ TEST(AdaptiveTetrahedralization, ConformingExactAndCoarser) {
     const TetMesh mesh = tetrahedralizeVoxelsAdaptive(grid, {.coarsestLevel = 3, .margin = 2});
     const RemeshComplex complex(mesh);  // throws unless conforming and positive
     EXPECT_EQ(complex.checkConsistency(true), "");
-    EXPECT_EQ(joined(compareTopology(computeGridTopology(grid), computeMeshTopology(mesh))), "") << synthKindName(kind);
+    EXPECT_EQ(test::joinLines(compareTopology(computeGridTopology(grid), computeMeshTopology(mesh))), "") << synthKindName(kind);
     const TetQualitySummary q = summarizeTetQuality(mesh);
     std::map<std::int32_t, double> voxels;
     std::size_t foreground = 0;
