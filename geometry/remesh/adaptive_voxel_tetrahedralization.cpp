@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
+#include <cstddef>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -76,6 +78,7 @@ public:
     if (corners_[0] * corners_[1] * corners_[2] >= std::numeric_limits<std::int32_t>::max())
       throw InputError("grid", "has too many voxels to mesh in one piece");
     buildPyramid();
+    selectCubes(options.shell, margin);
   }
 
   TetMesh run(bool includeBackground) {
@@ -113,6 +116,77 @@ public:
 
 private:
   std::int64_t cubeSize(int depth) const { return std::int64_t(1) << (levels_ - depth / 3); }
+
+  std::int64_t coarseCount(int a) const { return dims_[a] >> levels_; }
+  std::size_t coarseIndex(std::int64_t i, std::int64_t j, std::int64_t k) const {
+    return std::size_t(i + coarseCount(0) * (j + coarseCount(1) * k));
+  }
+
+  // Which coarsest cubes are meshed: all of them, or (shell) those within
+  // `margin` voxels of a labelled voxel, counted in whole cubes along each
+  // axis, then grown until their union is well composed (no two cubes meet
+  // only along an edge or at a corner, nor two gaps), so that the hull of
+  // the imaginary layer is a closed manifold surface of axis-aligned faces.
+  void selectCubes(bool shell, int margin) {
+    const std::int64_t n[3] = {coarseCount(0), coarseCount(1), coarseCount(2)};
+    const auto& coarse = pyramid_[0];
+    keep_.assign(coarse.size(), shell ? 0 : 1);
+    if (!shell) return;
+    for (std::size_t c = 0; c < coarse.size(); ++c) keep_[c] = coarse[c] != 0;
+    const std::int64_t r = (std::int64_t(margin) + (std::int64_t(1) << levels_) - 1) >> levels_;
+    std::vector<std::uint8_t> pass;
+    for (int a = 0; a < 3; ++a) {  // separable box dilation by r cubes
+      pass = keep_;
+      const std::int64_t step = a == 0 ? 1 : a == 1 ? n[0] : n[0] * n[1];
+      for (std::int64_t k = 0; k < n[2]; ++k)
+        for (std::int64_t j = 0; j < n[1]; ++j)
+          for (std::int64_t i = 0; i < n[0]; ++i) {
+            const std::int64_t at[3] = {i, j, k};
+            const std::size_t c = coarseIndex(i, j, k);
+            if (!pass[c]) continue;
+            for (std::int64_t d = std::max<std::int64_t>(-r, -at[a]); d <= r && at[a] + d < n[a]; ++d)
+              keep_[std::size_t(std::int64_t(c) + d * step)] = 1;
+          }
+    }
+    // Well-composedness: in every 2 x 2 square of cubes (three orientations)
+    // a diagonal pair, and in every 2 x 2 x 2 block an antipodal pair of kept
+    // cubes or of gaps, is filled in, until there is none.
+    for (bool changed = true; changed;) {
+      changed = false;
+      for (std::int64_t k = 0; k + 1 < std::max<std::int64_t>(n[2], 2); ++k)
+        for (std::int64_t j = 0; j + 1 < std::max<std::int64_t>(n[1], 2); ++j)
+          for (std::int64_t i = 0; i + 1 < std::max<std::int64_t>(n[0], 2); ++i) {
+            std::size_t cell[8];
+            std::uint8_t bits = 0;
+            for (int c = 0; c < 8; ++c) {
+              const std::int64_t x = i + (c & 1), y = j + ((c >> 1) & 1), z = k + (c >> 2);
+              cell[c] = x < n[0] && y < n[1] && z < n[2] ? coarseIndex(x, y, z) : SIZE_MAX;
+              if (cell[c] != SIZE_MAX && keep_[cell[c]]) bits |= std::uint8_t(1u << c);
+            }
+            if (!pinched(bits)) continue;
+            for (int c = 0; c < 8; ++c)
+              if (cell[c] != SIZE_MAX && !keep_[cell[c]]) keep_[cell[c]] = 1, changed = true;
+          }
+    }
+  }
+
+  // Whether a 2 x 2 x 2 block (bit c: cube (c & 1, c >> 1 & 1, c >> 2)
+  // kept; cubes beyond the grid are gaps) is not well composed: a square
+  // with exactly a diagonal pair kept, or a block whose only kept cubes, or
+  // only gaps, are an antipodal pair. (Such pairs never involve a cube
+  // beyond the grid, which lies on one side of the block.)
+  static bool pinched(std::uint8_t bits) {
+    static constexpr int kSquares[6][4] = {{0, 1, 3, 2}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 3, 7, 5}};
+    for (const auto& q : kSquares) {
+      const bool b0 = bits >> q[0] & 1, b1 = bits >> q[1] & 1, b2 = bits >> q[2] & 1, b3 = bits >> q[3] & 1;
+      if (b0 == b2 && b1 == b3 && b0 != b1) return true;
+    }
+    for (int c = 0; c < 4; ++c) {
+      const std::uint8_t pair = std::uint8_t(1u << c | 1u << (7 - c));
+      if (bits == pair || std::uint8_t(~bits) == pair) return true;
+    }
+    return false;
+  }
 
   void buildPyramid() {
     pyramid_.resize(std::size_t(levels_) + 1);
@@ -228,6 +302,7 @@ private:
     for (std::int64_t c = 0; c < dims_[2] / s; ++c)
       for (std::int64_t b = 0; b < dims_[1] / s; ++b)
         for (std::int64_t a = 0; a < dims_[0] / s; ++a) {
+          if (!keep_[coarseIndex(a, b, c)]) continue;
           const std::int64_t cube[3] = {a, b, c};
           std::int64_t origin[3], step[3];
           for (int x = 0; x < 3; ++x) {
@@ -301,6 +376,7 @@ private:
   std::int64_t offset_[3]{}, dims_[3]{}, corners_[3]{};
   std::vector<std::vector<std::uint16_t>> pyramid_;
   std::vector<std::uint8_t> exists_;
+  std::vector<std::uint8_t> keep_;  // per coarsest cube: meshed
 };
 
 }  // namespace
