@@ -42,9 +42,14 @@ struct VolumeCriteria {
   double facetDistanceMm = 1.0;      // upper bound on boundary/interface facet to surface distance
   double radiusEdgeRatio = 3.0;      // upper bound on tet circumradius / shortest edge
   const ScalarGrid* sizing = nullptr;  // cell and facet size in mm, sampled at each point (required)
+  // Also the Delaunay cells outside the domain, label 0, so that the tets
+  // fill the convex hull as in Mesh_3's own triangulation (what CGAL's
+  // tetrahedral remeshing takes as input).
+  bool keepOutside = false;
 };
 
-// Tetrahedral mesh of the domain: tets carry their subdomain label (> 0),
+// Tetrahedral mesh of the domain: tets carry their subdomain label (> 0, and
+// 0 outside the domain with keepOutside),
 // positively oriented, vertices unused by any tet dropped. Slivers are
 // exuded after refinement.
 TetMesh restrictedDelaunayVolume(const SampledDomain& domain, const VolumeCriteria& criteria);

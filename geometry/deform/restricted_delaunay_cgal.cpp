@@ -220,6 +220,14 @@ TetMesh restrictedDelaunayVolume(const SampledDomain& sampled, const VolumeCrite
     mesh.tets.push_back(t);
     mesh.labels.push_back(std::int32_t(c3t3.subdomain_index(cell)));
   }
+  if (criteria.keepOutside)
+    for (auto cell : tr.finite_cell_handles()) {
+      if (c3t3.is_in_complex(cell)) continue;
+      Tet t;
+      for (int j = 0; j < 4; ++j) t[j] = vertexIndex(index, mesh.positions, cell->vertex(j), tr);
+      mesh.tets.push_back(t);
+      mesh.labels.push_back(0);
+    }
   reportProgress("volume meshing", 1.0);
   return mesh;
 }

@@ -24,7 +24,7 @@ const LabelSet& EdgeCollapser::edgeLabels(const VertexNeighborhood& n, std::int3
   return n.edgeLabels[std::size_t(n.find(w))];
 }
 
-std::int32_t EdgeCollapser::tryCollapse(std::int32_t u, std::int32_t v, bool apply) {
+std::int32_t EdgeCollapser::tryCollapse(std::int32_t u, std::int32_t v, bool apply, CollapsePlan* plan) {
   const std::int32_t dummy = complex_.dummyVertex();
   if (u == v || u == dummy || v == dummy || !complex_.vertexAlive(u) || !complex_.vertexAlive(v)) return -1;
   const std::int32_t t = walker_.findEdgeTet(complex_, u, v);
@@ -78,6 +78,7 @@ std::int32_t EdgeCollapser::tryCollapse(std::int32_t u, std::int32_t v, bool app
     if (r.onHull() && !hull_.allows(planes[&r == &nu_ ? 0 : 1], o.p)) continue;
     if (keptMoves && k.onHull() && !hull_.allows(planes[&k == &nu_ ? 0 : 1], o.p)) continue;
     if (!test2NoLongEdges(r, k, o.p) || !test1PositiveVolumes(r, k, o.p)) continue;
+    if (plan) *plan = {u, v, r.vertex, k.vertex, o.p};
     if (apply) collapse(r, k, o.p);
     return k.vertex;
   }
@@ -278,6 +279,15 @@ bool EdgeCollapser::test2NoLongEdges(const VertexNeighborhood& r, const VertexNe
   return true;
 }
 
+void EdgeCollapser::applyPlan(const CollapsePlan& plan) {
+  // The same ring, in the same order, as tryCollapse(u, v) finds.
+  complex_.edgeRing(plan.u, plan.v, walker_.findEdgeTet(complex_, plan.u, plan.v), ring_);
+  nu_.vertex = plan.removed;
+  walker_.incidentTets(complex_, plan.removed, nu_.tets);
+  nv_.vertex = plan.kept;
+  collapse(nu_, nv_, plan.p);
+}
+
 void EdgeCollapser::collapse(const VertexNeighborhood& r, const VertexNeighborhood& k, const Eigen::Vector3d& p) {
   const std::int32_t rv = r.vertex, kv = k.vertex;
   for (std::int32_t q : r.tets)
@@ -316,15 +326,24 @@ std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& b
   // (Screened with one thread as well, so the result does not depend on
   // the thread count.)
   std::vector<char> promising(edges.size(), 0);
+  std::vector<CollapsePlan> plans(edges.size());
   parallelRanges(std::int64_t(edges.size()), threads, [&](std::int64_t b, std::int64_t e) {
     EdgeCollapser screen(complex, bounds, hull);
     for (std::int64_t i = b; i < e; ++i)
-      promising[std::size_t(i)] = screen.tryCollapse(edges[std::size_t(i)].a, edges[std::size_t(i)].b, false) >= 0;
+      promising[std::size_t(i)] =
+          screen.tryCollapse(edges[std::size_t(i)].a, edges[std::size_t(i)].b, false, &plans[std::size_t(i)]) >= 0;
   });
   std::size_t kept = 0;
   for (std::size_t i = 0; i < edges.size(); ++i)
-    if (promising[i]) edges[kept++] = edges[i];
+    if (promising[i]) {
+      plans[kept] = plans[i];
+      edges[kept++] = edges[i];
+    }
   edges.resize(kept);
+  plans.resize(kept);
+  // Vertices whose star a collapse has changed since the screening (the
+  // survivors and their one-rings): their screened plans may be stale.
+  std::vector<char> touched(std::size_t(complex.vertexSlots()), 0);
 
   auto later = [&](const WeightedEdge& x, const WeightedEdge& y) { return shorter(y, x); };
   std::priority_queue<WeightedEdge, std::vector<WeightedEdge>, decltype(later)> queue(later);
@@ -336,7 +355,9 @@ std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& b
   const std::int32_t dummy = complex.dummyVertex();
   while (next < edges.size() || !queue.empty()) {
     WeightedEdge e;
+    const CollapsePlan* plan = nullptr;
     if (queue.empty() || (next < edges.size() && shorter(edges[next], queue.top()))) {
+      plan = &plans[next];
       e = edges[next++];
     } else {
       e = queue.top();
@@ -344,7 +365,13 @@ std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& b
     }
     if (!complex.vertexAlive(e.a) || !complex.vertexAlive(e.b)) continue;
     if ((complex.position(e.a) - complex.position(e.b)).squaredNorm() >= emin2) continue;
-    const std::int32_t survivor = collapser.tryCollapse(e.a, e.b);
+    std::int32_t survivor = -1;
+    if (plan && !touched[std::size_t(e.a)] && !touched[std::size_t(e.b)]) {
+      collapser.applyPlan(*plan);
+      survivor = plan->kept;
+    } else {
+      survivor = collapser.tryCollapse(e.a, e.b);
+    }
     if (survivor < 0) continue;
     ++collapses;
     // Cascade: the remaining vertex's short edges are candidates again.
@@ -355,6 +382,8 @@ std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& b
         if (w != survivor && w != dummy) ring.push_back(w);
     std::sort(ring.begin(), ring.end());
     ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+    touched[std::size_t(survivor)] = 1;
+    for (std::int32_t w : ring) touched[std::size_t(w)] = 1;
     const Eigen::Vector3d pk = complex.position(survivor);
     for (std::int32_t w : ring) {
       const double l2 = (complex.position(w) - pk).squaredNorm();

@@ -27,6 +27,13 @@ namespace vox::remesh {
 
 inline constexpr double kCollapseMinDihedral = 10.0;  // degrees
 
+// A collapse found possible: edge (u, v) as asked, `removed` onto `kept`,
+// which moves to p.
+struct CollapsePlan {
+  std::int32_t u = -1, v = -1, removed = -1, kept = -1;
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+};
+
 class EdgeCollapser {
 public:
   EdgeCollapser(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull);
@@ -35,7 +42,13 @@ public:
   // that remains, or -1 (nothing changed). With apply = false only says
   // which vertex would remain (read-only: collapsers of other threads may
   // evaluate the same complex meanwhile).
-  std::int32_t tryCollapse(std::int32_t u, std::int32_t v, bool apply = true);
+  std::int32_t tryCollapse(std::int32_t u, std::int32_t v, bool apply = true, CollapsePlan* plan = nullptr);
+  // Performs a collapse that tryCollapse(u, v, false, &plan) found on the
+  // complex as it was then. The result is the same as tryCollapse(u, v)
+  // now, provided that no collapse since has touched u or v (changed a tet
+  // around u or v, or moved one of their neighbours): what the rules look at
+  // is all in the stars of u and v.
+  void applyPlan(const CollapsePlan& plan);
 
 private:
   bool anyPositionKeepsEdgesShort() const;
@@ -64,8 +77,10 @@ private:
 // the edges of the remaining vertex that became too short are queued too
 // (cascading), until every edge is long enough or cannot be collapsed.
 // Returns the number of collapses.
-// The candidates are first screened in parallel (read-only), the collapses
-// then applied one at a time in order, each re-checked.
+// The candidates are first screened in parallel (read-only); the collapses
+// are then applied one at a time in order: as screened while no collapse
+// has touched the edge's end points since, re-checked otherwise. Either way
+// the result is that of checking every collapse in turn.
 std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull,
                                int threads = 2);
 

@@ -84,7 +84,7 @@ bool EdgeFlipper::ringNearPinch() const {
   return false;
 }
 
-bool EdgeFlipper::tryFlipInnerEdge(std::int32_t a, std::int32_t b, bool apply) {
+bool EdgeFlipper::tryFlipInnerEdge(std::int32_t a, std::int32_t b, bool apply, std::uint8_t* apex) {
   if (a == complex_.dummyVertex() || b == complex_.dummyVertex()) return false;
   if (!complex_.vertexAlive(a) || !complex_.vertexAlive(b)) return false;
   const std::int32_t t = walker_.findEdgeTet(complex_, a, b);
@@ -114,6 +114,7 @@ bool EdgeFlipper::tryFlipInnerEdge(std::int32_t a, std::int32_t b, bool apply) {
   std::sort(choices.begin(), choices.end());
   for (const auto& [worst, k] : choices) {
     if (fanCreatesExistingEdge(k)) continue;
+    if (apex) *apex = std::uint8_t(k);
     if (!apply) return true;
     fanTowards(k);
     complex_.replaceTets(ring_.tets, fan_, fanLabels_, scratch_);
@@ -143,7 +144,7 @@ std::pair<int, int> EdgeFlipper::boundaryValence(std::int32_t v, std::int32_t x,
   return {int(std::unique(others.begin(), others.end()) - others.begin()), labels.size()};
 }
 
-bool EdgeFlipper::tryFlipSurfaceEdge(std::int32_t a, std::int32_t b, bool apply) {
+bool EdgeFlipper::tryFlipSurfaceEdge(std::int32_t a, std::int32_t b, bool apply, std::uint8_t* apex) {
   if (a == complex_.dummyVertex() || b == complex_.dummyVertex()) return false;
   if (!complex_.vertexAlive(a) || !complex_.vertexAlive(b)) return false;
   const std::int32_t t = walker_.findEdgeTet(complex_, a, b);
@@ -225,8 +226,21 @@ bool EdgeFlipper::tryFlipSurfaceEdge(std::int32_t a, std::int32_t b, bool apply)
   }
   if (fanCreatesExistingEdge(bestApex)) return false;
   if (bestApex == n) return false;
+  if (apex) *apex = std::uint8_t(bestApex);
   if (!apply) return true;
   fanTowards(bestApex);
+  complex_.replaceTets(ring_.tets, fan_, fanLabels_, scratch_);
+  return true;
+}
+
+bool EdgeFlipper::applyEdgePlan(std::int32_t a, std::int32_t b, std::uint8_t apex, const std::vector<char>& touched) {
+  if (touched[std::size_t(a)] || touched[std::size_t(b)] || !complex_.vertexAlive(a) || !complex_.vertexAlive(b))
+    return false;
+  // Stars of a and b unchanged: the same ring, in the same order.
+  complex_.edgeRing(a, b, walker_.findEdgeTet(complex_, a, b), ring_);
+  for (std::int32_t w : ring_.ring)
+    if (touched[std::size_t(w)]) return false;
+  fanTowards(apex);
   complex_.replaceTets(ring_.tets, fan_, fanLabels_, scratch_);
   return true;
 }
@@ -278,21 +292,32 @@ void worstCosines(const RemeshComplex& complex, int threads, std::vector<double>
 }
 }  // namespace
 
-// Keeps the candidate edges a flip would take on the complex as it is now,
-// found on all threads (read-only); the flips are then applied one by one
-// in order, each re-checked.
+// Finds on all threads (read-only) which candidate edges a flip would take
+// on the complex as it is now, and towards which apex. Then applies them in
+// order: as screened (the apex found then) while no
+// flip has touched the edge's end points or ring, re-checked otherwise, so
+// the result is that of checking every flip in turn. Returns the flips.
 template <typename Try>
-void screen(RemeshComplex& complex, const FlipOptions& options, std::vector<std::pair<std::int32_t, std::int32_t>>& edges,
-            const Try& tryFlip) {
-  std::vector<char> flippable(edges.size(), 0);
+std::size_t screenAndFlip(RemeshComplex& complex, const FlipOptions& options, EdgeFlipper& flipper,
+                          std::vector<std::pair<std::int32_t, std::int32_t>>& edges, const Try& tryFlip) {
+  constexpr std::uint8_t kNone = 0xFF;
+  std::vector<std::uint8_t> apex(edges.size(), kNone);
   parallelRanges(std::int64_t(edges.size()), options.threads, [&](std::int64_t b, std::int64_t e) {
     EdgeFlipper f(complex, options);
-    for (std::int64_t i = b; i < e; ++i) flippable[std::size_t(i)] = tryFlip(f, edges[std::size_t(i)].first, edges[std::size_t(i)].second);
+    for (std::int64_t i = b; i < e; ++i)
+      tryFlip(f, edges[std::size_t(i)].first, edges[std::size_t(i)].second, false, &apex[std::size_t(i)]);
   });
-  std::size_t kept = 0;
-  for (std::size_t i = 0; i < edges.size(); ++i)
-    if (flippable[i]) edges[kept++] = edges[i];
-  edges.resize(kept);
+  std::vector<char> touched(std::size_t(complex.vertexSlots()), 0);
+  std::size_t flips = 0;
+  for (std::size_t i = 0; i < edges.size(); ++i) {
+    if (apex[i] == kNone) continue;
+    const auto [a, b] = edges[i];
+    if (!flipper.applyEdgePlan(a, b, apex[i], touched) && !tryFlip(flipper, a, b, true, nullptr)) continue;
+    ++flips;
+    touched[std::size_t(a)] = touched[std::size_t(b)] = 1;
+    for (std::int32_t w : flipper.lastRing().ring) touched[std::size_t(w)] = 1;
+  }
+  return flips;
 }
 
 FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
@@ -315,8 +340,10 @@ FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
   }
   std::sort(edges.begin(), edges.end());
   edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-  screen(complex, options, edges, [](EdgeFlipper& f, std::int32_t a, std::int32_t b) { return f.tryFlipSurfaceEdge(a, b, false); });
-  for (const auto& [a, b] : edges) counts.surface += flipper.tryFlipSurfaceEdge(a, b);
+  counts.surface = screenAndFlip(complex, options, flipper, edges,
+                                 [](EdgeFlipper& f, std::int32_t a, std::int32_t b, bool apply, std::uint8_t* apex) {
+                                   return f.tryFlipSurfaceEdge(a, b, apply, apex);
+                                 });
 
   // Inner edges of poor tets, worst tets first.
   const double threshold = cosDegrees(options.innerFlipAngle);
@@ -356,8 +383,10 @@ FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
     }
     edges.swap(ordered);
   }
-  screen(complex, options, edges, [](EdgeFlipper& f, std::int32_t a, std::int32_t b) { return f.tryFlipInnerEdge(a, b, false); });
-  for (const auto& [a, b] : edges) counts.inner += flipper.tryFlipInnerEdge(a, b);
+  counts.inner = screenAndFlip(complex, options, flipper, edges,
+                               [](EdgeFlipper& f, std::int32_t a, std::int32_t b, bool apply, std::uint8_t* apex) {
+                                 return f.tryFlipInnerEdge(a, b, apply, apex);
+                               });
 
   // Face flips for the slivers and caps that are left.
   std::vector<std::pair<double, std::int32_t>> poor;

@@ -48,8 +48,17 @@ public:
   EdgeFlipper(RemeshComplex& complex, const FlipOptions& options);
   // Each returns whether it flipped; with apply = false only whether it
   // would (read-only: flippers of other threads may read the complex too).
-  bool tryFlipInnerEdge(std::int32_t a, std::int32_t b, bool apply = true);
-  bool tryFlipSurfaceEdge(std::int32_t a, std::int32_t b, bool apply = true);
+  // `apex` receives the ring position of the fan's apex when it would flip.
+  bool tryFlipInnerEdge(std::int32_t a, std::int32_t b, bool apply = true, std::uint8_t* apex = nullptr);
+  bool tryFlipSurfaceEdge(std::int32_t a, std::int32_t b, bool apply = true, std::uint8_t* apex = nullptr);
+  // Performs the flip of edge (a, b) towards `apex` that one of the above
+  // found (apply = false) on the complex as it was then, if neither a, b nor
+  // any vertex of the edge's ring is `touched` (no flip since has changed a
+  // tet around them: what the rules look at is all in their stars), and
+  // returns true; returns false, changing nothing, otherwise.
+  bool applyEdgePlan(std::int32_t a, std::int32_t b, std::uint8_t apex, const std::vector<char>& touched);
+  // The edge ring of the last edge tried (after a flip: the ring it removed).
+  const EdgeRing& lastRing() const { return ring_; }
   // 2-3 flip of face k of tet t (sliver removal, thesis 2.3.6).
   bool tryFlipFace(std::int32_t t, int k, bool apply = true);
 

@@ -1,25 +1,39 @@
 // M-MAd remesher against its peer, CGAL 5.5's tetrahedral_isotropic_remeshing,
-// side by side: the same initial mesh (the adaptive conforming decomposition
-// of the grid, with its imaginary layer as CGAL's subdomain 0) and the same
-// target length, 10 iterations plus 3 flip-smooth rounds for both (CGAL's
-// fixed extra rounds). Quality and topology of both outputs are measured
-// with the same code (mesh_quality.h, mesh_topology.h).
+// side by side on the same input and target length, 10 iterations plus
+// 3 flip-smooth rounds for both (CGAL's fixed extra rounds). Two inputs:
+//   - the grid (default): M-MAd starts from the adaptive conforming
+//     decomposition with its imaginary shell, as `voxmorph mesh` does; CGAL,
+//     whose triangulation must fill a convex hull, from the same
+//     decomposition with the imaginary layer filling the box (its
+//     subdomain 0);
+//   - VOX_REMESH_INPUT=mesh3: a CGAL Mesh_3 mesh of the grid with cells of
+//     about l and facets within l / 4 of the labels' interfaces (facet
+//     distance VOX_REMESH_MESH3_DISTANCE mm to change it; half a voxel gives
+//     7.5 M tets on the AM at l = 8 mm); M-MAd gets its domain tets, as a user's file
+//     holds them, CGAL the Mesh_3 triangulation (outside cells subdomain 0).
+// Quality and topology of both outputs are measured with the same code
+// (mesh_quality.h, mesh_topology.h), topology against the grid, or against
+// the Mesh_3 mesh for that input.
 //
 // This binary, and only this one, links CGAL: the peer is its own code.
 //
 //   build/release/bench/remesh_bench                       # AM phantom, l = 8 mm
+//   VOX_REMESH_INPUT=mesh3 build/release/bench/remesh_bench # Mesh_3 mesh of the AM, l = 8 mm
 //   VOX_REMESH_GRID=path.nii.gz VOX_REMESH_L=4.274 build/release/bench/remesh_bench
 //   VOX_REMESH_VOXELS=2 build/release/bench/remesh_bench --benchmark_filter=MMAdRemesh/2   # l = 2 voxels
 //   VOX_REMESH_SYNTH=junctions:48 VOX_REMESH_L=2.5 build/release/bench/remesh_bench
 //   VOX_REMESH_CROP=60,20,100,96,64,40 build/release/bench/remesh_bench  # a box of voxels
 //
 // Counters: tets (domain), min/max dihedral, tets under 15 and 5 degrees,
-// topology differences against the grid (0 = every label, 1-junction and
-// 0-junction kept), largest per-label volume change, process CPU seconds.
+// topology differences against the reference (0 = every label, 1-junction
+// and 0-junction kept), largest per-label volume change, process CPU
+// seconds, peak RSS of the process so far (MB; run one benchmark per
+// process for each remesher's own peak).
 // The M-MAd run is marked as an error when its output lost any label,
 // junction or Euler characteristic, or holds a tet of volume <= 0 (the
 // acceptance check of the full phantom at l = 2 voxels, too slow for ctest).
 
+#include "geometry/deform/restricted_delaunay.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/mesh_quality.h"
 #include "geometry/remesh/adaptive_voxel_tetrahedralization.h"
@@ -45,6 +59,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <sys/resource.h>
 
 namespace {
 
@@ -54,7 +69,8 @@ struct Case {
   std::string name;
   LabelGrid grid;
   double targetLength = 8.0;
-  TetMesh initial;  // domain and imaginary tets
+  TetMesh initial;      // M-MAd's input: domain and imaginary tets, or Mesh_3's domain tets
+  TetMesh cgalInitial;  // CGAL's input: tets filling a convex hull, label 0 outside the domain
   remesh::MeshTopology topology;
   TetQualitySummary initialQuality;
   double decompositionSeconds = 0.0;
@@ -91,16 +107,58 @@ const Case& benchCase() {
     if (const char* l = std::getenv("VOX_REMESH_L")) k->targetLength = std::atof(l);
     if (const char* v = std::getenv("VOX_REMESH_VOXELS")) k->targetLength = std::atof(v) * k->grid.spacing().minCoeff();
     const auto t0 = std::chrono::steady_clock::now();
-    k->initial = remesh::tetrahedralizeVoxelsAdaptive(
-        k->grid, remesh::adaptiveOptionsForTarget(k->grid.geometry(), k->targetLength));
+    const char* input = std::getenv("VOX_REMESH_INPUT");
+    if (input && std::string(input) == "mesh3") {
+      // Mesh_3 needs background on the border voxels: pad by one voxel.
+      GridGeometry g = k->grid.geometry();
+      g.dims = {g.dims[0] + 2, g.dims[1] + 2, g.dims[2] + 2};
+      g.origin = k->grid.geometry().voxelCenter(-1, -1, -1);
+      LabelGrid padded(g, 0);
+      for (std::int64_t z = 0; z < k->grid.dims()[2]; ++z)
+        for (std::int64_t y = 0; y < k->grid.dims()[1]; ++y)
+          for (std::int64_t x = 0; x < k->grid.dims()[0]; ++x) padded.at(x + 1, y + 1, z + 1) = k->grid.at(x, y, z);
+      SampledDomain domain;
+      domain.labels = &padded;
+      domain.labelAt = [&padded](const Eigen::Vector3d& p) {
+        Index3 c;
+        return padded.geometry().voxelAt(p, c) ? int(padded.at(c[0], c[1], c[2])) : 0;
+      };
+      const ScalarGrid sizing(padded.geometry(), float(k->targetLength));
+      VolumeCriteria criteria;
+      criteria.sizing = &sizing;
+      criteria.facetDistanceMm = 0.25 * k->targetLength;
+      if (const char* d = std::getenv("VOX_REMESH_MESH3_DISTANCE")) criteria.facetDistanceMm = std::atof(d);
+      criteria.keepOutside = true;
+      k->cgalInitial = restrictedDelaunayVolume(domain, criteria);
+      for (std::size_t t = 0; t < k->cgalInitial.tetCount(); ++t)
+        if (k->cgalInitial.labels[t] > 0) {
+          k->initial.tets.push_back(k->cgalInitial.tets[t]);
+          k->initial.labels.push_back(k->cgalInitial.labels[t]);
+        }
+      k->initial.positions = k->cgalInitial.positions;  // unused vertices are dropped by the remesher
+      k->topology = remesh::computeMeshTopology(k->initial);
+      k->name += " (Mesh_3, facet distance " + std::to_string(criteria.facetDistanceMm) + " mm)";
+    } else {
+      remesh::AdaptiveTetrahedralizationOptions options = remesh::adaptiveOptionsForTarget(k->grid.geometry(), k->targetLength);
+      k->initial = remesh::tetrahedralizeVoxelsAdaptive(k->grid, options);
+      options.shell = false;
+      k->cgalInitial = remesh::tetrahedralizeVoxelsAdaptive(k->grid, options);
+      k->topology = remesh::computeGridTopology(k->grid);
+    }
     k->decompositionSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    k->topology = remesh::computeGridTopology(k->grid);
     k->initialQuality = summarizeTetQuality(k->initial);
-    std::fprintf(stderr, "%s: l = %g mm, initial mesh %zu tets (%zu domain) in %.2f s\n", k->name.c_str(),
-                 k->targetLength, k->initial.tetCount(), k->initialQuality.tets, k->decompositionSeconds);
+    std::fprintf(stderr, "%s: l = %g mm, initial mesh %zu tets (%zu domain), CGAL's %zu tets, in %.2f s\n",
+                 k->name.c_str(), k->targetLength, k->initial.tetCount(), k->initialQuality.tets,
+                 k->cgalInitial.tetCount(), k->decompositionSeconds);
     return k;
   }();
   return *c;
+}
+
+double peakRssMb() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return double(usage.ru_maxrss) / 1024.0;
 }
 
 // Returns whether the topology is kept and every tet has a positive volume.
@@ -129,6 +187,7 @@ bool reportOutput(benchmark::State& state, const Case& c, const TetMesh& out, do
   state.counters["topology_differences"] = double(differences.size());
   state.counters["max_label_volume_change"] = worstVolume;
   state.counters["process_cpu_s"] = cpuSeconds;
+  state.counters["peak_rss_mb"] = peakRssMb();
   for (std::size_t i = 0; i < differences.size() && i < 10; ++i) std::fprintf(stderr, "  %s\n", differences[i].c_str());
   if (differences.size() > 10) std::fprintf(stderr, "  ... %zu differences in all\n", differences.size());
   return differences.empty() && minVolume > 0.0;
@@ -161,17 +220,22 @@ void BM_CgalRemesh(benchmark::State& state) {
   const Case& c = benchCase();
   for (auto _ : state) {
     const double cpu0 = vox::processCpuSeconds();
-    // The same tets, finite cells of a Triangulation_3; subdomain 0 (our
-    // imaginary layer) is outside for CGAL, the convex hull is the box.
+    // The input's tets as the finite cells of a Triangulation_3; subdomain 0
+    // (the imaginary box, or Mesh_3's outside cells) is outside for CGAL.
     CgalTriangulation tr;
     std::vector<CgalTriangulation::Point> points;
-    points.reserve(c.initial.vertexCount());
-    for (const Eigen::Vector3d& p : c.initial.positions) points.emplace_back(p[0], p[1], p[2]);
+    const TetMesh& in = c.cgalInitial;
+    points.reserve(in.vertexCount());
+    for (const Eigen::Vector3d& p : in.positions) points.emplace_back(p[0], p[1], p[2]);
     std::vector<std::array<int, 5>> cells;
-    cells.reserve(c.initial.tetCount());
-    for (std::size_t t = 0; t < c.initial.tetCount(); ++t) {
-      const Tet& q = c.initial.tets[t];
-      cells.push_back({q[0], q[1], q[2], q[3], c.initial.labels[t]});
+    cells.reserve(in.tetCount());
+    for (std::size_t t = 0; t < in.tetCount(); ++t) {
+      const Tet& q = in.tets[t];
+      // CGAL wants positively oriented cells.
+      if (signedVolume(in.positions, q) < 0.0)
+        cells.push_back({q[0], q[1], q[3], q[2], in.labels[t]});
+      else
+        cells.push_back({q[0], q[1], q[2], q[3], in.labels[t]});
     }
     std::map<std::array<int, 3>, int> noPatches;
     std::vector<CgalTriangulation::Vertex_handle> handles;
