@@ -27,15 +27,20 @@ const LabelSet& EdgeCollapser::edgeLabels(const VertexNeighborhood& n, std::int3
 std::int32_t EdgeCollapser::tryCollapse(std::int32_t u, std::int32_t v, bool apply, CollapsePlan* plan) {
   const std::int32_t dummy = complex_.dummyVertex();
   if (u == v || u == dummy || v == dummy || !complex_.vertexAlive(u) || !complex_.vertexAlive(v)) return -1;
-  const std::int32_t t = walker_.findEdgeTet(complex_, u, v);
+  // The first tet of u's star (in the walk's order) holding v: the edge
+  // ring starts where StarWalker::findEdgeTet would start it.
+  starOf(u, nu_.tets);
+  std::int32_t t = -1;
+  for (std::int32_t q : nu_.tets)
+    if (complex_.localIndex(q, v) >= 0) {
+      t = q;
+      break;
+    }
   if (t < 0) return -1;
-  // Label sets first: most short edges near interfaces meet the exclusion
-  // condition, which needs no one-ring.
   complex_.edgeRing(u, v, t, ring_);
   LabelSet suv;
   for (std::int32_t q : ring_.tets) suv.insert(complex_.label(q));
-  walker_.incidentTets(complex_, u, nu_.tets);
-  walker_.incidentTets(complex_, v, nv_.tets);
+  starOf(v, nv_.tets);
   auto labelsOf = [&](const std::vector<std::int32_t>& tets) {
     LabelSet s;
     for (std::int32_t q : tets) s.insert(complex_.label(q));
@@ -279,6 +284,22 @@ bool EdgeCollapser::test2NoLongEdges(const VertexNeighborhood& r, const VertexNe
   return true;
 }
 
+void EdgeCollapser::starOf(std::int32_t v, std::vector<std::int32_t>& out) {
+  ++clock_;
+  for (CachedStar& c : stars_)
+    if (c.vertex == v && c.collapses == collapses_) {
+      c.used = clock_;
+      out = c.tets;
+      return;
+    }
+  walker_.incidentTets(complex_, v, out);
+  CachedStar& c = stars_[0].used <= stars_[1].used ? stars_[0] : stars_[1];
+  c.vertex = v;
+  c.collapses = collapses_;
+  c.used = clock_;
+  c.tets.assign(out.begin(), out.end());
+}
+
 void EdgeCollapser::applyPlan(const CollapsePlan& plan) {
   // The same ring, in the same order, as tryCollapse(u, v) finds.
   complex_.edgeRing(plan.u, plan.v, walker_.findEdgeTet(complex_, plan.u, plan.v), ring_);
@@ -307,6 +328,7 @@ void EdgeCollapser::collapse(const VertexNeighborhood& r, const VertexNeighborho
   complex_.setPosition(kv, p);
   complex_.setAnyTet(kv, survivor);
   complex_.removeVertex(rv);
+  ++collapses_;
 }
 
 std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull,

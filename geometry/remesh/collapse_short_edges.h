@@ -22,6 +22,7 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 namespace vox::remesh {
 
@@ -68,6 +69,17 @@ private:
   StarWalker walker_;
   VertexNeighborhood nu_, nv_;
   EdgeRing ring_;
+  // The stars of the last two vertices asked for, valid until this
+  // collapser collapses an edge: the short edges queued after a collapse
+  // all share the surviving vertex.
+  struct CachedStar {
+    std::int32_t vertex = -1;
+    std::uint64_t collapses = 0, used = 0;
+    std::vector<std::int32_t> tets;
+  };
+  void starOf(std::int32_t v, std::vector<std::int32_t>& out);
+  CachedStar stars_[2];
+  std::uint64_t collapses_ = 0, clock_ = 0;
   // Worst dihedral cosine around u and v, computed when first needed.
   double worstBefore(const VertexNeighborhood& nb) const;
   mutable double worstBefore_[2] = {3.0, 3.0};
