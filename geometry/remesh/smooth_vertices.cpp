@@ -6,6 +6,9 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <atomic>
+#include <condition_variable>
+#include <mutex>
 
 namespace vox::remesh {
 
@@ -170,6 +173,91 @@ private:
   const VertexTets& vt_;
 };
 
+// Moves level[i] towards targets[i] where moves[i], with the result of doing
+// so one vertex at a time in index order: a move reads only the positions
+// of the vertex's one-ring, so a vertex moves once every moving neighbour of
+// lower index has moved and before any of higher index does. Those
+// dependencies are a DAG; its vertices are handed to the threads as they
+// become free. Returns the vertices moved.
+std::size_t applyMoves(RemeshComplex& complex, const Smoother& smoother, const VertexTets& vt,
+                       const std::vector<std::int32_t>& level, const std::vector<Eigen::Vector3d>& targets,
+                       const std::vector<char>& moves, int threads) {
+  const std::int64_t n = std::int64_t(level.size());
+  std::vector<std::int32_t> slot(std::size_t(complex.vertexSlots()), -1);
+  for (std::int64_t i = 0; i < n; ++i)
+    if (moves[std::size_t(i)]) slot[std::size_t(level[std::size_t(i)])] = std::int32_t(i);
+  // Later moving neighbours of each moving vertex (CSR), counted then filled.
+  std::vector<std::int64_t> start(std::size_t(n) + 1, 0);
+  std::vector<std::int32_t> later;
+  for (int pass = 0; pass < 2; ++pass) {
+    parallelRanges(n, threads, [&](std::int64_t b, std::int64_t e) {
+      std::vector<std::int32_t> tets, found;
+      for (std::int64_t i = b; i < e; ++i) {
+        if (!moves[std::size_t(i)]) continue;
+        vt.of(level[std::size_t(i)], tets);
+        found.clear();
+        for (std::int32_t q : tets)
+          for (std::int32_t w : complex.tet(q)) {
+            const std::int32_t j = w == complex.dummyVertex() ? -1 : slot[std::size_t(w)];
+            if (j > i) found.push_back(j);
+          }
+        std::sort(found.begin(), found.end());
+        found.erase(std::unique(found.begin(), found.end()), found.end());
+        if (pass == 0)
+          start[std::size_t(i) + 1] = std::int64_t(found.size());
+        else
+          std::copy(found.begin(), found.end(), later.begin() + start[std::size_t(i)]);
+      }
+    });
+    if (pass == 0) {
+      for (std::int64_t i = 0; i < n; ++i) start[std::size_t(i) + 1] += start[std::size_t(i)];
+      later.resize(std::size_t(start.back()));
+    }
+  }
+  std::vector<std::atomic<std::int32_t>> waiting(static_cast<std::size_t>(n));
+  for (auto& w : waiting) w.store(0, std::memory_order_relaxed);
+  for (std::int32_t j : later) waiting[std::size_t(j)].fetch_add(1, std::memory_order_relaxed);
+  std::vector<std::int32_t> ready;
+  std::int64_t remaining = 0;
+  for (std::int64_t i = n - 1; i >= 0; --i)
+    if (moves[std::size_t(i)]) {
+      ++remaining;
+      if (waiting[std::size_t(i)].load(std::memory_order_relaxed) == 0) ready.push_back(std::int32_t(i));
+    }
+  std::vector<char> moved(std::size_t(n), 0);
+  std::mutex mutex;
+  std::condition_variable wake;
+  const int workers = std::max(1, threads);
+  parallelRanges(workers, workers, [&](std::int64_t, std::int64_t) {
+    std::vector<std::int32_t> tets, freed;
+    for (;;) {
+      std::int32_t i;
+      {
+        std::unique_lock lock(mutex);
+        wake.wait(lock, [&] { return !ready.empty() || remaining == 0; });
+        if (ready.empty()) return;
+        i = ready.back();
+        ready.pop_back();
+      }
+      moved[std::size_t(i)] = smoother.moveTowards(level[std::size_t(i)], targets[std::size_t(i)], tets);
+      freed.clear();
+      for (std::int64_t x = start[std::size_t(i)]; x < start[std::size_t(i) + 1]; ++x) {
+        const std::int32_t j = later[std::size_t(x)];
+        if (waiting[std::size_t(j)].fetch_sub(1, std::memory_order_acq_rel) == 1) freed.push_back(j);
+      }
+      bool done;
+      {
+        std::lock_guard lock(mutex);
+        ready.insert(ready.end(), freed.begin(), freed.end());
+        done = --remaining == 0;
+      }
+      if (done || freed.size() > 1) wake.notify_all();
+      else if (!freed.empty()) wake.notify_one();
+    }
+  }, 1);
+  return std::size_t(std::count(moved.begin(), moved.end(), char(1)));
+}
+
 }  // namespace
 
 SmoothCounts smoothVertices(RemeshComplex& complex, const InterfaceSurfaces* surfaces, const HullConstraint& hull,
@@ -191,7 +279,7 @@ SmoothCounts smoothVertices(RemeshComplex& complex, const InterfaceSurfaces* sur
 
   Smoother smoother(complex, surfaces, hull, vt);
   SmoothCounts counts;
-  std::vector<std::int32_t> level, tets;
+  std::vector<std::int32_t> level;
   std::vector<Eigen::Vector3d> targets;
   std::vector<char> moves;
   for (VertexKind k : {VertexKind::Feature, VertexKind::Surface, VertexKind::Inside}) {
@@ -208,9 +296,7 @@ SmoothCounts smoothVertices(RemeshComplex& complex, const InterfaceSurfaces* sur
         moves[std::size_t(i)] = smoother.target(nb, targets[std::size_t(i)]);
       }
     });
-    std::size_t moved = 0;
-    for (std::size_t i = 0; i < level.size(); ++i)
-      if (moves[i]) moved += smoother.moveTowards(level[i], targets[i], tets);
+    const std::size_t moved = applyMoves(complex, smoother, vt, level, targets, moves, threads);
     (k == VertexKind::Feature ? counts.feature : k == VertexKind::Surface ? counts.surface : counts.inside) = moved;
   }
   return counts;

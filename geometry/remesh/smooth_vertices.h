@@ -5,7 +5,7 @@
 // (tangential Laplacian over the neighbours of their 2-junction, projected
 // onto its PSS), then inside vertices (Laplacian over the whole one-ring),
 // each level using the already smoothed positions of the level before.
-// Corners never move; hull vertices slide within their box faces. A move is
+// Corners never move; hull vertices slide within the planes of their hull facets. A move is
 // shortened until no incident tet inverts (nor drops under the quality
 // floor) and the worst dihedral angle around the vertex does not get worse
 // unless it stays above 30 degrees; it is dropped when even a small step
@@ -13,8 +13,9 @@
 // fixed junction points, plain Laplacian moves create most slivers.)
 //
 // Targets are computed in parallel from the positions of the previous level;
-// moves are then applied one vertex at a time in index order, so the result
-// does not depend on the thread count.
+// moves then give the result of applying them one vertex at a time in index
+// order (on all threads: a vertex waits only for its moving neighbours of
+// lower index), so it does not depend on the thread count.
 
 #include "geometry/remesh/hull_constraint.h"
 #include "geometry/remesh/interface_surfaces.h"
