@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <queue>
 #include <tuple>
 
 namespace vox::remesh {
@@ -334,82 +333,89 @@ void EdgeCollapser::collapse(const VertexNeighborhood& r, const VertexNeighborho
 std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull,
                                int threads) {
   const double emin2 = bounds.emin * bounds.emin;
-  // Shortest first: the initial candidates sorted once, the edges made
-  // short by a collapse in a small heap, always taking the shorter head.
-  std::vector<WeightedEdge> edges;
-  collectEdges(complex, [&](std::int32_t, std::int32_t, double l2) { return l2 < emin2; }, edges, threads);
   auto shorter = [](const WeightedEdge& x, const WeightedEdge& y) {
     return std::tie(x.length2, x.a, x.b) < std::tie(y.length2, y.a, y.b);
   };
-  std::sort(edges.begin(), edges.end(), shorter);
+  std::vector<WeightedEdge> edges;
+  collectEdges(complex, [&](std::int32_t, std::int32_t, double l2) { return l2 < emin2; }, edges, threads);
 
-  // Screening on all threads: most candidates cannot be collapsed
-  // (junctions, lengths, angles), and finding out only reads the complex.
-  // (Screened with one thread as well, so the result does not depend on
-  // the thread count.)
-  std::vector<char> promising(edges.size(), 0);
-  std::vector<CollapsePlan> plans(edges.size());
-  parallelRanges(std::int64_t(edges.size()), threads, [&](std::int64_t b, std::int64_t e) {
-    EdgeCollapser screen(complex, bounds, hull);
-    for (std::int64_t i = b; i < e; ++i)
-      promising[std::size_t(i)] =
-          screen.tryCollapse(edges[std::size_t(i)].a, edges[std::size_t(i)].b, false, &plans[std::size_t(i)]) >= 0;
-  });
-  std::size_t kept = 0;
-  for (std::size_t i = 0; i < edges.size(); ++i)
-    if (promising[i]) {
-      plans[kept] = plans[i];
-      edges[kept++] = edges[i];
-    }
-  edges.resize(kept);
-  plans.resize(kept);
-  // Vertices whose star a collapse has changed since the screening (the
-  // survivors and their one-rings): their screened plans may be stale.
-  std::vector<char> touched(std::size_t(complex.vertexSlots()), 0);
-
-  auto later = [&](const WeightedEdge& x, const WeightedEdge& y) { return shorter(y, x); };
-  std::priority_queue<WeightedEdge, std::vector<WeightedEdge>, decltype(later)> queue(later);
-  std::size_t next = 0;
-
+  // Waves, shortest edge first within each. A wave's candidates are screened
+  // on all threads (read-only: most cannot be collapsed), then the promising
+  // ones are collapsed in order: as screened while no collapse of this wave
+  // has touched their stars, checked again otherwise. The short edges a
+  // collapse leaves at its surviving vertex make the next wave (most of them
+  // cannot be collapsed either, and finding out is again read-only). Every
+  // wave but the last collapses at least its first promising edge. What a
+  // wave holds does not depend on the thread count, nor does the result.
   EdgeCollapser collapser(complex, bounds, hull);
-  std::vector<std::int32_t> star, ring;
+  std::vector<char> touched(std::size_t(complex.vertexSlots()), 0);
+  std::vector<std::int32_t> touchedList, star, ring, byVertex;
+  std::vector<char> promising;
+  std::vector<CollapsePlan> plans;
+  std::vector<WeightedEdge> next;
   std::size_t collapses = 0;
   const std::int32_t dummy = complex.dummyVertex();
-  while (next < edges.size() || !queue.empty()) {
-    WeightedEdge e;
-    const CollapsePlan* plan = nullptr;
-    if (queue.empty() || (next < edges.size() && shorter(edges[next], queue.top()))) {
-      plan = &plans[next];
-      e = edges[next++];
-    } else {
-      e = queue.top();
-      queue.pop();
+  while (!edges.empty()) {
+    std::sort(edges.begin(), edges.end(), shorter);
+    edges.erase(std::unique(edges.begin(), edges.end(),
+                            [](const WeightedEdge& x, const WeightedEdge& y) { return x.a == y.a && x.b == y.b; }),
+                edges.end());
+    promising.assign(edges.size(), 0);
+    plans.assign(edges.size(), CollapsePlan{});
+    // Screened by first end point, so that a screening collapser's star
+    // cache holds that point's star across its edges (a plan does not
+    // depend on the order in which plans are found).
+    byVertex.resize(edges.size());
+    for (std::size_t i = 0; i < edges.size(); ++i) byVertex[i] = std::int32_t(i);
+    std::sort(byVertex.begin(), byVertex.end(), [&](std::int32_t x, std::int32_t y) {
+      return std::tie(edges[std::size_t(x)].a, edges[std::size_t(x)].b) < std::tie(edges[std::size_t(y)].a, edges[std::size_t(y)].b);
+    });
+    parallelRanges(std::int64_t(edges.size()), threads, [&](std::int64_t b, std::int64_t e) {
+      EdgeCollapser screen(complex, bounds, hull);
+      for (std::int64_t x = b; x < e; ++x) {
+        const std::size_t i = std::size_t(byVertex[std::size_t(x)]);
+        promising[i] = screen.tryCollapse(edges[i].a, edges[i].b, false, &plans[i]) >= 0;
+      }
+    });
+    for (std::int32_t w : touchedList) touched[std::size_t(w)] = 0;
+    touchedList.clear();
+    next.clear();
+    for (std::size_t i = 0; i < edges.size(); ++i) {
+      if (!promising[i]) continue;
+      const WeightedEdge& e = edges[i];
+      if (!complex.vertexAlive(e.a) || !complex.vertexAlive(e.b)) continue;
+      std::int32_t survivor = -1;
+      if (touched[std::size_t(e.a)] || touched[std::size_t(e.b)]) {
+        if ((complex.position(e.a) - complex.position(e.b)).squaredNorm() >= emin2) continue;
+        survivor = collapser.tryCollapse(e.a, e.b);
+        if (survivor < 0) continue;
+      } else {
+        collapser.applyPlan(plans[i]);
+        survivor = plans[i].kept;
+      }
+      ++collapses;
+      complex.incidentTets(survivor, star);
+      ring.clear();
+      for (std::int32_t q : star)
+        for (std::int32_t w : complex.tet(q))
+          if (w != survivor && w != dummy) ring.push_back(w);
+      std::sort(ring.begin(), ring.end());
+      ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+      for (std::int32_t w : ring)
+        if (!touched[std::size_t(w)]) touched[std::size_t(w)] = 1, touchedList.push_back(w);
+      if (!touched[std::size_t(survivor)]) touched[std::size_t(survivor)] = 1, touchedList.push_back(survivor);
+      const Eigen::Vector3d pk = complex.position(survivor);
+      for (std::int32_t w : ring) {
+        const double l2 = (complex.position(w) - pk).squaredNorm();
+        if (l2 < emin2) next.push_back({std::min(survivor, w), std::max(survivor, w), l2});
+      }
     }
-    if (!complex.vertexAlive(e.a) || !complex.vertexAlive(e.b)) continue;
-    if ((complex.position(e.a) - complex.position(e.b)).squaredNorm() >= emin2) continue;
-    std::int32_t survivor = -1;
-    if (plan && !touched[std::size_t(e.a)] && !touched[std::size_t(e.b)]) {
-      collapser.applyPlan(*plan);
-      survivor = plan->kept;
-    } else {
-      survivor = collapser.tryCollapse(e.a, e.b);
-    }
-    if (survivor < 0) continue;
-    ++collapses;
-    // Cascade: the remaining vertex's short edges are candidates again.
-    complex.incidentTets(survivor, star);
-    ring.clear();
-    for (std::int32_t q : star)
-      for (std::int32_t w : complex.tet(q))
-        if (w != survivor && w != dummy) ring.push_back(w);
-    std::sort(ring.begin(), ring.end());
-    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
-    touched[std::size_t(survivor)] = 1;
-    for (std::int32_t w : ring) touched[std::size_t(w)] = 1;
-    const Eigen::Vector3d pk = complex.position(survivor);
-    for (std::int32_t w : ring) {
-      const double l2 = (complex.position(w) - pk).squaredNorm();
-      if (l2 < emin2) queue.push({std::min(survivor, w), std::max(survivor, w), l2});
+    // Deferred edges: alive and still short, at their current lengths.
+    edges.clear();
+    for (WeightedEdge e : next) {
+      if (!complex.vertexAlive(e.a) || !complex.vertexAlive(e.b)) continue;
+      e.length2 = (complex.position(e.a) - complex.position(e.b)).squaredNorm();
+      if (e.length2 < emin2) edges.push_back(e);
     }
   }
   return collapses;

@@ -85,14 +85,14 @@ private:
   mutable double worstBefore_[2] = {3.0, 3.0};
 };
 
-// Collapses edges shorter than e_min, shortest first; after each collapse
-// the edges of the remaining vertex that became too short are queued too
-// (cascading), until every edge is long enough or cannot be collapsed.
-// Returns the number of collapses.
-// The candidates are first screened in parallel (read-only); the collapses
-// are then applied one at a time in order: as screened while no collapse
-// has touched the edge's end points since, re-checked otherwise. Either way
-// the result is that of checking every collapse in turn.
+// Collapses edges shorter than e_min in waves, shortest first within each:
+// the edges of a remaining vertex that a collapse made too short form the
+// next wave (cascading), until every edge is long enough or cannot be
+// collapsed. Returns the number of collapses.
+// Each wave's candidates are first screened in parallel (read-only); the
+// collapses are then applied one at a time in order: as screened while no
+// collapse has touched the edge's end points since, re-checked otherwise.
+// The result does not depend on the thread count.
 std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull,
                                int threads = 2);
 

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <tuple>
 
 namespace vox::remesh {
@@ -327,17 +328,23 @@ FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
 
   // Surface edges: sides of boundary facets between two geometric tets.
   std::vector<std::pair<std::int32_t, std::int32_t>> edges;
-  for (std::int32_t t = 0; t < complex.tetSlots(); ++t) {
-    if (!complex.tetAlive(t) || complex.isDummyTet(t)) continue;
-    for (int k = 0; k < 4; ++k) {
-      const std::int32_t n = complex.neighbor(t, k);
-      if (n < t || complex.label(n) == complex.label(t) || complex.isDummyTet(n)) continue;
-      const Tri f = tetFace(complex.tet(t), k);
-      for (int e = 0; e < 3; ++e)
-        edges.push_back({std::min(f[std::size_t(e)], f[std::size_t((e + 1) % 3)]),
-                         std::max(f[std::size_t(e)], f[std::size_t((e + 1) % 3)])});
+  std::mutex gather;
+  parallelRanges(complex.tetSlots(), options.threads, [&](std::int64_t begin, std::int64_t end) {
+    std::vector<std::pair<std::int32_t, std::int32_t>> found;
+    for (std::int32_t t = std::int32_t(begin); t < std::int32_t(end); ++t) {
+      if (!complex.tetAlive(t) || complex.isDummyTet(t)) continue;
+      for (int k = 0; k < 4; ++k) {
+        const std::int32_t n = complex.neighbor(t, k);
+        if (n < t || complex.label(n) == complex.label(t) || complex.isDummyTet(n)) continue;
+        const Tri f = tetFace(complex.tet(t), k);
+        for (int e = 0; e < 3; ++e)
+          found.push_back({std::min(f[std::size_t(e)], f[std::size_t((e + 1) % 3)]),
+                           std::max(f[std::size_t(e)], f[std::size_t((e + 1) % 3)])});
+      }
     }
-  }
+    std::lock_guard lock(gather);
+    edges.insert(edges.end(), found.begin(), found.end());
+  });
   std::sort(edges.begin(), edges.end());
   edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
   counts.surface = screenAndFlip(complex, options, flipper, edges,
@@ -365,24 +372,18 @@ FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
       candidates.push_back({-w, std::min(a, b), std::max(a, b)});
     }
   }
+  // Each edge once, at its worst tet's key; worst first.
+  std::sort(candidates.begin(), candidates.end(), [](const auto& x, const auto& y) {
+    return std::tie(std::get<1>(x), std::get<2>(x), std::get<0>(x)) < std::tie(std::get<1>(y), std::get<2>(y), std::get<0>(y));
+  });
+  candidates.erase(std::unique(candidates.begin(), candidates.end(),
+                               [](const auto& x, const auto& y) {
+                                 return std::get<1>(x) == std::get<1>(y) && std::get<2>(x) == std::get<2>(y);
+                               }),
+                   candidates.end());
   std::sort(candidates.begin(), candidates.end());
   edges.clear();
   for (const auto& [w, a, b] : candidates) edges.push_back({a, b});
-  {
-    // Keep the first (worst) occurrence of each edge.
-    std::vector<std::pair<std::int32_t, std::int32_t>> sorted = edges;
-    std::sort(sorted.begin(), sorted.end());
-    sorted.erase(std::unique(sorted.begin(), sorted.end()), sorted.end());
-    std::vector<char> seen(sorted.size(), 0);
-    std::vector<std::pair<std::int32_t, std::int32_t>> ordered;
-    for (const auto& e : edges) {
-      const std::size_t i = std::size_t(std::lower_bound(sorted.begin(), sorted.end(), e) - sorted.begin());
-      if (seen[i]) continue;
-      seen[i] = 1;
-      ordered.push_back(e);
-    }
-    edges.swap(ordered);
-  }
   counts.inner = screenAndFlip(complex, options, flipper, edges,
                                [](EdgeFlipper& f, std::int32_t a, std::int32_t b, bool apply, std::uint8_t* apex) {
                                  return f.tryFlipInnerEdge(a, b, apply, apex);

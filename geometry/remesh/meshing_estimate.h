@@ -24,7 +24,7 @@ struct MeshingEstimate {
 // (docs/BENCHMARKS.md, "Meshing estimate"): tets per l^3 of domain and peak
 // bytes per output tet (the imaginary layer and the complex's tables count).
 constexpr double kTetsPerCubicLength = 12.0;
-constexpr double kRemeshBytesPerTet = 1200.0;
+constexpr double kRemeshBytesPerTet = 700.0;
 
 MeshingEstimate estimateMeshing(const LabelGrid& grid, double targetLength);
 MeshingEstimate estimateMeshing(const TetMesh& mesh, double targetLength);
