@@ -354,7 +354,6 @@ std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& b
   std::vector<CollapsePlan> plans;
   std::vector<WeightedEdge> next;
   std::size_t collapses = 0;
-  const std::int32_t dummy = complex.dummyVertex();
   while (!edges.empty()) {
     std::sort(edges.begin(), edges.end(), shorter);
     edges.erase(std::unique(edges.begin(), edges.end(),
@@ -395,12 +394,7 @@ std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& b
       }
       ++collapses;
       complex.incidentTets(survivor, star);
-      ring.clear();
-      for (std::int32_t q : star)
-        for (std::int32_t w : complex.tet(q))
-          if (w != survivor && w != dummy) ring.push_back(w);
-      std::sort(ring.begin(), ring.end());
-      ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+      complex.starVertices(star, survivor, ring);
       for (std::int32_t w : ring)
         if (!touched[std::size_t(w)]) touched[std::size_t(w)] = 1, touchedList.push_back(w);
       if (!touched[std::size_t(survivor)]) touched[std::size_t(survivor)] = 1, touchedList.push_back(survivor);

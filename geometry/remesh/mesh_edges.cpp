@@ -22,14 +22,10 @@ void collectEdges(const RemeshComplex& complex,
       for (std::int32_t a = std::int32_t(n * c / kChunks); a < std::int32_t(n * (c + 1) / kChunks); ++a) {
         if (a == dummy || !complex.vertexAlive(a)) continue;
         walker.incidentTets(complex, a, star);
-        ring.clear();
-        for (std::int32_t t : star)
-          for (std::int32_t b : complex.tet(t))
-            if (b > a && b != dummy) ring.push_back(b);
-        std::sort(ring.begin(), ring.end());
-        ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+        complex.starVertices(star, a, ring);
         const Eigen::Vector3d& pa = complex.position(a);
-        for (std::int32_t b : ring) {
+        for (auto it = std::upper_bound(ring.begin(), ring.end(), a); it != ring.end(); ++it) {
+          const std::int32_t b = *it;
           const double l2 = (complex.position(b) - pa).squaredNorm();
           if (keep(a, b, l2)) chunks[std::size_t(c)].push_back({a, b, l2});
         }

@@ -366,6 +366,16 @@ std::int32_t StarWalker::findEdgeTet(const RemeshComplex& complex, std::int32_t 
   return -1;
 }
 
+void RemeshComplex::starVertices(const std::vector<std::int32_t>& tets, std::int32_t except,
+                                 std::vector<std::int32_t>& out) const {
+  out.clear();
+  for (std::int32_t t : tets)
+    for (std::int32_t w : tets_[std::size_t(t)])
+      if (w != except && w != dummy_) out.push_back(w);
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+}
+
 void RemeshComplex::edgeRing(std::int32_t a, std::int32_t b, std::int32_t t, EdgeRing& out) const {
   out.a = a;
   out.b = b;

@@ -131,6 +131,9 @@ public:
   // --- Queries (single-threaded: they share the complex's StarWalker).
   void incidentTets(std::int32_t v, std::vector<std::int32_t>& out) const { walker_.incidentTets(*this, v, out); }
   std::int32_t findEdgeTet(std::int32_t a, std::int32_t b) const { return walker_.findEdgeTet(*this, a, b); }
+  // The vertices of `tets` other than `except` and the dummy vertex, sorted
+  // and unique: with `tets` the star of `except`, its one-ring. Thread-safe.
+  void starVertices(const std::vector<std::int32_t>& tets, std::int32_t except, std::vector<std::int32_t>& out) const;
   // Circulates around edge (a, b) starting from tet t, which contains both.
   void edgeRing(std::int32_t a, std::int32_t b, std::int32_t t, EdgeRing& out) const;
 
