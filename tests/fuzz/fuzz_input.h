@@ -1,7 +1,7 @@
 #pragma once
 // What every reader harness shares: the readers take paths, so the input is
 // written to a file of this process (under $TMPDIR, named with the format's
-// extension) and read back. A reader may reject the bytes with InputError;
+// extension), read back and removed. A reader may reject the bytes with InputError;
 // any other exception, crash, sanitizer report, leak or allocation beyond
 // libFuzzer's limit (-rss_limit_mb) is a finding.
 
@@ -32,6 +32,9 @@ void readAsFile(const std::uint8_t* data, std::size_t size, const char* extensio
     read(path);
   } catch (const InputError&) {
   }
+  // Removed before its pages are written back: rewriting one file in place
+  // would make the file system flush it on every input.
+  std::remove(path.c_str());
 }
 
 }  // namespace vox::fuzz
