@@ -19,6 +19,7 @@
 //
 //   build/release/bench/remesh_bench                       # AM phantom, l = 8 mm
 //   VOX_REMESH_INPUT=mesh3 build/release/bench/remesh_bench # Mesh_3 mesh of the AM, l = 8 mm
+//   VOX_REMESH_INPUT=mesh3 VOX_REMESH_MESH3_FILE=am_mesh3.mesh ...  # that mesh made once, then read
 //   VOX_REMESH_GRID=path.nii.gz VOX_REMESH_L=4.274 build/release/bench/remesh_bench
 //   VOX_REMESH_VOXELS=2 build/release/bench/remesh_bench --benchmark_filter=MMAdRemesh/2   # l = 2 voxels
 //   VOX_REMESH_SYNTH=junctions:48 VOX_REMESH_L=2.5 build/release/bench/remesh_bench
@@ -35,6 +36,7 @@
 
 #include "geometry/deform/restricted_delaunay.h"
 #include "geometry/io/grid_io.h"
+#include "geometry/io/mesh_io.h"
 #include "geometry/mesh_quality.h"
 #include "geometry/remesh/adaptive_voxel_tetrahedralization.h"
 #include "geometry/remesh/mesh_topology.h"
@@ -55,6 +57,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
+#include <filesystem>
 #include <limits>
 #include <memory>
 #include <stdexcept>
@@ -129,7 +132,16 @@ const Case& benchCase() {
       criteria.facetDistanceMm = 0.25 * k->targetLength;
       if (const char* d = std::getenv("VOX_REMESH_MESH3_DISTANCE")) criteria.facetDistanceMm = std::atof(d);
       criteria.keepOutside = true;
-      k->cgalInitial = restrictedDelaunayVolume(domain, criteria);
+      // The Mesh_3 run can take longer than either remesher: with
+      // VOX_REMESH_MESH3_FILE it is read from that file when present, else
+      // made and written there, so that runs (one per remesher) share it.
+      const char* cache = std::getenv("VOX_REMESH_MESH3_FILE");
+      if (cache && std::filesystem::exists(cache)) {
+        k->cgalInitial = readTetMesh(cache);
+      } else {
+        k->cgalInitial = restrictedDelaunayVolume(domain, criteria);
+        if (cache) writeTetMesh(cache, k->cgalInitial);
+      }
       for (std::size_t t = 0; t < k->cgalInitial.tetCount(); ++t)
         if (k->cgalInitial.labels[t] > 0) {
           k->initial.tets.push_back(k->cgalInitial.tets[t]);
