@@ -22,10 +22,9 @@ void collectEdges(const RemeshComplex& complex,
       for (std::int32_t a = std::int32_t(n * c / kChunks); a < std::int32_t(n * (c + 1) / kChunks); ++a) {
         if (a == dummy || !complex.vertexAlive(a)) continue;
         walker.incidentTets(complex, a, star);
-        complex.starVertices(star, a, ring);
+        complex.starVertices(star, a, ring, a);
         const Eigen::Vector3d& pa = complex.position(a);
-        for (auto it = std::upper_bound(ring.begin(), ring.end(), a); it != ring.end(); ++it) {
-          const std::int32_t b = *it;
+        for (std::int32_t b : ring) {
           const double l2 = (complex.position(b) - pa).squaredNorm();
           if (keep(a, b, l2)) chunks[std::size_t(c)].push_back({a, b, l2});
         }

@@ -367,11 +367,11 @@ std::int32_t StarWalker::findEdgeTet(const RemeshComplex& complex, std::int32_t 
 }
 
 void RemeshComplex::starVertices(const std::vector<std::int32_t>& tets, std::int32_t except,
-                                 std::vector<std::int32_t>& out) const {
+                                 std::vector<std::int32_t>& out, std::int32_t above) const {
   out.clear();
   for (std::int32_t t : tets)
     for (std::int32_t w : tets_[std::size_t(t)])
-      if (w != except && w != dummy_) out.push_back(w);
+      if (w > above && w != except && w != dummy_) out.push_back(w);
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());
 }

@@ -132,8 +132,10 @@ public:
   void incidentTets(std::int32_t v, std::vector<std::int32_t>& out) const { walker_.incidentTets(*this, v, out); }
   std::int32_t findEdgeTet(std::int32_t a, std::int32_t b) const { return walker_.findEdgeTet(*this, a, b); }
   // The vertices of `tets` other than `except` and the dummy vertex, sorted
-  // and unique: with `tets` the star of `except`, its one-ring. Thread-safe.
-  void starVertices(const std::vector<std::int32_t>& tets, std::int32_t except, std::vector<std::int32_t>& out) const;
+  // and unique: with `tets` the star of `except`, its one-ring. Only those
+  // above `above` when given (filtered before sorting). Thread-safe.
+  void starVertices(const std::vector<std::int32_t>& tets, std::int32_t except, std::vector<std::int32_t>& out,
+                    std::int32_t above = -1) const;
   // Circulates around edge (a, b) starting from tet t, which contains both.
   void edgeRing(std::int32_t a, std::int32_t b, std::int32_t t, EdgeRing& out) const;
 

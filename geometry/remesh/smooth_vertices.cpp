@@ -191,15 +191,20 @@ std::size_t applyMoves(RemeshComplex& complex, const Smoother& smoother, const V
   std::vector<std::int32_t> later;
   for (int pass = 0; pass < 2; ++pass) {
     parallelRanges(n, threads, [&](std::int64_t b, std::int64_t e) {
-      std::vector<std::int32_t> tets, ring, found;
+      std::vector<std::int32_t> tets, found;
       for (std::int64_t i = b; i < e; ++i) {
         if (!moves[std::size_t(i)]) continue;
         vt.of(level[std::size_t(i)], tets);
-        complex.starVertices(tets, level[std::size_t(i)], ring);
+        // Filtered by move index, not by vertex, then sorted once (the star's
+        // vertices are not wanted in vertex order here).
         found.clear();
-        for (std::int32_t w : ring)
-          if (const std::int32_t j = slot[std::size_t(w)]; j > i) found.push_back(j);
+        for (std::int32_t q : tets)
+          for (std::int32_t w : complex.tet(q)) {
+            const std::int32_t j = w == complex.dummyVertex() ? -1 : slot[std::size_t(w)];
+            if (j > i) found.push_back(j);
+          }
         std::sort(found.begin(), found.end());
+        found.erase(std::unique(found.begin(), found.end()), found.end());
         if (pass == 0)
           start[std::size_t(i) + 1] = std::int64_t(found.size());
         else
