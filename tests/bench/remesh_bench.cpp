@@ -136,7 +136,8 @@ const Case& benchCase() {
       // VOX_REMESH_MESH3_FILE it is read from that file when present, else
       // made and written there, so that runs (one per remesher) share it.
       const char* cache = std::getenv("VOX_REMESH_MESH3_FILE");
-      if (cache && std::filesystem::exists(cache)) {
+      const bool read = cache && std::filesystem::exists(cache);
+      if (read) {
         k->cgalInitial = readTetMesh(cache);
       } else {
         k->cgalInitial = restrictedDelaunayVolume(domain, criteria);
@@ -149,7 +150,9 @@ const Case& benchCase() {
         }
       k->initial.positions = k->cgalInitial.positions;  // unused vertices are dropped by the remesher
       k->topology = remesh::computeMeshTopology(k->initial);
-      k->name += " (Mesh_3, facet distance " + std::to_string(criteria.facetDistanceMm) + " mm)";
+      // A file made by another run says nothing of its facet distance.
+      k->name += read ? std::string(" (Mesh_3 read from ") + cache + ")"
+                      : " (Mesh_3, facet distance " + std::to_string(criteria.facetDistanceMm) + " mm)";
     } else {
       remesh::AdaptiveTetrahedralizationOptions options = remesh::adaptiveOptionsForTarget(k->grid.geometry(), k->targetLength);
       k->initial = remesh::tetrahedralizeVoxelsAdaptive(k->grid, options);
