@@ -4,6 +4,7 @@
 #include "gpu/command.h"
 #include "gpu/vk_check.h"
 
+#include <algorithm>
 #include <cstring>
 #include <utility>
 
@@ -36,7 +37,8 @@ Buffer::Buffer(Context& context, std::uint64_t bytes, MemoryIntent intent, VkBuf
     mai.memoryTypeIndex = type;
     VOX_VK(vkAllocateMemory(dev, &mai, nullptr, &memory_));
     VOX_VK(vkBindBufferMemory(dev, buffer_, memory_, 0));
-    if ((context.memoryTypeFlags(type) & hostBits) == hostBits) VOX_VK(vkMapMemory(dev, memory_, 0, VK_WHOLE_SIZE, 0, &mapped_));
+    const bool staged = intent == MemoryIntent::Device && context.stagesDeviceMemory();
+    if (!staged && (context.memoryTypeFlags(type) & hostBits) == hostBits) VOX_VK(vkMapMemory(dev, memory_, 0, VK_WHOLE_SIZE, 0, &mapped_));
   } catch (...) {
     release();
     throw;
@@ -77,18 +79,35 @@ Buffer& Buffer::operator=(Buffer&& o) noexcept {
   return *this;
 }
 
-void Buffer::upload(const void* src, std::uint64_t bytes, std::uint64_t offset) {
+namespace {
+// Bytes per staged copy: whole granules within `stagingBytes`, at least one.
+std::uint64_t stagingChunk(std::uint64_t bytes, std::uint64_t granule, std::uint64_t stagingBytes) {
+  granule = std::max<std::uint64_t>(granule, 1);
+  return std::min(bytes, std::max<std::uint64_t>(1, stagingBytes / granule) * granule);
+}
+}  // namespace
+
+void Buffer::write(std::uint64_t offset, std::uint64_t bytes, std::uint64_t granule, const Fill& fill) {
   if (bytes == 0) return;
-  if (offset + bytes > size_) throw RuntimeFailure("GPU buffer upload out of range");
+  if (offset + bytes > size_) throw RuntimeFailure("GPU buffer write out of range");
   if (mapped_) {
-    std::memcpy(static_cast<char*>(mapped_) + offset, src, bytes);
+    fill(0, bytes, static_cast<std::uint8_t*>(mapped_) + offset);
     return;
   }
-  Buffer staging(*context_, bytes, MemoryIntent::Upload);
-  std::memcpy(staging.mapped(), src, bytes);
+  const std::uint64_t chunk = stagingChunk(bytes, granule, context_->stagingBytes());
+  Buffer staging(*context_, chunk, MemoryIntent::Upload);
   CommandBatch batch(*context_);
-  batch.copy(staging, *this, bytes, 0, offset);
-  batch.submitAndWait();
+  for (std::uint64_t first = 0; first < bytes; first += chunk) {
+    const std::uint64_t n = std::min(chunk, bytes - first);
+    fill(first, n, static_cast<std::uint8_t*>(staging.mapped()));
+    batch.copy(staging, *this, n, 0, offset + first);
+    batch.submitAndWait();
+  }
+}
+
+void Buffer::upload(const void* src, std::uint64_t bytes, std::uint64_t offset) {
+  const auto* from = static_cast<const std::uint8_t*>(src);
+  write(offset, bytes, 1, [from](std::uint64_t first, std::uint64_t n, std::uint8_t* dst) { std::memcpy(dst, from + first, n); });
 }
 
 void Buffer::download(void* dst, std::uint64_t bytes, std::uint64_t offset) const {
@@ -98,11 +117,15 @@ void Buffer::download(void* dst, std::uint64_t bytes, std::uint64_t offset) cons
     std::memcpy(dst, static_cast<const char*>(mapped_) + offset, bytes);
     return;
   }
-  Buffer staging(*context_, bytes, MemoryIntent::Readback);
+  const std::uint64_t chunk = stagingChunk(bytes, 1, context_->stagingBytes());
+  Buffer staging(*context_, chunk, MemoryIntent::Readback);
   CommandBatch batch(*context_);
-  batch.copy(*this, staging, bytes, offset, 0);
-  batch.submitAndWait();
-  std::memcpy(dst, staging.mapped(), bytes);
+  for (std::uint64_t first = 0; first < bytes; first += chunk) {
+    const std::uint64_t n = std::min(chunk, bytes - first);
+    batch.copy(*this, staging, n, offset + first, 0);
+    batch.submitAndWait();
+    std::memcpy(static_cast<char*>(dst) + first, staging.mapped(), n);
+  }
 }
 
 }  // namespace vox::gpu

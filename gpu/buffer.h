@@ -5,6 +5,7 @@
 #include "gpu/context.h"
 
 #include <cstdint>
+#include <functional>
 
 namespace vox::gpu {
 
@@ -31,10 +32,20 @@ public:
   // Host pointer when the memory is host visible, else nullptr.
   void* mapped() const { return mapped_; }
 
-  // Host <-> buffer copies; staged through a temporary buffer when the memory
-  // is not host visible. Must not overlap GPU work that uses the same range.
+  // Host <-> buffer copies. When the memory is not host visible they go
+  // through one temporary staging buffer of at most the context's
+  // stagingBytes(), reused chunk by chunk, so a copy of any size holds at most
+  // that much host memory besides the caller's. Must not overlap GPU work that
+  // uses the same range.
   void upload(const void* src, std::uint64_t bytes, std::uint64_t offset = 0);
   void download(void* dst, std::uint64_t bytes, std::uint64_t offset = 0) const;
+  // Writes bytes [offset, offset + bytes) in place: fill(first, n, dst) writes
+  // the n bytes from `first` (relative to `offset`) at dst. Mapped memory gets
+  // one call; otherwise one call per staging chunk, each a whole multiple of
+  // `granule` bytes (at least one granule) but the last, so a producer that
+  // works in units (slices of a grid) never splits one.
+  using Fill = std::function<void(std::uint64_t first, std::uint64_t n, std::uint8_t* dst)>;
+  void write(std::uint64_t offset, std::uint64_t bytes, std::uint64_t granule, const Fill& fill);
 
 private:
   void release();

@@ -112,24 +112,29 @@ void CommandBatch::copy(const Buffer& src, Buffer& dst, std::uint64_t bytes, std
 }
 
 namespace {
-VkBufferImageCopy wholeImage(const Image3D& img) {
+VkBufferImageCopy imageSlices(const Image3D& img, std::uint32_t z0, std::uint32_t depth) {
   VkBufferImageCopy r{};
   r.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-  r.imageExtent = {img.extent()[0], img.extent()[1], img.extent()[2]};
+  r.imageOffset = {0, 0, std::int32_t(z0)};
+  r.imageExtent = {img.extent()[0], img.extent()[1], depth};
   return r;
 }
 }  // namespace
 
-void CommandBatch::copy(const Buffer& src, Image3D& dst) {
+void CommandBatch::copy(const Buffer& src, Image3D& dst) { copy(src, dst, 0, dst.extent()[2]); }
+
+void CommandBatch::copy(const Image3D& src, Buffer& dst) { copy(src, dst, 0, src.extent()[2]); }
+
+void CommandBatch::copy(const Buffer& src, Image3D& dst, std::uint32_t z0, std::uint32_t depth) {
   begin();
-  const VkBufferImageCopy r = wholeImage(dst);
+  const VkBufferImageCopy r = imageSlices(dst, z0, depth);
   vkCmdCopyBufferToImage(cmd_, src.handle(), dst.handle(), VK_IMAGE_LAYOUT_GENERAL, 1, &r);
   barrier();
 }
 
-void CommandBatch::copy(const Image3D& src, Buffer& dst) {
+void CommandBatch::copy(const Image3D& src, Buffer& dst, std::uint32_t z0, std::uint32_t depth) {
   begin();
-  const VkBufferImageCopy r = wholeImage(src);
+  const VkBufferImageCopy r = imageSlices(src, z0, depth);
   vkCmdCopyImageToBuffer(cmd_, src.handle(), VK_IMAGE_LAYOUT_GENERAL, dst.handle(), 1, &r);
   barrier();
 }

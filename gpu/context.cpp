@@ -168,7 +168,8 @@ std::vector<std::string> listDevices() {
   return out;
 }
 
-Context::Context(const ContextOptions& options) {
+Context::Context(const ContextOptions& options)
+    : stageDeviceMemory_(options.stageDeviceMemory), stagingBytes_(std::max<std::uint64_t>(options.stagingBytes, 1)) {
   instance_ = createInstance(options);
   try {
     const auto devices = physicalDevices(instance_);

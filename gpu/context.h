@@ -36,6 +36,13 @@ struct ContextOptions {
   // Extra test a device and queue family must pass (e.g. presentation).
   std::function<bool(VkInstance, VkPhysicalDevice, std::uint32_t queueFamily)> acceptQueue;
   bool validation = false;  // enable VK_LAYER_KHRONOS_validation when present
+  // Device-intent buffers stay unmapped even where their memory is host
+  // visible, so host access is staged as on a discrete GPU (tests exercise
+  // that path on lavapipe).
+  bool stageDeviceMemory = false;
+  // Largest staging buffer of a host <-> device copy (gpu/buffer.h): larger
+  // copies go in chunks through one buffer of this size.
+  std::uint64_t stagingBytes = std::uint64_t(64) << 20;
 };
 
 // The devices Vulkan reports, in enumeration order ("index: name (type)").
@@ -49,6 +56,8 @@ public:
   Context& operator=(const Context&) = delete;
 
   const DeviceInfo& info() const { return info_; }
+  bool stagesDeviceMemory() const { return stageDeviceMemory_; }
+  std::uint64_t stagingBytes() const { return stagingBytes_; }
   // Largest storage-buffer binding a kernel may use: the device limit capped
   // at the 128 MiB lavapipe offers, so chunking is exercised everywhere.
   std::uint64_t maxBindingBytes() const;
@@ -82,6 +91,8 @@ private:
   VkPipelineCache pipelineCache_ = VK_NULL_HANDLE;
   VkPhysicalDeviceMemoryProperties memory_{};
   DeviceInfo info_;
+  bool stageDeviceMemory_ = false;
+  std::uint64_t stagingBytes_ = 0;
 };
 
 }  // namespace vox::gpu

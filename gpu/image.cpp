@@ -5,6 +5,7 @@
 #include "gpu/command.h"
 #include "gpu/vk_check.h"
 
+#include <algorithm>
 #include <cstring>
 #include <utility>
 
@@ -109,22 +110,38 @@ Image3D::Image3D(Context& context, std::array<std::uint32_t, 3> extent, VkFormat
 
 std::uint64_t Image3D::texelBytes() const { return formatBytes(format_); }
 
+// Both directions go slab by slab through one staging buffer of at most
+// the context's stagingBytes() (whole slices, at least one), so an image of
+// any size holds at most that much host memory besides the caller's.
+std::uint32_t Image3D::stagingSlices() const {
+  const std::uint64_t slice = std::uint64_t(extent_[0]) * extent_[1] * texelBytes();
+  return std::uint32_t(std::clamp<std::uint64_t>(image_.context()->stagingBytes() / slice, 1, extent_[2]));
+}
+
 void Image3D::upload(const void* src) {
-  const std::uint64_t bytes = std::uint64_t(extent_[0]) * extent_[1] * extent_[2] * texelBytes();
-  Buffer staging(*image_.context(), bytes, MemoryIntent::Upload);
-  std::memcpy(staging.mapped(), src, bytes);
+  const std::uint64_t slice = std::uint64_t(extent_[0]) * extent_[1] * texelBytes();
+  const std::uint32_t step = stagingSlices();
+  Buffer staging(*image_.context(), step * slice, MemoryIntent::Upload);
   CommandBatch batch(*image_.context());
-  batch.copy(staging, *this);
-  batch.submitAndWait();
+  for (std::uint32_t z0 = 0; z0 < extent_[2]; z0 += step) {
+    const std::uint32_t depth = std::min(step, extent_[2] - z0);
+    std::memcpy(staging.mapped(), static_cast<const std::uint8_t*>(src) + z0 * slice, depth * slice);
+    batch.copy(staging, *this, z0, depth);
+    batch.submitAndWait();
+  }
 }
 
 void Image3D::download(void* dst) const {
-  const std::uint64_t bytes = std::uint64_t(extent_[0]) * extent_[1] * extent_[2] * texelBytes();
-  Buffer staging(*image_.context(), bytes, MemoryIntent::Readback);
+  const std::uint64_t slice = std::uint64_t(extent_[0]) * extent_[1] * texelBytes();
+  const std::uint32_t step = stagingSlices();
+  Buffer staging(*image_.context(), step * slice, MemoryIntent::Readback);
   CommandBatch batch(*image_.context());
-  batch.copy(*this, staging);
-  batch.submitAndWait();
-  std::memcpy(dst, staging.mapped(), bytes);
+  for (std::uint32_t z0 = 0; z0 < extent_[2]; z0 += step) {
+    const std::uint32_t depth = std::min(step, extent_[2] - z0);
+    batch.copy(*this, staging, z0, depth);
+    batch.submitAndWait();
+    std::memcpy(static_cast<std::uint8_t*>(dst) + z0 * slice, staging.mapped(), depth * slice);
+  }
 }
 
 Image2D::Image2D(Context& context, std::uint32_t width, std::uint32_t height) : width_(width), height_(height) {

@@ -47,11 +47,14 @@ public:
   VkImageView view() const { return image_.view(); }
   std::uint64_t texelBytes() const;
 
-  // Whole-image copies from / to tightly packed host memory (x fastest).
+  // Whole-image copies from / to tightly packed host memory (x fastest),
+  // staged in slabs of whole slices within the context's stagingBytes() (at
+  // least one slice).
   void upload(const void* src);
   void download(void* dst) const;
 
 private:
+  std::uint32_t stagingSlices() const;  // slices per staged copy
   DeviceImage image_;
   std::array<std::uint32_t, 3> extent_{0, 0, 0};
   VkFormat format_ = VK_FORMAT_UNDEFINED;

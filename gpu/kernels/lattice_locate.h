@@ -68,16 +68,11 @@ inline void growBuffer(Context& context, Buffer& buffer, std::uint64_t bytes, Me
 }
 
 // fill(dst) writes `bytes` bytes of host data: straight into mapped memory,
-// or into a staging vector uploaded afterwards.
+// or into one staging buffer of that size copied afterwards.
 template <class Fill>
 void writeHostData(Buffer& buffer, std::uint64_t bytes, Fill&& fill) {
-  if (buffer.mapped()) {
-    fill(static_cast<std::uint8_t*>(buffer.mapped()));
-    return;
-  }
-  std::vector<std::uint8_t> staging(bytes);
-  fill(staging.data());
-  buffer.upload(staging.data(), bytes);
+  // One chunk (granule = bytes): `fill` writes the whole range at once.
+  buffer.write(0, bytes, bytes, [&](std::uint64_t, std::uint64_t, std::uint8_t* dst) { fill(dst); });
 }
 
 // Dispatches `items` invocations of a 1D kernel in groups of `groupSize`, as

@@ -128,9 +128,12 @@ Binding RasterizeKernel::sourcePart(int part) const {
 }
 
 void RasterizeKernel::loadWindow(const SliceRange& window) {
-  const std::uint64_t labels = std::uint64_t(window.count() * source_.geometry().sliceVoxels());
-  writeHostData(window_, labels * sizeof(Label), [&](std::uint8_t* dst) {
-    source_.readSlices(window.first, window.count(), reinterpret_cast<Label*>(dst));
+  // Slice by slice through the staging buffer where the window is not host
+  // visible (a discrete GPU): the window is the budget's largest buffer, so no
+  // host copy of it is made.
+  const std::uint64_t sliceBytes = std::uint64_t(source_.geometry().sliceVoxels()) * sizeof(Label);
+  window_.write(0, std::uint64_t(window.count()) * sliceBytes, sliceBytes, [&](std::uint64_t first, std::uint64_t n, std::uint8_t* dst) {
+    source_.readSlices(window.first + std::int64_t(first / sliceBytes), std::int64_t(n / sliceBytes), reinterpret_cast<Label*>(dst));
   });
   resident_ = window;
 }

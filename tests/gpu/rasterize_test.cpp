@@ -188,14 +188,19 @@ TEST(RasterizeGpu, OutOfCoreEqualsInCore) {
   OutOfCoreSource source(dir + "/source.nii.gz", grid.voxelCount() / 27, dir);
   const TetMesh tm = tetrahedralizeVoxels(source.downsampled(), {.includeBackground = false});
   const auto deformed = test::deformPositions(tm.positions, deformations(grid.geometry()).at("bend"));
+  // Device memory staged as on a discrete GPU, through a staging buffer of
+  // three source slices: the windows go in chunks of whole slices.
+  static gpu::Context staged({.stageDeviceMemory = true, .stagingBytes = std::uint64_t(3 * grid.geometry().sliceVoxels()) * sizeof(Label)});
   for (int samples : {1, 2}) {
     gpu::RasterizeKernel kernel(context(), grid, tm, {.samples = samples});
     const LabelGrid inCore = kernel.rasterize(deformed);
-    // 64 KiB: several slabs, several windows per slab.
-    gpu::rasterizeOutOfCore(context(), source, tm, deformed, dir + "/posed.nii.gz", {.maxMemoryBytes = 64 << 10, .samples = samples});
-    const LabelGrid got = readGrid(dir + "/posed.nii.gz");
-    ASSERT_EQ(got.dims(), inCore.dims());
-    EXPECT_EQ(got.labels(), inCore.labels()) << "samples " << samples;
+    for (gpu::Context* ctx : {&context(), &staged}) {
+      // 64 KiB: several slabs, several windows per slab.
+      gpu::rasterizeOutOfCore(*ctx, source, tm, deformed, dir + "/posed.nii.gz", {.maxMemoryBytes = 64 << 10, .samples = samples});
+      const LabelGrid got = readGrid(dir + "/posed.nii.gz");
+      ASSERT_EQ(got.dims(), inCore.dims());
+      EXPECT_EQ(got.labels(), inCore.labels()) << "samples " << samples << (ctx == &staged ? ", staged" : "");
+    }
   }
 }
 
