@@ -50,6 +50,7 @@ Pose poseInGridFrame(const Pose& pose, const GridGeometry& grid, const std::stri
   for (PoseSelection& s : p.selections) {
     mapBox(grid, s.boxMin, s.boxMax);
     s.center = worldToGrid(grid, s.center);
+    for (Eigen::Vector3d& q : s.points) q = worldToGrid(grid, q);
     if (s.part) s.part = worldToGrid(grid, *s.part);
     mapTransform(grid, s.transform);
   }

@@ -1,6 +1,6 @@
 // World-frame poses on grids stored with axis flips: the pose converted to
-// the grid frame selects the points the world pose selects and moves them
-// to the same world positions; "frame": "grid" poses pass unchanged, and an
+// the grid frame selects the points the world pose selects (boxes, spheres,
+// picked points) and moves them to the same world positions; "frame": "grid" poses pass unchanged, and an
 // oblique grid refuses a world-frame pose.
 
 #include "geometry/deform/pose_frame.h"
@@ -19,7 +19,8 @@ const char* kPose = R"({
     {"name": "all", "box": {"min": [-100, -100, -100], "max": [100, 100, 100]}, "fixed": true},
     {"name": "arm", "box": {"min": [5, -20, 10], "max": [40, 30, 35]},
      "transform": {"rotation": {"axis": [0.3, 1, 0.2], "angle_deg": 35, "center": [12, 4, 20]}, "translation": [3, -2, 7]}},
-    {"name": "ball", "sphere": {"center": [-10, 5, -8], "radius": 12}, "transform": {"translation": [0, 0, -4]}}
+    {"name": "ball", "sphere": {"center": [-10, 5, -8], "radius": 12}, "transform": {"translation": [0, 0, -4]}},
+    {"name": "picked", "points": [[7, -3, 11], [-25, 40, 2]], "part": [1, 2, 3], "transform": {"translation": [1, 0, 0]}}
   ]
 })";
 
@@ -34,6 +35,12 @@ TEST(PoseFrame, WorldPoseOnFlippedGridsSelectsAndMovesTheSamePoints) {
     // A permutation of the axes too.
     g.direction = g.direction * Eigen::Matrix3d(Eigen::PermutationMatrix<3>(Eigen::Vector3i(1, 2, 0)));
     const Pose grid = poseInGridFrame(world, g, "pose.json");
+    // Picked points and part seeds name the same places.
+    const PoseSelection& picked = grid.selections.back();
+    ASSERT_EQ(picked.points.size(), 2u);
+    for (std::size_t i = 0; i < picked.points.size(); ++i)
+      EXPECT_LT((gridToWorld(g, picked.points[i]) - world.selections.back().points[i]).norm(), 1e-12);
+    EXPECT_LT((gridToWorld(g, *picked.part) - *world.selections.back().part).norm(), 1e-12);
     for (int n = 0; n < 2000; ++n) {
       const Eigen::Vector3d p(u(rng), u(rng), u(rng));  // grid frame
       const Eigen::Vector3d w = gridToWorld(g, p);
