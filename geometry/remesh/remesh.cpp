@@ -92,7 +92,13 @@ void remeshComplex(RemeshComplex& complex, const RemeshOptions& options, RemeshS
     step.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (stats) stats->steps.push_back(step);
   }
-  if (stats) stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const auto polishStart = std::chrono::steady_clock::now();
+  const std::size_t polished = polishWorstTets(complex, surfaces.get(), hull, options.polishAngle, options.threads);
+  if (stats) {
+    stats->polished = polished;
+    stats->polishSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - polishStart).count();
+    stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
 }
 
 TetMesh remeshTetMesh(const TetMesh& mesh, const RemeshOptions& options, RemeshStats* stats, bool keepImaginary,

@@ -6,6 +6,7 @@
 //   repeat `iterations` times:  split long edges, collapse short edges,
 //                               flip edges, smooth vertices
 //   repeat `flipSmoothCycles`:  flip edges, smooth vertices
+//   polish the vertices of the worst tets
 //
 // with e_max = 4/3 l and e_min = 4/5 l for the target length l.
 
@@ -32,6 +33,10 @@ struct RemeshOptions {
   bool hermite = true;
   int threads = 2;
   FlipOptions flip;
+  // After the last round, the vertices of tets with a dihedral angle under
+  // this (degrees) are moved to lift the smallest angle (polishWorstTets,
+  // smooth_vertices.h); 0 skips it.
+  double polishAngle = 12.0;
 };
 
 struct RemeshStep {
@@ -45,6 +50,8 @@ struct RemeshStep {
 
 struct RemeshStats {
   std::vector<RemeshStep> steps;
+  std::size_t polished = 0;  // vertices the polish moved
+  double polishSeconds = 0.0;
   double seconds = 0.0;
 };
 

@@ -7,6 +7,9 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <atomic>
+#include <cmath>
+#include <functional>
+#include <limits>
 #include <condition_variable>
 #include <mutex>
 
@@ -111,7 +114,108 @@ public:
     return false;
   }
 
+  // Compass search for v (its neighbourhood in nb) maximizing the smallest
+  // dihedral angle of its domain tets; true when v moved.
+  bool polish(VertexNeighborhood& nb) const {
+    const std::int32_t v = nb.vertex, dummy = complex_.dummyVertex();
+    if (nb.kind == VertexKind::Corner || nb.onHull()) return false;
+    const Eigen::Vector3d start = complex_.position(v);
+    double shortest = std::numeric_limits<double>::infinity();
+    for (std::int32_t w : nb.neighbors)
+      if (w != dummy) shortest = std::min(shortest, (complex_.position(w) - start).norm());
+    if (!std::isfinite(shortest) || !(shortest > 0.0)) return false;
+
+    // Directions of the search and the projection back onto the constraint.
+    std::vector<Eigen::Vector3d> dirs;
+    std::function<bool(Eigen::Vector3d&)> project = [](Eigen::Vector3d&) { return true; };
+    switch (nb.kind) {
+      case VertexKind::Inside:
+        for (int x = -1; x <= 1; ++x)
+          for (int y = -1; y <= 1; ++y)
+            for (int z = -1; z <= 1; ++z)
+              if (std::abs(x) + std::abs(y) + std::abs(z) == 1 || std::abs(x) + std::abs(y) + std::abs(z) == 3)
+                dirs.push_back(Eigen::Vector3d(x, y, z).normalized());
+        break;
+      case VertexKind::Surface: {
+        const std::int32_t x = nb.labels[0], y = nb.labels[1];
+        const Eigen::Vector3d n = interfaceNormal(nb, x, y);
+        if (!(n.squaredNorm() > 0.0)) return false;
+        const Eigen::Vector3d u = n.unitOrthogonal(), w = n.cross(u);
+        for (const Eigen::Vector3d& d : {u, w, Eigen::Vector3d((u + w).normalized()), Eigen::Vector3d((u - w).normalized())}) {
+          dirs.push_back(d);
+          dirs.push_back(-d);
+        }
+        if (surfaces_) project = [this, x, y, n](Eigen::Vector3d& p) { return surfaces_->projectOnSurface(x, y, n, p); };
+        break;
+      }
+      case VertexKind::Feature: {
+        // Along the chord of its two neighbours on the same 1-junction.
+        std::vector<Eigen::Vector3d> ends;
+        for (std::size_t i = 0; i < nb.neighbors.size(); ++i)
+          if (nb.neighbors[i] != dummy && isFeatureEdge(nb.edgeLabels[i]) && nb.edgeLabels[i] == nb.labels)
+            ends.push_back(complex_.position(nb.neighbors[i]));
+        if (ends.size() != 2) return false;
+        const Eigen::Vector3d t = ends[1] - ends[0];
+        if (!(t.squaredNorm() > 0.0)) return false;
+        dirs = {t.normalized(), -t.normalized()};
+        if (surfaces_) project = [this, &nb](Eigen::Vector3d& p) { return surfaces_->projectOnCurve(nb.labels, p); };
+        break;
+      }
+      case VertexKind::Corner:
+        return false;
+    }
+
+    double best = polishScore(v, start, nb.tets);
+    if (!(best < 2.0)) return false;  // already invalid: leave it
+    Eigen::Vector3d at = start;
+    const double first = 0.25 * shortest;
+    for (double step = first; step > 0.02 * first;) {
+      double found = best;
+      Eigen::Vector3d next = at;
+      for (const Eigen::Vector3d& d : dirs) {
+        Eigen::Vector3d p = at + step * d;
+        if (!project(p) || !p.allFinite()) continue;
+        const double score = polishScore(v, p, nb.tets);
+        if (score < found) {
+          found = score;
+          next = p;
+        }
+      }
+      if (found < best - 1e-12) {
+        best = found;
+        at = next;
+      } else {
+        step *= 0.5;
+      }
+    }
+    if (at == start) return false;
+    complex_.setPosition(v, at);
+    return true;
+  }
+
 private:
+  // Largest cosine of the smallest dihedral angle over v's domain tets with v
+  // at p (lower is better); 3 when a tet around v inverts or falls under the
+  // quality floor that it met before.
+  double polishScore(std::int32_t v, const Eigen::Vector3d& p, const std::vector<std::int32_t>& tets) const {
+    const auto& P = complex_.positions();
+    double worst = -1.0;
+    for (std::int32_t q : tets) {
+      if (complex_.isDummyTet(q)) continue;
+      const Tet& t = complex_.tet(q);
+      Eigen::Vector3d x[4];
+      for (int i = 0; i < 4; ++i) x[i] = t[std::size_t(i)] == v ? p : P[std::size_t(t[std::size_t(i)])];
+      if (signedVolume(x[0], x[1], x[2], x[3]) <= 0.0) return 3.0;
+      const double quality = volumeLengthQuality(x[0], x[1], x[2], x[3]);
+      if (!(quality > 0.0)) return 3.0;
+      if (quality < kQualityFloor &&
+          quality < volumeLengthQuality(P[std::size_t(t[0])], P[std::size_t(t[1])], P[std::size_t(t[2])], P[std::size_t(t[3])]))
+        return 3.0;
+      if (complex_.label(q) > 0) worst = std::max(worst, minDihedralCosine(x[0], x[1], x[2], x[3]));
+    }
+    return worst;
+  }
+
   // Area-weighted normal of the x|y facets around v, pointing from x to y.
   Eigen::Vector3d interfaceNormal(const VertexNeighborhood& nb, std::int32_t x, std::int32_t y) const {
     Eigen::Vector3d n = Eigen::Vector3d::Zero();
@@ -258,6 +362,61 @@ std::size_t applyMoves(RemeshComplex& complex, const Smoother& smoother, const V
     }
   }, 1);
   return std::size_t(std::count(moved.begin(), moved.end(), char(1)));
+}
+
+}  // namespace
+
+namespace {
+std::size_t polishPass(RemeshComplex& complex, const InterfaceSurfaces* surfaces, const HullConstraint& hull,
+                       double angleDeg, int threads);
+}  // namespace
+
+std::size_t polishWorstTets(RemeshComplex& complex, const InterfaceSurfaces* surfaces, const HullConstraint& hull,
+                            double angleDeg, int threads) {
+  if (!(angleDeg > 0.0)) return 0;
+  // A vertex moved changes its neighbours' stars: a second pass over the
+  // tets still poor uses that room.
+  std::size_t moved = 0;
+  for (int pass = 0; pass < 2; ++pass) {
+    const std::size_t n = polishPass(complex, surfaces, hull, angleDeg, threads);
+    moved += n;
+    if (n == 0) break;
+  }
+  return moved;
+}
+
+namespace {
+
+std::size_t polishPass(RemeshComplex& complex, const InterfaceSurfaces* surfaces, const HullConstraint& hull,
+                       double angleDeg, int threads) {
+  const double cosine = std::cos(angleDeg * M_PI / 180.0);
+  const std::int32_t nv = complex.vertexSlots();
+  // Marks are idempotent writes of 1: racing threads agree.
+  std::vector<std::atomic<char>> marks(static_cast<std::size_t>(nv));
+  for (auto& m : marks) m.store(0, std::memory_order_relaxed);
+  parallelRanges(complex.tetSlots(), threads, [&](std::int64_t b, std::int64_t e) {
+    for (std::int32_t t = std::int32_t(b); t < std::int32_t(e); ++t) {
+      if (!complex.tetAlive(t) || complex.isDummyTet(t) || complex.label(t) <= 0) continue;
+      const Tet& q = complex.tet(t);
+      const auto& P = complex.positions();
+      if (minDihedralCosine(P[std::size_t(q[0])], P[std::size_t(q[1])], P[std::size_t(q[2])], P[std::size_t(q[3])]) > cosine)
+        for (std::int32_t v : q) marks[std::size_t(v)].store(1, std::memory_order_relaxed);
+    }
+  });
+  std::vector<std::int32_t> vertices;
+  for (std::int32_t v = 0; v < nv; ++v)
+    if (marks[std::size_t(v)].load(std::memory_order_relaxed) && v != complex.dummyVertex()) vertices.push_back(v);
+  if (vertices.empty()) return 0;
+  const VertexTets vt = vertexTets(complex);
+  Smoother smoother(complex, surfaces, hull, vt);
+  VertexNeighborhood nb;
+  std::size_t moved = 0;
+  for (std::int32_t v : vertices) {
+    vt.of(v, nb.tets);
+    classifyNeighborhood(complex, v, nb);
+    moved += smoother.polish(nb) ? 1 : 0;
+  }
+  return moved;
 }
 
 }  // namespace

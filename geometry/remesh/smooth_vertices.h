@@ -33,4 +33,17 @@ struct SmoothCounts {
 SmoothCounts smoothVertices(RemeshComplex& complex, const InterfaceSurfaces* surfaces, const HullConstraint& hull,
                             int threads);
 
+// Polish: the vertices of the domain tets whose smallest dihedral angle is
+// under `angleDeg` move, one at a time in index order, to where the smallest
+// dihedral angle of the domain tets around them is largest, by a compass
+// search within their freedom: inside vertices in space, surface vertices in
+// the interface's tangent plane and back onto its PSS, feature vertices along
+// their 1-junction and back onto its MLS line; corners and hull vertices
+// stay. A move is kept only when that angle grows and no tet around the
+// vertex inverts or falls under the quality floor, so the smallest angle of
+// the mesh never drops. Returns the vertices moved. Sequential: the result
+// does not depend on `threads` (used for the scan).
+std::size_t polishWorstTets(RemeshComplex& complex, const InterfaceSurfaces* surfaces, const HullConstraint& hull,
+                            double angleDeg, int threads);
+
 }  // namespace vox::remesh
