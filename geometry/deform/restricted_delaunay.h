@@ -46,12 +46,15 @@ struct VolumeCriteria {
   // fill the convex hull as in Mesh_3's own triangulation (what CGAL's
   // tetrahedral remeshing takes as input).
   bool keepOutside = false;
+  // Slivers (dihedral angle under 10 degrees) are exuded after refinement,
+  // without a time limit so that the result does not depend on the machine;
+  // false skips the exudation (a plain refined Mesh_3 mesh).
+  bool exude = true;
 };
 
 // Tetrahedral mesh of the domain: tets carry their subdomain label (> 0, and
 // 0 outside the domain with keepOutside),
-// positively oriented, vertices unused by any tet dropped. Slivers are
-// exuded after refinement.
+// positively oriented, vertices unused by any tet dropped.
 TetMesh restrictedDelaunayVolume(const SampledDomain& domain, const VolumeCriteria& criteria);
 
 }  // namespace vox

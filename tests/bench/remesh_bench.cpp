@@ -9,7 +9,8 @@
 //   - VOX_REMESH_INPUT=mesh3: a CGAL Mesh_3 mesh of the grid with cells of
 //     about l and facets within l / 4 of the labels' interfaces (facet
 //     distance VOX_REMESH_MESH3_DISTANCE mm to change it; half a voxel gives
-//     7.5 M tets on the AM at l = 8 mm); M-MAd gets its domain tets, as a user's file
+//     7.5 M tets on the AM at l = 8 mm; VOX_REMESH_MESH3_EXUDE=0 leaves out
+//     the sliver exudation); M-MAd gets its domain tets, as a user's file
 //     holds them, CGAL the Mesh_3 triangulation (outside cells subdomain 0).
 // Quality and topology of both outputs are measured with the same code
 // (mesh_quality.h, mesh_topology.h), topology against the grid, or against
@@ -131,6 +132,7 @@ const Case& benchCase() {
       criteria.sizing = &sizing;
       criteria.facetDistanceMm = 0.25 * k->targetLength;
       if (const char* d = std::getenv("VOX_REMESH_MESH3_DISTANCE")) criteria.facetDistanceMm = std::atof(d);
+      if (const char* e = std::getenv("VOX_REMESH_MESH3_EXUDE")) criteria.exude = std::string(e) != "0";
       criteria.keepOutside = true;
       // The Mesh_3 run can take longer than either remesher: with
       // VOX_REMESH_MESH3_FILE it is read from that file when present, else
@@ -152,7 +154,8 @@ const Case& benchCase() {
       k->topology = remesh::computeMeshTopology(k->initial);
       // A file made by another run says nothing of its facet distance.
       k->name += read ? std::string(" (Mesh_3 read from ") + cache + ")"
-                      : " (Mesh_3, facet distance " + std::to_string(criteria.facetDistanceMm) + " mm)";
+                      : " (Mesh_3, facet distance " + std::to_string(criteria.facetDistanceMm) + " mm" +
+                            (criteria.exude ? "" : ", not exuded") + ")";
     } else {
       remesh::AdaptiveTetrahedralizationOptions options = remesh::adaptiveOptionsForTarget(k->grid.geometry(), k->targetLength);
       k->initial = remesh::tetrahedralizeVoxelsAdaptive(k->grid, options);
