@@ -79,13 +79,10 @@ Buffer& Buffer::operator=(Buffer&& o) noexcept {
   return *this;
 }
 
-namespace {
-// Bytes per staged copy: whole granules within `stagingBytes`, at least one.
 std::uint64_t stagingChunk(std::uint64_t bytes, std::uint64_t granule, std::uint64_t stagingBytes) {
   granule = std::max<std::uint64_t>(granule, 1);
   return std::min(bytes, std::max<std::uint64_t>(1, stagingBytes / granule) * granule);
 }
-}  // namespace
 
 void Buffer::write(std::uint64_t offset, std::uint64_t bytes, std::uint64_t granule, const Fill& fill) {
   if (bytes == 0) return;

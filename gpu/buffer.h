@@ -9,6 +9,10 @@
 
 namespace vox::gpu {
 
+// Bytes per staged copy of `bytes`: whole granules (a slice, say) within
+// `stagingBytes`, at least one granule, at most `bytes`.
+std::uint64_t stagingChunk(std::uint64_t bytes, std::uint64_t granule, std::uint64_t stagingBytes);
+
 enum class MemoryIntent {
   Device,    // fastest for the GPU; host access goes through a staging copy
   Upload,    // host-visible, written by the CPU, read by the GPU

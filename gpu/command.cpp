@@ -121,10 +121,6 @@ VkBufferImageCopy imageSlices(const Image3D& img, std::uint32_t z0, std::uint32_
 }
 }  // namespace
 
-void CommandBatch::copy(const Buffer& src, Image3D& dst) { copy(src, dst, 0, dst.extent()[2]); }
-
-void CommandBatch::copy(const Image3D& src, Buffer& dst) { copy(src, dst, 0, src.extent()[2]); }
-
 void CommandBatch::copy(const Buffer& src, Image3D& dst, std::uint32_t z0, std::uint32_t depth) {
   begin();
   const VkBufferImageCopy r = imageSlices(dst, z0, depth);

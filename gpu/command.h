@@ -56,9 +56,7 @@ public:
   // transfer and host accesses.
   void barrier();
   void copy(const Buffer& src, Buffer& dst, std::uint64_t bytes, std::uint64_t srcOffset = 0, std::uint64_t dstOffset = 0);
-  // Whole 3D images, or the slices [z0, z0 + depth) from / to the buffer's start.
-  void copy(const Buffer& src, Image3D& dst);
-  void copy(const Image3D& src, Buffer& dst);
+  // The slices [z0, z0 + depth) of a 3D image from / to the buffer's start.
   void copy(const Buffer& src, Image3D& dst, std::uint32_t z0, std::uint32_t depth);
   void copy(const Image3D& src, Buffer& dst, std::uint32_t z0, std::uint32_t depth);
   // Tightly packed RGBA8 rows (x fastest) to and from a 2D image.

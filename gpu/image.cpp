@@ -115,7 +115,7 @@ std::uint64_t Image3D::texelBytes() const { return formatBytes(format_); }
 // any size holds at most that much host memory besides the caller's.
 std::uint32_t Image3D::stagingSlices() const {
   const std::uint64_t slice = std::uint64_t(extent_[0]) * extent_[1] * texelBytes();
-  return std::uint32_t(std::clamp<std::uint64_t>(image_.context()->stagingBytes() / slice, 1, extent_[2]));
+  return std::uint32_t(stagingChunk(slice * extent_[2], slice, image_.context()->stagingBytes()) / slice);
 }
 
 void Image3D::upload(const void* src) {

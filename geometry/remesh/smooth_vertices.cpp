@@ -364,29 +364,8 @@ std::size_t applyMoves(RemeshComplex& complex, const Smoother& smoother, const V
   return std::size_t(std::count(moved.begin(), moved.end(), char(1)));
 }
 
-}  // namespace
-
-namespace {
-std::size_t polishPass(RemeshComplex& complex, const InterfaceSurfaces* surfaces, const HullConstraint& hull,
-                       double angleDeg, int threads);
-}  // namespace
-
-std::size_t polishWorstTets(RemeshComplex& complex, const InterfaceSurfaces* surfaces, const HullConstraint& hull,
-                            double angleDeg, int threads) {
-  if (!(angleDeg > 0.0)) return 0;
-  // A vertex moved changes its neighbours' stars: a second pass over the
-  // tets still poor uses that room.
-  std::size_t moved = 0;
-  for (int pass = 0; pass < 2; ++pass) {
-    const std::size_t n = polishPass(complex, surfaces, hull, angleDeg, threads);
-    moved += n;
-    if (n == 0) break;
-  }
-  return moved;
-}
-
-namespace {
-
+// One pass of polishWorstTets: the vertices of the domain tets under the
+// angle, in index order. Returns the vertices moved.
 std::size_t polishPass(RemeshComplex& complex, const InterfaceSurfaces* surfaces, const HullConstraint& hull,
                        double angleDeg, int threads) {
   const double cosine = std::cos(angleDeg * M_PI / 180.0);
@@ -420,6 +399,20 @@ std::size_t polishPass(RemeshComplex& complex, const InterfaceSurfaces* surfaces
 }
 
 }  // namespace
+
+std::size_t polishWorstTets(RemeshComplex& complex, const InterfaceSurfaces* surfaces, const HullConstraint& hull,
+                            double angleDeg, int threads) {
+  if (!(angleDeg > 0.0)) return 0;
+  // A vertex moved changes its neighbours' stars: a second pass over the
+  // tets still poor uses that room.
+  std::size_t moved = 0;
+  for (int pass = 0; pass < 2; ++pass) {
+    const std::size_t n = polishPass(complex, surfaces, hull, angleDeg, threads);
+    moved += n;
+    if (n == 0) break;
+  }
+  return moved;
+}
 
 SmoothCounts smoothVertices(RemeshComplex& complex, const InterfaceSurfaces* surfaces, const HullConstraint& hull,
                             int threads) {
