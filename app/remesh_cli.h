@@ -43,7 +43,7 @@ inline void addRemeshOptions(CLI::App& cmd, RemeshCliOptions& o) {
   cmd.add_option("-o,--output", o.output, "Output tet mesh (.mesh .vtu .msh), domain tets (label > 0)")
       ->required()
       ->check(meshExtension);
-  cmd.add_option("--iterations", o.remesh.iterations, "Split-collapse-flip-smooth iterations (default 10)")
+  cmd.add_option("--iterations", o.remesh.iterations, "Split-collapse-flip-smooth iterations (default 5)")
       ->check(integerIn(0, 100));
   cmd.add_option("--flip-smooth", o.remesh.flipSmoothCycles, "Final flip-smooth cycles (default 3)")->check(integerIn(0, 100));
   cmd.add_option("--surface", o.surface, "Interface model boundary vertices are projected on: hpss (default), pss, none")

@@ -22,7 +22,10 @@ namespace vox::remesh {
 
 struct RemeshOptions {
   double targetLength = 0.0;   // l in mm (required, > 0)
-  int iterations = 10;         // split-collapse-flip-smooth rounds (thesis: 5-10)
+  // Split-collapse-flip-smooth rounds. The thesis uses 5 (+ 2-3 flip-smooth
+  // cycles) in its examples and calls 5-10 typical; 5 keeps as few slivers
+  // and more of the thin labels' volume than 10 (docs/REMESH.md, schedule).
+  int iterations = 5;
   int flipSmoothCycles = 3;    // final flip-smooth rounds
   // Width of the point set surfaces' Gaussian (mm); 0 picks the larger of
   // l / 2 and the mean length of the input's boundary edges.

@@ -1,6 +1,7 @@
 // M-MAd remesher against its peer, CGAL 5.5's tetrahedral_isotropic_remeshing,
-// side by side on the same input and target length, 10 iterations plus
-// 3 flip-smooth rounds for both (CGAL's fixed extra rounds). Two inputs:
+// side by side on the same input and target length, the same number of
+// rounds for both (`voxmorph mesh`'s default, 5, or VOX_REMESH_ROUNDS) plus
+// 3 flip-smooth rounds (CGAL's fixed extra rounds). Two inputs:
 //   - the grid (default): M-MAd starts from the adaptive conforming
 //     decomposition with its imaginary shell, as `voxmorph mesh` does; CGAL,
 //     whose triangulation must fill a convex hull, from the same
@@ -66,6 +67,13 @@
 #include <sys/resource.h>
 
 namespace {
+
+// Rounds for both remeshers: VOX_REMESH_ROUNDS, else `voxmorph mesh`'s default.
+int rounds() {
+  if (const char* r = std::getenv("VOX_REMESH_ROUNDS")) return std::max(1, std::atoi(r));
+  return vox::remesh::RemeshOptions{}.iterations;
+}
+
 
 using namespace vox;
 
@@ -165,8 +173,8 @@ const Case& benchCase() {
     }
     k->decompositionSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     k->initialQuality = summarizeTetQuality(k->initial);
-    std::fprintf(stderr, "%s: l = %g mm, initial mesh %zu tets (%zu domain), CGAL's %zu tets, in %.2f s\n",
-                 k->name.c_str(), k->targetLength, k->initial.tetCount(), k->initialQuality.tets,
+    std::fprintf(stderr, "%s: l = %g mm, %d rounds + 3, initial mesh %zu tets (%zu domain), CGAL's %zu tets, in %.2f s\n",
+                 k->name.c_str(), k->targetLength, rounds(), k->initial.tetCount(), k->initialQuality.tets,
                  k->cgalInitial.tetCount(), k->decompositionSeconds);
     return k;
   }();
@@ -216,7 +224,7 @@ void BM_MMAdRemesh(benchmark::State& state) {
   for (auto _ : state) {
     remesh::RemeshOptions options;
     options.targetLength = c.targetLength;
-    options.iterations = 10;
+    options.iterations = rounds();
     options.flipSmoothCycles = 3;
     options.threads = int(state.range(0));
     const auto wall0 = std::chrono::steady_clock::now();
@@ -259,7 +267,7 @@ void BM_CgalRemesh(benchmark::State& state) {
     std::vector<CgalTriangulation::Vertex_handle> handles;
     if (!CGAL::build_triangulation<CgalTriangulation, true>(tr, points, cells, noPatches, handles))
       state.SkipWithError("CGAL could not build the triangulation");
-    CGAL::tetrahedral_isotropic_remeshing(tr, c.targetLength, CGAL::parameters::number_of_iterations(10));
+    CGAL::tetrahedral_isotropic_remeshing(tr, c.targetLength, CGAL::parameters::number_of_iterations(unsigned(rounds())));
     const double cpu = vox::processCpuSeconds() - cpu0;
     state.PauseTiming();
     TetMesh out;

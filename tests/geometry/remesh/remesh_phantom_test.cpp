@@ -91,7 +91,7 @@ TEST(RemeshPhantom, AdultMaleCropKeepsEveryLabelAndJunction) {
 
 TEST(RemeshPhantom, AdultMaleTorsoKeepsEveryLabelAndJunction) {
   // A slab through the chest and upper abdomen, the full default schedule
-  // (10 rounds and 3 flip-smooth cycles): lungs, heart, liver, stomach,
+  // (5 rounds and 3 flip-smooth cycles): lungs, heart, liver, stomach,
   // spine, ribs, sternum, blood vessels, muscle, fat, skin.
   const LabelGrid grid = cropAdultMale(80, 30, 148, 95, 90, 10);
   const MeshTopology input = computeGridTopology(grid);
