@@ -23,8 +23,8 @@ namespace vox::remesh {
 struct RemeshOptions {
   double targetLength = 0.0;   // l in mm (required, > 0)
   // Split-collapse-flip-smooth rounds. The thesis uses 5 (+ 2-3 flip-smooth
-  // cycles) in its examples and calls 5-10 typical; 5 keeps as few slivers
-  // and more of the thin labels' volume than 10 (docs/REMESH.md, schedule).
+  // cycles) in its examples and calls 5-10 typical; 10 were measured to add
+  // no quality worth their time (docs/BENCHMARKS.md, "Rounds against quality").
   int iterations = 5;
   int flipSmoothCycles = 3;    // final flip-smooth rounds
   // Width of the point set surfaces' Gaussian (mm); 0 picks the larger of

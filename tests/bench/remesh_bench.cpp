@@ -68,14 +68,13 @@
 
 namespace {
 
+using namespace vox;
+
 // Rounds for both remeshers: VOX_REMESH_ROUNDS, else `voxmorph mesh`'s default.
 int rounds() {
   if (const char* r = std::getenv("VOX_REMESH_ROUNDS")) return std::max(1, std::atoi(r));
-  return vox::remesh::RemeshOptions{}.iterations;
+  return remesh::RemeshOptions{}.iterations;
 }
-
-
-using namespace vox;
 
 struct Case {
   std::string name;
