@@ -207,13 +207,10 @@ TetMesh restrictedDelaunayVolume(const SampledDomain& sampled, const VolumeCrite
   // which would make the result depend on the machine's speed: no limit,
   // but only tets with a dihedral angle under 10 degrees are worked on
   // (exuding everything as far as possible triples the time on a body).
-  if (criteria.exude)
-    CGAL::refine_mesh_3(c3t3, domain, meshCriteria, CGAL::parameters::no_perturb(),
-                        CGAL::parameters::exude(CGAL::parameters::time_limit = 0.0, CGAL::parameters::sliver_bound = 10.0),
-                        CGAL::parameters::no_reset_c3t3());
-  else
-    CGAL::refine_mesh_3(c3t3, domain, meshCriteria, CGAL::parameters::no_perturb(), CGAL::parameters::no_exude(),
-                        CGAL::parameters::no_reset_c3t3());
+  const auto exude = criteria.exude
+                         ? CGAL::parameters::exude(CGAL::parameters::time_limit = 0.0, CGAL::parameters::sliver_bound = 10.0)
+                         : CGAL::parameters::no_exude();
+  CGAL::refine_mesh_3(c3t3, domain, meshCriteria, CGAL::parameters::no_perturb(), exude, CGAL::parameters::no_reset_c3t3());
 
   TetMesh mesh;
   std::unordered_map<VertexHandle, int> index;
