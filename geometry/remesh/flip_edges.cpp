@@ -354,11 +354,24 @@ FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
 
   // Inner edges of poor tets, worst tets first.
   const double threshold = cosDegrees(options.innerFlipAngle);
+  // The imaginary layer is not output: its tets are candidates only where
+  // they touch the domain (their shape limits how its boundary can move).
+  std::vector<char> nearDomain(std::size_t(complex.vertexSlots()), 0);
+  for (std::int32_t t = 0; t < complex.tetSlots(); ++t)
+    if (complex.tetAlive(t) && complex.label(t) > 0)
+      for (std::int32_t v : complex.tet(t)) nearDomain[std::size_t(v)] = 1;
+  auto candidate = [&](std::int32_t t) {
+    if (complex.label(t) > 0) return true;
+    for (std::int32_t v : complex.tet(t))
+      if (nearDomain[std::size_t(v)]) return true;
+    return false;
+  };
   std::vector<std::tuple<double, std::int32_t, std::int32_t>> candidates;
   worstCosines(complex, options.threads, worst);
   for (std::int32_t t = 0; t < complex.tetSlots(); ++t) {
     const double w = worst[std::size_t(t)];
     if (w <= threshold || w > 1.5) continue;
+    if (!candidate(t)) continue;
     // The edges at its two largest dihedral angles: removing either one
     // takes a sliver apart (thesis 2.3.6); caps are left to face flips.
     const Tet& q = complex.tet(t);
@@ -393,7 +406,7 @@ FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
   std::vector<std::pair<double, std::int32_t>> poor;
   worstCosines(complex, options.threads, worst);
   for (std::int32_t t = 0; t < complex.tetSlots(); ++t)
-    if (worst[std::size_t(t)] > threshold && worst[std::size_t(t)] < 1.5) poor.push_back({-worst[std::size_t(t)], t});
+    if (worst[std::size_t(t)] > threshold && worst[std::size_t(t)] < 1.5 && candidate(t)) poor.push_back({-worst[std::size_t(t)], t});
   std::sort(poor.begin(), poor.end());
   {
     std::vector<char> any(poor.size(), 0);

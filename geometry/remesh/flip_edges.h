@@ -13,6 +13,9 @@
 //  - Feature edges are never flipped.
 // Then the faces of the tets still under `innerFlipAngle` get 2-3 flips
 // (the face flip of the thesis' sliver removal, 2.3.6) when that helps.
+// Inner and face flips start from domain tets and from the imaginary tets
+// that touch the domain: the rest of the imaginary layer is not output and
+// only needs to stay valid.
 
 #include "geometry/remesh/remesh_complex.h"
 

@@ -535,4 +535,97 @@ std::string RemeshComplex::checkConsistency(bool geometry) const {
   return {};
 }
 
+namespace {
+// Interleaves the low 21 bits of x, y and z.
+std::uint64_t morton3(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+  auto spread = [](std::uint64_t v) {
+    v &= 0x1fffff;
+    v = (v | v << 32) & 0x1f00000000ffffULL;
+    v = (v | v << 16) & 0x1f0000ff0000ffULL;
+    v = (v | v << 8) & 0x100f00f00f00f00fULL;
+    v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
+    v = (v | v << 2) & 0x1249249249249249ULL;
+    return v;
+  };
+  return spread(x) | spread(y) << 1 | spread(z) << 2;
+}
+}  // namespace
+
+void RemeshComplex::reorderForLocality() {
+  const std::size_t nv = positions_.size(), nt = tets_.size();
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (std::size_t v = 0; v < nv; ++v)
+    if (vertexTet_[v] >= 0 && std::int32_t(v) != dummy_) {
+      lo = lo.cwiseMin(positions_[v]);
+      hi = hi.cwiseMax(positions_[v]);
+    }
+  const double extent = std::max((hi - lo).maxCoeff(), 1e-300);
+  std::vector<std::pair<std::uint64_t, std::int32_t>> keys;
+  keys.reserve(nv);
+  for (std::size_t v = 0; v < nv; ++v) {
+    if (vertexTet_[v] < 0 && std::int32_t(v) != dummy_) continue;
+    std::uint64_t key = std::numeric_limits<std::uint64_t>::max();  // the dummy vertex last
+    if (std::int32_t(v) != dummy_) {
+      const Eigen::Vector3d q = (positions_[v] - lo) / extent * double((1 << 21) - 1);
+      key = morton3(std::uint32_t(q[0]), std::uint32_t(q[1]), std::uint32_t(q[2]));
+    }
+    keys.push_back({key, std::int32_t(v)});
+  }
+  std::sort(keys.begin(), keys.end());
+  std::vector<std::int32_t> vmap(nv, -1);
+  for (std::size_t i = 0; i < keys.size(); ++i) vmap[std::size_t(keys[i].second)] = std::int32_t(i);
+
+  std::vector<std::pair<std::int32_t, std::int32_t>> tetKeys;
+  tetKeys.reserve(nt);
+  for (std::size_t t = 0; t < nt; ++t) {
+    if (tets_[t][0] < 0) continue;
+    std::int32_t m = std::numeric_limits<std::int32_t>::max();
+    for (std::int32_t v : tets_[t]) m = std::min(m, vmap[std::size_t(v)]);
+    tetKeys.push_back({m, std::int32_t(t)});
+  }
+  std::sort(tetKeys.begin(), tetKeys.end());
+  std::vector<std::int32_t> tmap(nt, -1);
+  for (std::size_t i = 0; i < tetKeys.size(); ++i) tmap[std::size_t(tetKeys[i].second)] = std::int32_t(i);
+
+  // One array at a time, each freed as its replacement takes over: the
+  // peak is the complex plus the maps and one array.
+  auto permuteVertices = [&](auto& data, auto missing, std::size_t extra, auto map) {
+    std::remove_reference_t<decltype(data)> out(keys.size() + extra, missing);
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      const std::size_t v = std::size_t(keys[i].second);
+      if (v < data.size()) out[i] = map(data[v]);
+    }
+    data = std::move(out);
+  };
+  permuteVertices(positions_, Eigen::Vector3d::Zero().eval(), 0, [](const Eigen::Vector3d& p) { return p; });
+  permuteVertices(vertexTet_, std::int32_t(-1), 0,
+                  [&](std::int32_t t) { return t < 0 ? -1 : tmap[std::size_t(t)]; });
+  permuteVertices(pinned_, std::uint8_t(0), 1, [](std::uint8_t x) { return x; });
+  if (!pinchOf_.empty())
+    permuteVertices(pinchOf_, std::int32_t(-1), 0,
+                    [&](std::int32_t w) { return w < 0 ? -1 : vmap[std::size_t(w)]; });
+  auto permuteTets = [&](auto& data, auto map) {
+    std::remove_reference_t<decltype(data)> out(tetKeys.size());
+    for (std::size_t i = 0; i < tetKeys.size(); ++i) out[i] = map(data[std::size_t(tetKeys[i].second)]);
+    data = std::move(out);
+  };
+  permuteTets(tets_, [&](const Tet& q) {
+    Tet r;
+    for (int k = 0; k < 4; ++k) r[std::size_t(k)] = vmap[std::size_t(q[std::size_t(k)])];
+    return r;
+  });
+  permuteTets(labels_, [](std::int32_t l) { return l; });
+  permuteTets(neighbors_, [&](const std::array<std::int32_t, 4>& n) {
+    std::array<std::int32_t, 4> r;
+    for (int k = 0; k < 4; ++k)
+      r[std::size_t(k)] = n[std::size_t(k)] < 0 ? n[std::size_t(k)] : 4 * tmap[std::size_t(n[std::size_t(k)] >> 2)] + (n[std::size_t(k)] & 3);
+    return r;
+  });
+  freeVertices_.clear();
+  freeVertices_.shrink_to_fit();
+  freeTets_.clear();
+  freeTets_.shrink_to_fit();
+  dummy_ = vmap[std::size_t(dummy_)];
+}
+
 }  // namespace vox::remesh

@@ -159,6 +159,12 @@ public:
   std::int32_t encodedNeighbor(std::int32_t t, int k) const { return neighbors_[std::size_t(t)][std::size_t(k)]; }
   void setEncodedNeighbor(std::int32_t t, int k, std::int32_t code) { neighbors_[std::size_t(t)][std::size_t(k)] = code; }
 
+  // Renumbers the live vertices along a Morton curve of their positions and
+  // the live tets by their smallest vertex, dropping removed slots: the
+  // stars the operations walk then lie close together in memory. The
+  // complex is the same; only ids change (deterministically).
+  void reorderForLocality();
+
   // Combinatorial consistency (symmetric adjacency on identical faces, every
   // live vertex's anyTet contains it, no live tet uses a removed vertex) and,
   // with `geometry`, a positive volume for every geometric tet. Returns an

@@ -427,6 +427,7 @@ SmoothCounts smoothVertices(RemeshComplex& complex, const InterfaceSurfaces* sur
       if (v == dummy || !complex.vertexAlive(v)) continue;
       vt.of(v, nb.tets);
       classifyNeighborhood(complex, v, nb);
+      if (nb.labels[nb.labels.size() - 1] <= 0) continue;  // no domain tet: the imaginary layer is not output
       kind[std::size_t(v)] = std::uint8_t(nb.kind);
     }
   });

@@ -5,7 +5,8 @@
 // (tangential Laplacian over the neighbours of their 2-junction, projected
 // onto its PSS), then inside vertices (Laplacian over the whole one-ring),
 // each level using the already smoothed positions of the level before.
-// Corners never move; hull vertices slide within the planes of their hull facets. A move is
+// Corners never move, nor do vertices without a domain tet (the imaginary
+// layer is not output); hull vertices slide within the planes of their hull facets. A move is
 // shortened until no incident tet inverts (nor drops under the quality
 // floor) and the worst dihedral angle around the vertex does not get worse
 // unless it stays above 30 degrees; it is dropped when even a small step

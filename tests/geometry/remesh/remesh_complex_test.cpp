@@ -200,5 +200,67 @@ TEST(CollapseShortEdges, KeepsComplexValidAndTopology) {
   }
 }
 
+// The same mesh as a set: each tet as its sorted corner positions and label.
+std::vector<std::pair<std::array<std::array<double, 3>, 4>, std::int32_t>> tetSet(const TetMesh& mesh) {
+  std::vector<std::pair<std::array<std::array<double, 3>, 4>, std::int32_t>> out;
+  for (std::size_t t = 0; t < mesh.tetCount(); ++t) {
+    std::array<std::array<double, 3>, 4> corners;
+    for (int i = 0; i < 4; ++i) {
+      const Eigen::Vector3d& p = mesh.positions[std::size_t(mesh.tets[t][std::size_t(i)])];
+      corners[std::size_t(i)] = {p.x(), p.y(), p.z()};
+    }
+    std::sort(corners.begin(), corners.end());
+    out.push_back({corners, mesh.labels[t]});
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// Renumbering changes ids only: the same tets, labels and adjacency, the
+// removed slots dropped, the copies of pinched vertices still copies of one
+// vertex (written once), and vertex ids ordered along the space.
+TEST(RemeshComplex, ReorderingKeepsTheComplex) {
+  const LabelGrid grid = synthesize(SynthKind::JunctionSphere, 16);
+  RemeshComplex complex(tetrahedralizeVoxels(grid));
+  collapseShortEdges(complex, EdgeLengthBounds::forTarget(3.0 * grid.spacing().maxCoeff()), HullConstraint(complex));
+  ASSERT_LT(complex.liveTetCount(), std::size_t(complex.tetSlots()));
+  const TetMesh before = complex.toTetMesh(true);
+  const std::size_t liveTets = complex.liveTetCount(), liveVertices = complex.liveVertexCount();
+  complex.reorderForLocality();
+  EXPECT_EQ(complex.checkConsistency(true), "");
+  EXPECT_EQ(std::size_t(complex.tetSlots()), liveTets);
+  EXPECT_EQ(std::size_t(complex.vertexSlots()), liveVertices);
+  EXPECT_EQ(tetSet(complex.toTetMesh(true)), tetSet(before));
+  // Neighbouring ids are near each other: the mean distance between the
+  // positions of consecutive vertex ids is far below the mesh's extent.
+  double step = 0.0;
+  for (std::int32_t v = 1; v < complex.vertexSlots(); ++v)
+    if (v != complex.dummyVertex() && v - 1 != complex.dummyVertex())
+      step += (complex.position(v) - complex.position(v - 1)).norm();
+  EXPECT_LT(step / double(complex.vertexSlots()), 0.2 * 16.0 * grid.spacing().maxCoeff());
+
+  // A vertex contact: two copies of one vertex, merged on output.
+  const TetMesh touching = blocksMesh({{0, 0, 0, 1}, {1, 1, 1, 2}}, 4);
+  RemeshComplex pinched(touching);
+  ASSERT_TRUE(pinched.hasPinches());
+  const TetMesh pinchedBefore = pinched.toTetMesh();
+  pinched.reorderForLocality();
+  EXPECT_EQ(pinched.checkConsistency(true), "");
+  const TetMesh pinchedAfter = pinched.toTetMesh();
+  EXPECT_EQ(pinchedAfter.positions.size(), pinchedBefore.positions.size());
+  EXPECT_EQ(tetSet(pinchedAfter), tetSet(pinchedBefore));
+  std::size_t copies = 0, pinnedVertices = 0;
+  for (std::int32_t v = 0; v < pinched.vertexSlots(); ++v) {
+    copies += pinched.pinchOf(v) >= 0 && pinched.pinchOf(v) != v;
+    pinnedVertices += pinched.isPinned(v);
+    if (pinched.pinchOf(v) >= 0) {
+      EXPECT_EQ(pinched.position(pinched.pinchOf(v)), pinched.position(v));
+      EXPECT_TRUE(pinched.isPinned(v));
+    }
+  }
+  EXPECT_EQ(copies, 1u);
+  EXPECT_GE(pinnedVertices, 2u);
+}
+
 }  // namespace
 }  // namespace vox::remesh
