@@ -589,20 +589,20 @@ void RemeshComplex::reorderForLocality() {
 
   // One array at a time, each freed as its replacement takes over: the
   // peak is the complex plus the maps and one array.
-  auto permuteVertices = [&](auto& data, auto missing, std::size_t extra, auto map) {
-    std::remove_reference_t<decltype(data)> out(keys.size() + extra, missing);
+  auto permuteVertices = [&](auto& data, auto missing, auto map) {
+    std::remove_reference_t<decltype(data)> out(keys.size(), missing);
     for (std::size_t i = 0; i < keys.size(); ++i) {
       const std::size_t v = std::size_t(keys[i].second);
       if (v < data.size()) out[i] = map(data[v]);
     }
     data = std::move(out);
   };
-  permuteVertices(positions_, Eigen::Vector3d::Zero().eval(), 0, [](const Eigen::Vector3d& p) { return p; });
-  permuteVertices(vertexTet_, std::int32_t(-1), 0,
+  permuteVertices(positions_, Eigen::Vector3d::Zero().eval(), [](const Eigen::Vector3d& p) { return p; });
+  permuteVertices(vertexTet_, std::int32_t(-1),
                   [&](std::int32_t t) { return t < 0 ? -1 : tmap[std::size_t(t)]; });
-  permuteVertices(pinned_, std::uint8_t(0), 1, [](std::uint8_t x) { return x; });
+  permuteVertices(pinned_, std::uint8_t(0), [](std::uint8_t x) { return x; });
   if (!pinchOf_.empty())
-    permuteVertices(pinchOf_, std::int32_t(-1), 0,
+    permuteVertices(pinchOf_, std::int32_t(-1),
                     [&](std::int32_t w) { return w < 0 ? -1 : vmap[std::size_t(w)]; });
   auto permuteTets = [&](auto& data, auto map) {
     std::remove_reference_t<decltype(data)> out(tetKeys.size());
