@@ -23,7 +23,8 @@ const LabelSet& EdgeCollapser::edgeLabels(const VertexNeighborhood& n, std::int3
   return n.edgeLabels[std::size_t(n.find(w))];
 }
 
-std::int32_t EdgeCollapser::tryCollapse(std::int32_t u, std::int32_t v, bool apply, CollapsePlan* plan) {
+std::int32_t EdgeCollapser::tryCollapse(std::int32_t u, std::int32_t v, bool apply, CollapseMove* move) {
+  if (move) *move = CollapseMove::None;
   const std::int32_t dummy = complex_.dummyVertex();
   if (u == v || u == dummy || v == dummy || !complex_.vertexAlive(u) || !complex_.vertexAlive(v)) return -1;
   // The first tet of u's star (in the walk's order) holding v: the edge
@@ -47,7 +48,11 @@ std::int32_t EdgeCollapser::tryCollapse(std::int32_t u, std::int32_t v, bool app
   };
   if (suv.overflow() || (!(labelsOf(nu_.tets) == suv) && !(labelsOf(nv_.tets) == suv))) return -1;
   if (!anyPositionKeepsEdgesShort()) return -1;
-  classifyNeighborhood(complex_, u, nu_);
+  if (classifiedU_ != u || classifiedAfter_ != collapses_) {
+    classifyNeighborhood(complex_, u, nu_);
+    classifiedU_ = u;
+    classifiedAfter_ = collapses_;
+  }
   classifyNeighborhood(complex_, v, nv_);
   const EdgeRule rule = edgeRule(nu_, nv_, suv, dummy);
   if (rule.condition == EdgeCondition::Exclusion) return -1;
@@ -61,17 +66,18 @@ std::int32_t EdgeCollapser::tryCollapse(std::int32_t u, std::int32_t v, bool app
     const VertexNeighborhood* removed;
     const VertexNeighborhood* kept;
     Eigen::Vector3d p;
+    CollapseMove move;
   };
   Option options[3];
   int count = 0;
   if (rule.condition == EdgeCondition::Similarity) {
-    options[count++] = {&nu_, &nv_, 0.5 * (pu + pv)};
-    options[count++] = {&nu_, &nv_, pv};
-    options[count++] = {&nv_, &nu_, pu};
+    options[count++] = {&nu_, &nv_, 0.5 * (pu + pv), CollapseMove::ToMidpoint};
+    options[count++] = {&nu_, &nv_, pv, CollapseMove::UOntoV};
+    options[count++] = {&nv_, &nu_, pu, CollapseMove::VOntoU};
   } else if (rule.moving == u) {
-    options[count++] = {&nu_, &nv_, pv};
+    options[count++] = {&nu_, &nv_, pv, CollapseMove::UOntoV};
   } else {
-    options[count++] = {&nv_, &nu_, pu};
+    options[count++] = {&nv_, &nu_, pu, CollapseMove::VOntoU};
   }
   const HullConstraint::Planes planes[2] = {hull_.planes(complex_, nu_), hull_.planes(complex_, nv_)};
   for (int i = 0; i < count; ++i) {
@@ -82,7 +88,7 @@ std::int32_t EdgeCollapser::tryCollapse(std::int32_t u, std::int32_t v, bool app
     if (r.onHull() && !hull_.allows(planes[&r == &nu_ ? 0 : 1], o.p)) continue;
     if (keptMoves && k.onHull() && !hull_.allows(planes[&k == &nu_ ? 0 : 1], o.p)) continue;
     if (!test2NoLongEdges(r, k, o.p) || !test1PositiveVolumes(r, k, o.p)) continue;
-    if (plan) *plan = {u, v, r.vertex, k.vertex, o.p};
+    if (move) *move = o.move;
     if (apply) collapse(r, k, o.p);
     return k.vertex;
   }
@@ -115,7 +121,8 @@ bool EdgeCollapser::anyPositionKeepsEdgesShort() const {
   };
   auto scan = [&](const std::vector<std::int32_t>& tets, const std::vector<std::int32_t>& otherTets, std::int32_t self,
                   std::int32_t other, bool& toOther) {
-    for (std::int32_t q : tets)
+    for (std::int32_t q : tets) {
+      if (!toMid && !toOther) return;  // nothing left for this star to decide
       for (std::int32_t w : complex_.tet(q)) {
         if (w == self || w == other || w == dummy) continue;
         const Eigen::Vector3d& pw = complex_.position(w);
@@ -123,6 +130,7 @@ bool EdgeCollapser::anyPositionKeepsEdgesShort() const {
         // Moving `self` onto `other` creates (other, w) unless it exists.
         if (toOther && (pw - complex_.position(other)).squaredNorm() >= emax2 && !holds(otherTets, w)) toOther = false;
       }
+    }
   };
   scan(nu_.tets, nv_.tets, u, v, toV);
   scan(nv_.tets, nu_.tets, v, u, toU);
@@ -299,13 +307,19 @@ void EdgeCollapser::starOf(std::int32_t v, std::vector<std::int32_t>& out) {
   c.tets.assign(out.begin(), out.end());
 }
 
-void EdgeCollapser::applyPlan(const CollapsePlan& plan) {
-  // The same ring, in the same order, as tryCollapse(u, v) finds.
-  complex_.edgeRing(plan.u, plan.v, walker_.findEdgeTet(complex_, plan.u, plan.v), ring_);
-  nu_.vertex = plan.removed;
-  walker_.incidentTets(complex_, plan.removed, nu_.tets);
-  nv_.vertex = plan.kept;
-  collapse(nu_, nv_, plan.p);
+std::int32_t EdgeCollapser::applyPlan(std::int32_t u, std::int32_t v, CollapseMove move) {
+  // The same ring, in the same order, as tryCollapse(u, v) finds, and the
+  // same position (u and v have not moved since).
+  complex_.edgeRing(u, v, walker_.findEdgeTet(complex_, u, v), ring_);
+  const Eigen::Vector3d pu = complex_.position(u), pv = complex_.position(v);
+  const bool removesU = move != CollapseMove::VOntoU;
+  const Eigen::Vector3d p = move == CollapseMove::ToMidpoint ? Eigen::Vector3d(0.5 * (pu + pv)) : removesU ? pv : pu;
+  classifiedU_ = -1;
+  nu_.vertex = removesU ? u : v;
+  walker_.incidentTets(complex_, nu_.vertex, nu_.tets);
+  nv_.vertex = removesU ? v : u;
+  collapse(nu_, nv_, p);
+  return nv_.vertex;
 }
 
 void EdgeCollapser::collapse(const VertexNeighborhood& r, const VertexNeighborhood& k, const Eigen::Vector3d& p) {
@@ -350,17 +364,15 @@ std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& b
   EdgeCollapser collapser(complex, bounds, hull);
   std::vector<char> touched(std::size_t(complex.vertexSlots()), 0);
   std::vector<std::int32_t> touchedList, star, ring, byVertex;
-  std::vector<char> promising;
-  std::vector<CollapsePlan> plans;
-  std::vector<WeightedEdge> next;
+  std::vector<CollapseMove> plans;
+  std::vector<std::pair<std::int32_t, std::int32_t>> next;  // lengths taken again when the wave starts
   std::size_t collapses = 0;
   while (!edges.empty()) {
     std::sort(edges.begin(), edges.end(), shorter);
     edges.erase(std::unique(edges.begin(), edges.end(),
                             [](const WeightedEdge& x, const WeightedEdge& y) { return x.a == y.a && x.b == y.b; }),
                 edges.end());
-    promising.assign(edges.size(), 0);
-    plans.assign(edges.size(), CollapsePlan{});
+    plans.assign(edges.size(), CollapseMove::None);
     // Screened by first end point, so that a screening collapser's star
     // cache holds that point's star across its edges (a plan does not
     // depend on the order in which plans are found).
@@ -373,14 +385,15 @@ std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& b
       EdgeCollapser screen(complex, bounds, hull);
       for (std::int64_t x = b; x < e; ++x) {
         const std::size_t i = std::size_t(byVertex[std::size_t(x)]);
-        promising[i] = screen.tryCollapse(edges[i].a, edges[i].b, false, &plans[i]) >= 0;
+        screen.tryCollapse(edges[i].a, edges[i].b, false, &plans[i]);
       }
     });
+    std::vector<std::int32_t>().swap(byVertex);  // not needed while the collapses are applied
     for (std::int32_t w : touchedList) touched[std::size_t(w)] = 0;
     touchedList.clear();
     next.clear();
     for (std::size_t i = 0; i < edges.size(); ++i) {
-      if (!promising[i]) continue;
+      if (plans[i] == CollapseMove::None) continue;
       const WeightedEdge& e = edges[i];
       if (!complex.vertexAlive(e.a) || !complex.vertexAlive(e.b)) continue;
       std::int32_t survivor = -1;
@@ -389,8 +402,7 @@ std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& b
         survivor = collapser.tryCollapse(e.a, e.b);
         if (survivor < 0) continue;
       } else {
-        collapser.applyPlan(plans[i]);
-        survivor = plans[i].kept;
+        survivor = collapser.applyPlan(e.a, e.b, plans[i]);
       }
       ++collapses;
       complex.incidentTets(survivor, star);
@@ -401,15 +413,15 @@ std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& b
       const Eigen::Vector3d pk = complex.position(survivor);
       for (std::int32_t w : ring) {
         const double l2 = (complex.position(w) - pk).squaredNorm();
-        if (l2 < emin2) next.push_back({std::min(survivor, w), std::max(survivor, w), l2});
+        if (l2 < emin2) next.push_back({std::min(survivor, w), std::max(survivor, w)});
       }
     }
     // Deferred edges: alive and still short, at their current lengths.
     edges.clear();
-    for (WeightedEdge e : next) {
-      if (!complex.vertexAlive(e.a) || !complex.vertexAlive(e.b)) continue;
-      e.length2 = (complex.position(e.a) - complex.position(e.b)).squaredNorm();
-      if (e.length2 < emin2) edges.push_back(e);
+    for (const auto& [a, b] : next) {
+      if (!complex.vertexAlive(a) || !complex.vertexAlive(b)) continue;
+      const double l2 = (complex.position(a) - complex.position(b)).squaredNorm();
+      if (l2 < emin2) edges.push_back({a, b, l2});
     }
   }
   return collapses;

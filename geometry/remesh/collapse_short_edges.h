@@ -28,11 +28,14 @@ namespace vox::remesh {
 
 inline constexpr double kCollapseMinDihedral = 10.0;  // degrees
 
-// A collapse found possible: edge (u, v) as asked, `removed` onto `kept`,
-// which moves to p.
-struct CollapsePlan {
-  std::int32_t u = -1, v = -1, removed = -1, kept = -1;
-  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+// A collapse found possible for edge (u, v) as asked: which end point goes
+// and where the other one ends up. With the positions of u and v this is
+// the whole plan (one byte per candidate edge of a wave).
+enum class CollapseMove : std::uint8_t {
+  None,        // no collapse possible
+  ToMidpoint,  // u removed, v moved to the mid-point of (u, v)
+  UOntoV,      // u removed, v stays
+  VOntoU,      // v removed, u stays
 };
 
 class EdgeCollapser {
@@ -42,14 +45,16 @@ public:
   // Collapses edge (u, v) when the rules above allow it. Returns the vertex
   // that remains, or -1 (nothing changed). With apply = false only says
   // which vertex would remain (read-only: collapsers of other threads may
-  // evaluate the same complex meanwhile).
-  std::int32_t tryCollapse(std::int32_t u, std::int32_t v, bool apply = true, CollapsePlan* plan = nullptr);
-  // Performs a collapse that tryCollapse(u, v, false, &plan) found on the
-  // complex as it was then. The result is the same as tryCollapse(u, v)
-  // now, provided that no collapse since has touched u or v (changed a tet
-  // around u or v, or moved one of their neighbours): what the rules look at
-  // is all in the stars of u and v.
-  void applyPlan(const CollapsePlan& plan);
+  // evaluate the same complex meanwhile). `move` receives what it did or
+  // would do (None when nothing).
+  std::int32_t tryCollapse(std::int32_t u, std::int32_t v, bool apply = true, CollapseMove* move = nullptr);
+  // Performs the collapse of (u, v) that tryCollapse(u, v, false, &move)
+  // found on the complex as it was then, and returns the vertex that
+  // remains. The result is the same as tryCollapse(u, v) now, provided that
+  // no collapse since has touched u or v (changed a tet around u or v, or
+  // moved one of their neighbours): what the rules look at is all in the
+  // stars of u and v.
+  std::int32_t applyPlan(std::int32_t u, std::int32_t v, CollapseMove move);
 
 private:
   bool anyPositionKeepsEdgesShort() const;
@@ -80,6 +85,10 @@ private:
   void starOf(std::int32_t v, std::vector<std::int32_t>& out);
   CachedStar stars_[2];
   std::uint64_t collapses_ = 0, clock_ = 0;
+  // nu_ holds the classified neighbourhood of this vertex as it was after
+  // that many collapses (the edges of a wave come by first end point).
+  std::int32_t classifiedU_ = -1;
+  std::uint64_t classifiedAfter_ = 0;
   // Worst dihedral cosine around u and v, computed when first needed.
   double worstBefore(const VertexNeighborhood& nb) const;
   mutable double worstBefore_[2] = {3.0, 3.0};

@@ -76,6 +76,13 @@ bool EdgeFlipper::fanCreatesExistingEdge(std::size_t apex) {
   return false;
 }
 
+double EdgeFlipper::tetWorstCosine(std::int32_t q) const {
+  if (worst_) return (*worst_)[std::size_t(q)];
+  const auto& P = complex_.positions();
+  const Tet& v = complex_.tet(q);
+  return minDihedralCosine(P[std::size_t(v[0])], P[std::size_t(v[1])], P[std::size_t(v[2])], P[std::size_t(v[3])]);
+}
+
 bool EdgeFlipper::ringNearPinch() const {
   // A flip joins ring vertices: none may be a copy of a pinched vertex
   // (see RemeshComplex::pinchOf).
@@ -95,14 +102,10 @@ bool EdgeFlipper::tryFlipInnerEdge(std::int32_t a, std::int32_t b, bool apply, s
   if (n > std::size_t(options_.maxRing)) return false;
   if (ringNearPinch()) return false;
   const std::int32_t label = complex_.label(ring_.tets[0]);
-  const auto& P = complex_.positions();
-  double current = -1.0;
-  for (std::int32_t q : ring_.tets) {
+  for (std::int32_t q : ring_.tets)
     if (complex_.label(q) != label || complex_.isDummyTet(q)) return false;
-    const Tet& v = complex_.tet(q);
-    current = std::max(current, minDihedralCosine(P[std::size_t(v[0])], P[std::size_t(v[1])], P[std::size_t(v[2])],
-                                                  P[std::size_t(v[3])]));
-  }
+  double current = -1.0;
+  for (std::int32_t q : ring_.tets) current = std::max(current, tetWorstCosine(q));
   // Candidate fans, best worst-angle first.
   thread_local std::vector<std::pair<double, std::size_t>> choices;
   choices.clear();
@@ -189,11 +192,7 @@ bool EdgeFlipper::tryFlipSurfaceEdge(std::int32_t a, std::int32_t b, bool apply,
   }
 
   double current = -1.0;
-  for (std::int32_t q : ring_.tets) {
-    const Tet& v = complex_.tet(q);
-    current = std::max(current, minDihedralCosine(P[std::size_t(v[0])], P[std::size_t(v[1])], P[std::size_t(v[2])],
-                                                  P[std::size_t(v[3])]));
-  }
+  for (std::int32_t q : ring_.tets) current = std::max(current, tetWorstCosine(q));
   // The better of the (one or two) fans towards the boundary facets' apexes.
   double best = std::numeric_limits<double>::infinity();
   std::size_t bestApex = n;
@@ -255,11 +254,7 @@ bool EdgeFlipper::tryFlipFace(std::int32_t t, int k, bool apply) {
   const std::int32_t apexT = complex_.tet(t)[std::size_t(k)];
   const std::int32_t apexN = complex_.tet(n)[std::size_t(complex_.neighborFace(t, k))];
   if (complex_.pinchOf(apexT) >= 0 || complex_.pinchOf(apexN) >= 0) return false;  // see RemeshComplex::pinchOf
-  const auto& P = complex_.positions();
-  auto worstOf = [&](const Tet& q) {
-    return minDihedralCosine(P[std::size_t(q[0])], P[std::size_t(q[1])], P[std::size_t(q[2])], P[std::size_t(q[3])]);
-  };
-  const double current = std::max(worstOf(complex_.tet(t)), worstOf(complex_.tet(n)));
+  const double current = std::max(tetWorstCosine(t), tetWorstCosine(n));
   fan_.clear();
   fanLabels_.clear();
   for (int i = 0; i < 4; ++i) {
@@ -294,17 +289,20 @@ void worstCosines(const RemeshComplex& complex, int threads, std::vector<double>
 }  // namespace
 
 // Finds on all threads (read-only) which candidate edges a flip would take
-// on the complex as it is now, and towards which apex. Then applies them in
+// on the complex as it is now (`worst`: its tets' worst dihedral cosines),
+// and towards which apex. Then applies them in
 // order: as screened (the apex found then) while no
 // flip has touched the edge's end points or ring, re-checked otherwise, so
 // the result is that of checking every flip in turn. Returns the flips.
 template <typename Try>
 std::size_t screenAndFlip(RemeshComplex& complex, const FlipOptions& options, EdgeFlipper& flipper,
-                          std::vector<std::pair<std::int32_t, std::int32_t>>& edges, const Try& tryFlip) {
+                          std::vector<std::pair<std::int32_t, std::int32_t>>& edges, const std::vector<double>& worst,
+                          const Try& tryFlip) {
   constexpr std::uint8_t kNone = 0xFF;
   std::vector<std::uint8_t> apex(edges.size(), kNone);
   parallelRanges(std::int64_t(edges.size()), options.threads, [&](std::int64_t b, std::int64_t e) {
     EdgeFlipper f(complex, options);
+    f.useWorstCosines(&worst);
     for (std::int64_t i = b; i < e; ++i)
       tryFlip(f, edges[std::size_t(i)].first, edges[std::size_t(i)].second, false, &apex[std::size_t(i)]);
   });
@@ -347,7 +345,8 @@ FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
   });
   std::sort(edges.begin(), edges.end());
   edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-  counts.surface = screenAndFlip(complex, options, flipper, edges,
+  worstCosines(complex, options.threads, worst);
+  counts.surface = screenAndFlip(complex, options, flipper, edges, worst,
                                  [](EdgeFlipper& f, std::int32_t a, std::int32_t b, bool apply, std::uint8_t* apex) {
                                    return f.tryFlipSurfaceEdge(a, b, apply, apex);
                                  });
@@ -366,24 +365,43 @@ FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
       if (nearDomain[std::size_t(v)]) return true;
     return false;
   };
-  std::vector<std::tuple<double, std::int32_t, std::int32_t>> candidates;
+  using Candidate = std::tuple<double, std::int32_t, std::int32_t>;
+  std::vector<Candidate> candidates;
   worstCosines(complex, options.threads, worst);
-  for (std::int32_t t = 0; t < complex.tetSlots(); ++t) {
-    const double w = worst[std::size_t(t)];
-    if (w <= threshold || w > 1.5) continue;
-    if (!candidate(t)) continue;
-    // The edges at its two largest dihedral angles: removing either one
-    // takes a sliver apart (thesis 2.3.6); caps are left to face flips.
-    const Tet& q = complex.tet(t);
-    const auto& P = complex.positions();
-    const auto angles = dihedralAngles(P[std::size_t(q[0])], P[std::size_t(q[1])], P[std::size_t(q[2])], P[std::size_t(q[3])]);
-    static constexpr int kEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
-    int order[6] = {0, 1, 2, 3, 4, 5};
-    std::sort(order, order + 6, [&](int x, int y) { return angles[std::size_t(x)] > angles[std::size_t(y)] || (angles[std::size_t(x)] == angles[std::size_t(y)] && x < y); });
-    for (int r = 0; r < options.edgesPerPoorTet; ++r) {
-      const std::int32_t a = q[std::size_t(kEdge[order[r]][0])], b = q[std::size_t(kEdge[order[r]][1])];
-      candidates.push_back({-w, std::min(a, b), std::max(a, b)});
-    }
+  {
+    // Per range on all threads, concatenated in tet order.
+    const int ranges = std::max(1, options.threads);
+    std::vector<std::vector<Candidate>> found(static_cast<std::size_t>(ranges));
+    const std::int64_t slots = complex.tetSlots();
+    parallelRanges(ranges, ranges, [&](std::int64_t r0, std::int64_t r1) {
+      for (std::int64_t r = r0; r < r1; ++r) {
+        std::vector<Candidate>& out = found[std::size_t(r)];
+        const auto& P = complex.positions();
+        for (std::int64_t t = slots * r / ranges; t < slots * (r + 1) / ranges; ++t) {
+          const double w = worst[std::size_t(t)];
+          if (w <= threshold || w > 1.5) continue;
+          if (!candidate(std::int32_t(t))) continue;
+          // The edges at its largest dihedral angles: removing either one
+          // takes a sliver apart (thesis 2.3.6); caps are left to face flips.
+          const Tet& q = complex.tet(std::int32_t(t));
+          const auto angles =
+              dihedralAngles(P[std::size_t(q[0])], P[std::size_t(q[1])], P[std::size_t(q[2])], P[std::size_t(q[3])]);
+          static constexpr int kEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+          int order[6] = {0, 1, 2, 3, 4, 5};
+          std::sort(order, order + 6, [&](int x, int y) {
+            return angles[std::size_t(x)] > angles[std::size_t(y)] || (angles[std::size_t(x)] == angles[std::size_t(y)] && x < y);
+          });
+          for (int k = 0; k < options.edgesPerPoorTet; ++k) {
+            const std::int32_t a = q[std::size_t(kEdge[order[k]][0])], b = q[std::size_t(kEdge[order[k]][1])];
+            out.push_back({-w, std::min(a, b), std::max(a, b)});
+          }
+        }
+      }
+    }, 1);
+    std::size_t total = 0;
+    for (const auto& f : found) total += f.size();
+    candidates.reserve(total);
+    for (const auto& f : found) candidates.insert(candidates.end(), f.begin(), f.end());
   }
   // Each edge once, at its worst tet's key; worst first.
   std::sort(candidates.begin(), candidates.end(), [](const auto& x, const auto& y) {
@@ -397,7 +415,7 @@ FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
   std::sort(candidates.begin(), candidates.end());
   edges.clear();
   for (const auto& [w, a, b] : candidates) edges.push_back({a, b});
-  counts.inner = screenAndFlip(complex, options, flipper, edges,
+  counts.inner = screenAndFlip(complex, options, flipper, edges, worst,
                                [](EdgeFlipper& f, std::int32_t a, std::int32_t b, bool apply, std::uint8_t* apex) {
                                  return f.tryFlipInnerEdge(a, b, apply, apex);
                                });
@@ -412,6 +430,7 @@ FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
     std::vector<char> any(poor.size(), 0);
     parallelRanges(std::int64_t(poor.size()), options.threads, [&](std::int64_t b, std::int64_t e) {
       EdgeFlipper f(complex, options);
+      f.useWorstCosines(&worst);
       for (std::int64_t i = b; i < e; ++i)
         for (int k = 0; k < 4 && !any[std::size_t(i)]; ++k) any[std::size_t(i)] = f.tryFlipFace(poor[std::size_t(i)].second, k, false);
     });

@@ -64,6 +64,10 @@ public:
   const EdgeRing& lastRing() const { return ring_; }
   // 2-3 flip of face k of tet t (sliver removal, thesis 2.3.6).
   bool tryFlipFace(std::int32_t t, int k, bool apply = true);
+  // The worst dihedral cosine of every tet slot of the complex as it is
+  // (minDihedralCosine, 2 for dummy tets), for a flipper that only screens:
+  // the tets' current worst angles are read from it instead of computed.
+  void useWorstCosines(const std::vector<double>* worst) { worst_ = worst; }
 
 private:
   // Tets of the fan towards ring[apex], with their labels.
@@ -73,6 +77,8 @@ private:
   double fanWorstCosine(double bound) const;
   bool fanCreatesExistingEdge(std::size_t apex);
   bool ringNearPinch() const;
+  // Worst dihedral cosine of tet q as it is now.
+  double tetWorstCosine(std::int32_t q) const;
   // Edges of v on the x|y interface, and |S(v)|.
   std::pair<int, int> boundaryValence(std::int32_t v, std::int32_t x, std::int32_t y);
 
@@ -83,6 +89,7 @@ private:
   std::vector<Tet> fan_;
   std::vector<std::int32_t> fanLabels_;
   std::vector<std::int32_t> star_, scratch_;
+  const std::vector<double>* worst_ = nullptr;
 };
 
 // Surface flips first (valence), then inner flips (dihedral angle), then

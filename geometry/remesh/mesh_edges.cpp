@@ -30,8 +30,14 @@ void collectEdges(const RemeshComplex& complex,
         }
       }
   }, 1);
+  std::size_t total = 0;
+  for (const auto& c : chunks) total += c.size();
   out.clear();
-  for (const auto& c : chunks) out.insert(out.end(), c.begin(), c.end());
+  out.reserve(total);
+  for (auto& c : chunks) {
+    out.insert(out.end(), c.begin(), c.end());
+    std::vector<WeightedEdge>().swap(c);  // each chunk freed once copied
+  }
 }
 
 }  // namespace vox::remesh

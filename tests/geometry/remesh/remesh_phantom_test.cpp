@@ -113,7 +113,7 @@ TEST(RemeshPhantom, AdultMaleTorsoKeepsEveryLabelAndJunction) {
 
 TEST(RemeshPhantom, WholeAdultMaleAtTwoVoxelsKeepsEveryLabelAndJunction) {
   const char* slow = std::getenv("VOX_SLOW_TESTS");
-  if (!slow || std::string(slow) != "1") GTEST_SKIP() << "about 50 minutes on 2 cores; set VOX_SLOW_TESTS=1 to run it";
+  if (!slow || std::string(slow) != "1") GTEST_SKIP() << "about 20 minutes on 2 cores; set VOX_SLOW_TESTS=1 to run it";
   const LabelGrid grid = readGrid(test::assetPath("icrp110_am.nii.gz"));
   const MeshTopology input = computeGridTopology(grid);
   ASSERT_GE(input.labels.size(), 130u);
