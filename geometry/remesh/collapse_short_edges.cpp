@@ -262,14 +262,9 @@ bool EdgeCollapser::test1PositiveVolumes(const VertexNeighborhood& r, const Vert
 double EdgeCollapser::worstBefore(const VertexNeighborhood& nb) const {
   double& w = worstBefore_[&nb == &nu_ ? 0 : 1];
   if (w != kUnknownCosine) return w;
-  const auto& P = complex_.positions();
   w = -1.0;
-  for (std::int32_t q : nb.tets) {
-    if (complex_.isDummyTet(q)) continue;
-    const Tet& c = complex_.tet(q);
-    w = std::max(w, minDihedralCosine(P[std::size_t(c[0])], P[std::size_t(c[1])], P[std::size_t(c[2])],
-                                      P[std::size_t(c[3])]));
-  }
+  for (std::int32_t q : nb.tets)
+    if (!complex_.isDummyTet(q)) w = std::max(w, complex_.minDihedralCosineOf(q));
   return w;
 }
 

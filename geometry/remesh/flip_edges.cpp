@@ -77,10 +77,7 @@ bool EdgeFlipper::fanCreatesExistingEdge(std::size_t apex) {
 }
 
 double EdgeFlipper::tetWorstCosine(std::int32_t q) const {
-  if (worst_) return (*worst_)[std::size_t(q)];
-  const auto& P = complex_.positions();
-  const Tet& v = complex_.tet(q);
-  return minDihedralCosine(P[std::size_t(v[0])], P[std::size_t(v[1])], P[std::size_t(v[2])], P[std::size_t(v[3])]);
+  return worst_ ? (*worst_)[std::size_t(q)] : complex_.minDihedralCosineOf(q);
 }
 
 bool EdgeFlipper::ringNearPinch() const {
@@ -276,14 +273,9 @@ namespace {
 // Worst dihedral cosine of every geometric tet (2 elsewhere), in parallel.
 void worstCosines(const RemeshComplex& complex, int threads, std::vector<double>& out) {
   out.assign(std::size_t(complex.tetSlots()), 2.0);
-  const auto& P = complex.positions();
   parallelRanges(complex.tetSlots(), threads, [&](std::int64_t b, std::int64_t e) {
-    for (std::int32_t t = std::int32_t(b); t < std::int32_t(e); ++t) {
-      if (!complex.tetAlive(t) || complex.isDummyTet(t)) continue;
-      const Tet& q = complex.tet(t);
-      out[std::size_t(t)] = minDihedralCosine(P[std::size_t(q[0])], P[std::size_t(q[1])], P[std::size_t(q[2])],
-                                              P[std::size_t(q[3])]);
-    }
+    for (std::int32_t t = std::int32_t(b); t < std::int32_t(e); ++t)
+      if (complex.tetAlive(t) && !complex.isDummyTet(t)) out[std::size_t(t)] = complex.minDihedralCosineOf(t);
   });
 }
 }  // namespace
@@ -368,41 +360,31 @@ FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
   using Candidate = std::tuple<double, std::int32_t, std::int32_t>;
   std::vector<Candidate> candidates;
   worstCosines(complex, options.threads, worst);
-  {
-    // Per range on all threads, concatenated in tet order.
-    const int ranges = std::max(1, options.threads);
-    std::vector<std::vector<Candidate>> found(static_cast<std::size_t>(ranges));
-    const std::int64_t slots = complex.tetSlots();
-    parallelRanges(ranges, ranges, [&](std::int64_t r0, std::int64_t r1) {
-      for (std::int64_t r = r0; r < r1; ++r) {
-        std::vector<Candidate>& out = found[std::size_t(r)];
-        const auto& P = complex.positions();
-        for (std::int64_t t = slots * r / ranges; t < slots * (r + 1) / ranges; ++t) {
-          const double w = worst[std::size_t(t)];
-          if (w <= threshold || w > 1.5) continue;
-          if (!candidate(std::int32_t(t))) continue;
-          // The edges at its largest dihedral angles: removing either one
-          // takes a sliver apart (thesis 2.3.6); caps are left to face flips.
-          const Tet& q = complex.tet(std::int32_t(t));
-          const auto angles =
-              dihedralAngles(P[std::size_t(q[0])], P[std::size_t(q[1])], P[std::size_t(q[2])], P[std::size_t(q[3])]);
-          static constexpr int kEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
-          int order[6] = {0, 1, 2, 3, 4, 5};
-          std::sort(order, order + 6, [&](int x, int y) {
-            return angles[std::size_t(x)] > angles[std::size_t(y)] || (angles[std::size_t(x)] == angles[std::size_t(y)] && x < y);
-          });
-          for (int k = 0; k < options.edgesPerPoorTet; ++k) {
-            const std::int32_t a = q[std::size_t(kEdge[order[k]][0])], b = q[std::size_t(kEdge[order[k]][1])];
-            out.push_back({-w, std::min(a, b), std::max(a, b)});
-          }
-        }
+  // Gathered on all threads in any order: the sorts below order them fully.
+  parallelRanges(complex.tetSlots(), options.threads, [&](std::int64_t begin, std::int64_t end) {
+    std::vector<Candidate> found;
+    const auto& P = complex.positions();
+    for (std::int32_t t = std::int32_t(begin); t < std::int32_t(end); ++t) {
+      const double w = worst[std::size_t(t)];
+      if (w <= threshold || w > 1.5 || !candidate(t)) continue;
+      // The edges at its largest dihedral angles: removing either one
+      // takes a sliver apart (thesis 2.3.6); caps are left to face flips.
+      const Tet& q = complex.tet(t);
+      const auto angles =
+          dihedralAngles(P[std::size_t(q[0])], P[std::size_t(q[1])], P[std::size_t(q[2])], P[std::size_t(q[3])]);
+      static constexpr int kEdge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+      int order[6] = {0, 1, 2, 3, 4, 5};
+      std::sort(order, order + 6, [&](int x, int y) {
+        return angles[std::size_t(x)] > angles[std::size_t(y)] || (angles[std::size_t(x)] == angles[std::size_t(y)] && x < y);
+      });
+      for (int k = 0; k < options.edgesPerPoorTet; ++k) {
+        const std::int32_t a = q[std::size_t(kEdge[order[k]][0])], b = q[std::size_t(kEdge[order[k]][1])];
+        found.push_back({-w, std::min(a, b), std::max(a, b)});
       }
-    }, 1);
-    std::size_t total = 0;
-    for (const auto& f : found) total += f.size();
-    candidates.reserve(total);
-    for (const auto& f : found) candidates.insert(candidates.end(), f.begin(), f.end());
-  }
+    }
+    std::lock_guard lock(gather);
+    candidates.insert(candidates.end(), found.begin(), found.end());
+  });
   // Each edge once, at its worst tet's key; worst first.
   std::sort(candidates.begin(), candidates.end(), [](const auto& x, const auto& y) {
     return std::tie(std::get<1>(x), std::get<2>(x), std::get<0>(x)) < std::tie(std::get<1>(y), std::get<2>(y), std::get<0>(y));

@@ -1,6 +1,7 @@
 #include "geometry/remesh/remesh_complex.h"
 
 #include "geometry/error.h"
+#include "geometry/remesh/tet_shape.h"
 
 #include <Eigen/Geometry>
 
@@ -533,6 +534,12 @@ std::string RemeshComplex::checkConsistency(bool geometry) const {
       return "vertex " + std::to_string(v) + " points to a tet that does not hold it";
   }
   return {};
+}
+
+double RemeshComplex::minDihedralCosineOf(std::int32_t t) const {
+  const Tet& q = tets_[std::size_t(t)];
+  return minDihedralCosine(positions_[std::size_t(q[0])], positions_[std::size_t(q[1])], positions_[std::size_t(q[2])],
+                           positions_[std::size_t(q[3])]);
 }
 
 namespace {

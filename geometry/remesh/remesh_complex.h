@@ -156,6 +156,8 @@ public:
   // tet or a face of the cavity's boundary. Returns the new tets' slots.
   void replaceTets(const std::vector<std::int32_t>& removed, const std::vector<Tet>& added,
                    const std::vector<std::int32_t>& addedLabels, std::vector<std::int32_t>& out);
+  // Cosine of tet t's smallest dihedral angle (minDihedralCosine, tet_shape.h).
+  double minDihedralCosineOf(std::int32_t t) const;
   std::int32_t encodedNeighbor(std::int32_t t, int k) const { return neighbors_[std::size_t(t)][std::size_t(k)]; }
   void setEncodedNeighbor(std::int32_t t, int k, std::int32_t code) { neighbors_[std::size_t(t)][std::size_t(k)] = code; }
 

@@ -256,12 +256,8 @@ private:
       if (worst > kGoodAngleCosine) {
         if (worstBefore == kUnknownCosine) {
           worstBefore = -1.0;
-          for (std::int32_t o : tets) {
-            if (complex_.isDummyTet(o)) continue;
-            const Tet& u = complex_.tet(o);
-            worstBefore = std::max(worstBefore, minDihedralCosine(P[std::size_t(u[0])], P[std::size_t(u[1])],
-                                                                  P[std::size_t(u[2])], P[std::size_t(u[3])]));
-          }
+          for (std::int32_t o : tets)
+            if (!complex_.isDummyTet(o)) worstBefore = std::max(worstBefore, complex_.minDihedralCosineOf(o));
         }
         if (worst > worstBefore) return false;
       }
@@ -376,10 +372,8 @@ std::size_t polishPass(RemeshComplex& complex, const InterfaceSurfaces* surfaces
   parallelRanges(complex.tetSlots(), threads, [&](std::int64_t b, std::int64_t e) {
     for (std::int32_t t = std::int32_t(b); t < std::int32_t(e); ++t) {
       if (!complex.tetAlive(t) || complex.isDummyTet(t) || complex.label(t) <= 0) continue;
-      const Tet& q = complex.tet(t);
-      const auto& P = complex.positions();
-      if (minDihedralCosine(P[std::size_t(q[0])], P[std::size_t(q[1])], P[std::size_t(q[2])], P[std::size_t(q[3])]) > cosine)
-        for (std::int32_t v : q) marks[std::size_t(v)].store(1, std::memory_order_relaxed);
+      if (complex.minDihedralCosineOf(t) > cosine)
+        for (std::int32_t v : complex.tet(t)) marks[std::size_t(v)].store(1, std::memory_order_relaxed);
     }
   });
   std::vector<std::int32_t> vertices;
