@@ -261,10 +261,7 @@ bool EdgeCollapser::test1PositiveVolumes(const VertexNeighborhood& r, const Vert
 
 double EdgeCollapser::worstBefore(const VertexNeighborhood& nb) const {
   double& w = worstBefore_[&nb == &nu_ ? 0 : 1];
-  if (w != kUnknownCosine) return w;
-  w = -1.0;
-  for (std::int32_t q : nb.tets)
-    if (!complex_.isDummyTet(q)) w = std::max(w, complex_.minDihedralCosineOf(q));
+  if (w == kUnknownCosine) w = complex_.worstDihedralCosineOf(nb.tets);
   return w;
 }
 

@@ -542,6 +542,13 @@ double RemeshComplex::minDihedralCosineOf(std::int32_t t) const {
                            positions_[std::size_t(q[3])]);
 }
 
+double RemeshComplex::worstDihedralCosineOf(const std::vector<std::int32_t>& tets) const {
+  double worst = -1.0;
+  for (std::int32_t t : tets)
+    if (!isDummyTet(t)) worst = std::max(worst, minDihedralCosineOf(t));
+  return worst;
+}
+
 namespace {
 // Interleaves the low 21 bits of x, y and z.
 std::uint64_t morton3(std::uint32_t x, std::uint32_t y, std::uint32_t z) {

@@ -158,6 +158,9 @@ public:
                    const std::vector<std::int32_t>& addedLabels, std::vector<std::int32_t>& out);
   // Cosine of tet t's smallest dihedral angle (minDihedralCosine, tet_shape.h).
   double minDihedralCosineOf(std::int32_t t) const;
+  // The largest of those over the geometric tets among `tets` (a star's
+  // worst angle), -1 when there are none.
+  double worstDihedralCosineOf(const std::vector<std::int32_t>& tets) const;
   std::int32_t encodedNeighbor(std::int32_t t, int k) const { return neighbors_[std::size_t(t)][std::size_t(k)]; }
   void setEncodedNeighbor(std::int32_t t, int k, std::int32_t code) { neighbors_[std::size_t(t)][std::size_t(k)] = code; }
 

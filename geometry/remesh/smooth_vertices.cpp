@@ -254,11 +254,7 @@ private:
         return false;
       const double worst = minDihedralCosine(x[0], x[1], x[2], x[3]);
       if (worst > kGoodAngleCosine) {
-        if (worstBefore == kUnknownCosine) {
-          worstBefore = -1.0;
-          for (std::int32_t o : tets)
-            if (!complex_.isDummyTet(o)) worstBefore = std::max(worstBefore, complex_.minDihedralCosineOf(o));
-        }
+        if (worstBefore == kUnknownCosine) worstBefore = complex_.worstDihedralCosineOf(tets);
         if (worst > worstBefore) return false;
       }
     }

@@ -10,7 +10,6 @@
 #include "geometry/remesh/hull_constraint.h"
 #include "geometry/remesh/mesh_edges.h"
 #include "geometry/remesh/split_long_edges.h"
-#include "geometry/remesh/tet_shape.h"
 #include "geometry/synth.h"
 
 #include <gtest/gtest.h>
@@ -41,11 +40,8 @@ Input junctionSphere(bool collapse = false) {
 
 std::vector<double> worstCosineTable(const RemeshComplex& c) {
   std::vector<double> table(std::size_t(c.tetSlots()), 2.0);
-  for (std::int32_t t = 0; t < c.tetSlots(); ++t) {
-    if (!c.tetAlive(t) || c.isDummyTet(t)) continue;
-    const Tet& q = c.tet(t);
-    table[std::size_t(t)] = minDihedralCosine(c.position(q[0]), c.position(q[1]), c.position(q[2]), c.position(q[3]));
-  }
+  for (std::int32_t t = 0; t < c.tetSlots(); ++t)
+    if (c.tetAlive(t) && !c.isDummyTet(t)) table[std::size_t(t)] = c.minDihedralCosineOf(t);
   return table;
 }
 
