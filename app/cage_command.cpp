@@ -5,10 +5,10 @@
 // voxels it leaves outside; an invalid cage is an error and is not written.
 
 #include "app/command_line.h"
-#include "geometry/deform/cage_builder.h"
-#include "geometry/deform/label_groups.h"
+#include "geometry/deform/cage/cage_builder.h"
+#include "geometry/skeleton/label_groups.h"
 #include "geometry/deform/pipeline.h"
-#include "geometry/deform/pose_frame.h"
+#include "geometry/deform/pose/pose_frame.h"
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/io/mesh_io.h"
@@ -30,8 +30,8 @@ LimbSeparation parseSeparation(const std::string& text) {
   const std::size_t colon = groups.find(':');
   if (colon == std::string::npos) throw InputError("--separate " + text, usage);
   LimbSeparation s;
-  s.groupA = Label(bodyPartFromName(groups.substr(0, colon), "--separate " + text));
-  s.groupB = Label(bodyPartFromName(groups.substr(colon + 1), "--separate " + text));
+  s.groupA = Label(labelGroupFromName(groups.substr(0, colon), "--separate " + text));
+  s.groupB = Label(labelGroupFromName(groups.substr(colon + 1), "--separate " + text));
   if (s.groupA == s.groupB) throw InputError("--separate " + text, "separates a group from itself");
   if (at != std::string::npos) {
     std::istringstream in(text.substr(at + 1));

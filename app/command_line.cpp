@@ -1,8 +1,9 @@
 #include "app/command_line.h"
 
 #include "geometry/error.h"
-#include "geometry/io/atomic_file.h"
+#include "geometry/atomic_file.h"
 #include "geometry/io/grid_io.h"
+#include "geometry/io/input_provenance.h"
 #include "geometry/progress.h"
 
 #include <algorithm>

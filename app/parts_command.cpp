@@ -7,7 +7,7 @@
 
 #include "app/command_line.h"
 #include "geometry/error.h"
-#include "geometry/io/atomic_file.h"
+#include "geometry/atomic_file.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/io/output_path.h"
 #include "geometry/organ_table.h"

@@ -3,7 +3,7 @@
 // and running it on an initial mesh, writing the mesh and the report.
 
 #include "app/command_line.h"
-#include "geometry/io/atomic_file.h"
+#include "geometry/atomic_file.h"
 #include "geometry/io/mesh_io.h"
 #include "geometry/io/output_path.h"
 #include "geometry/error.h"

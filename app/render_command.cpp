@@ -9,8 +9,8 @@
 
 #include "app/command_line.h"
 #include "geometry/deform/pipeline.h"
-#include "geometry/deform/pose.h"
-#include "geometry/deform/pose_frame.h"
+#include "geometry/deform/pose/pose.h"
+#include "geometry/deform/pose/pose_frame.h"
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/io/output_path.h"
@@ -24,7 +24,7 @@
 #include "geometry/render/raycast_reference.h"
 #include "geometry/render/raycast_scene.h"
 #include "geometry/render/rest_transfer_mesh.h"
-#include "geometry/skeleton/joint_pose.h"
+#include "geometry/deform/pose/joint_pose.h"
 #include "gpu/context.h"
 #include "gpu/kernels/raycast.h"
 

@@ -1,6 +1,6 @@
 #include "geometry/label_stats.h"
 
-#include "geometry/io/grid_io.h"
+#include "geometry/grid_slices.h"
 #include "geometry/progress.h"
 
 #include <algorithm>

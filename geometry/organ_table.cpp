@@ -2,7 +2,7 @@
 
 #include "geometry/ascii_text.h"
 #include "geometry/error.h"
-#include "geometry/io/atomic_file.h"
+#include "geometry/atomic_file.h"
 
 #include <algorithm>
 #include <cctype>

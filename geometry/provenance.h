@@ -41,12 +41,6 @@ struct Provenance {
 std::string shellQuoted(std::string_view argument);
 std::string shellCommandLine(int argc, const char* const* argv);
 
-// Provenance of a run: the current working directory and the digests of the
-// files given as (role, path); pairs with an empty path are skipped. A
-// "grid" whose samples live in a separate file (.mhd + .raw, .nhdr +
-// .raw.gz) adds that file as "grid data". Throws InputError naming a file
-// that cannot be read.
-Provenance makeProvenance(std::string commandLine, const std::vector<std::pair<std::string, std::string>>& files);
 // Records an input that is not a file (a pose edited in the viewer) by the
 // digest of its text.
 void addTextInput(Provenance& provenance, const std::string& role, const std::string& description, std::string_view text);

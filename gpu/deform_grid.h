@@ -2,7 +2,7 @@
 // deformGrid: re-poses a label grid file and writes the posed full-resolution
 // grid (thesis chapters 3 and 4), as `voxmorph deform` and the viewer's export
 // both run it:
-//   a pose with joints compiled against the skeleton (skeleton/joint_pose.h) ->
+//   a pose with joints compiled against the skeleton (deform/pose/joint_pose.h) ->
 //   pre-process (label groups, envelope, cage, transfer mesh, embedding) ->
 //   deformation (ARAP -> Green coordinates -> propagation) ->
 //   deformation-adaptive refinement (eq. 4.5-4.7; field interpolation on the
@@ -15,9 +15,9 @@
 // pipeline, spooled to an unlinked raw temporary when compressed) and G' is
 // rasterized from source windows under the budget.
 
-#include "geometry/deform/adaptive_refinement.h"
-#include "geometry/deform/deformation_report.h"
-#include "geometry/deform/pose.h"
+#include "geometry/deform/solve/adaptive_refinement.h"
+#include "geometry/deform/report/deformation_report.h"
+#include "geometry/deform/pose/pose.h"
 #include "geometry/organ_table.h"
 #include "geometry/provenance.h"
 #include "geometry/tri_mesh.h"

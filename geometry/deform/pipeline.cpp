@@ -1,10 +1,10 @@
 #include "geometry/deform/pipeline.h"
 #include "geometry/disjoint_sets.h"
 
-#include "geometry/deform/green_coordinates.h"
-#include "geometry/deform/label_groups.h"
+#include "geometry/deform/solve/green_coordinates.h"
+#include "geometry/skeleton/label_groups.h"
 #include "geometry/deform/out_of_core.h"
-#include "geometry/deform/surface_checks.h"
+#include "geometry/deform/cage/surface_checks.h"
 #include "geometry/error.h"
 #include "geometry/label_stats.h"
 #include "geometry/parallel.h"
@@ -16,28 +16,14 @@
 #include <limits>
 #include <numeric>
 #include <set>
-#include <sys/resource.h>
 
 namespace vox {
-
-double processCpuSeconds() {
-  rusage u{};
-  ::getrusage(RUSAGE_SELF, &u);
-  return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
-}
-
-StageTimer::StageTimer(std::string name)
-    : name_(std::move(name)), wall_(std::chrono::steady_clock::now()), cpu_(processCpuSeconds()) {}
-
-StageTime StageTimer::stop() const {
-  return {name_, std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_).count(), processCpuSeconds() - cpu_};
-}
 
 namespace {
 
 // Label of the groups that no separation names, in the TM's group grid: one
 // material, so the mesher does not resolve interfaces nobody cuts.
-constexpr Label kOtherGroups = Label(kBodyPartCount + 1);
+constexpr Label kOtherGroups = Label(kLabelGroupCount + 1);
 
 }  // namespace
 
@@ -108,14 +94,14 @@ DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOp
       if (!withGroups)
         throw InputError("separation", "limb separation needs the grid's organ table (--organs) to find the label groups");
       groups_ = labelGroups();
-      std::vector<std::int64_t> count(kBodyPartCount + 1, 0);
+      std::vector<std::int64_t> count(kLabelGroupCount + 1, 0);
       for (const Label l : groups_.labels()) ++count[l];
       std::set<Label> named;
       for (const LimbSeparation& s : separations)
         for (const Label g : {s.groupA, s.groupB}) {
-          if (g < 1 || g > kBodyPartCount || count[g] == 0)
+          if (g < 1 || g > kLabelGroupCount || count[g] == 0)
             throw InputError("separation", std::string("label group '") +
-                                               (g >= 1 && g <= kBodyPartCount ? bodyPartName(BodyPart(g)) : "?") +
+                                               (g >= 1 && g <= kLabelGroupCount ? labelGroupName(LabelGroup(g)) : "?") +
                                                "' has no voxels in this grid");
           named.insert(g);
         }
@@ -305,7 +291,7 @@ std::vector<std::uint8_t> DeformationPipeline::acrossSeparation() const {
   // their group's tets) to less than 5 % of the group's largest inside
   // region, e.g. fingertips inside the part of the cage around the thigh
   // they touch, whose neighbours all lie outside. They are propagated too.
-  std::vector<std::uint8_t> separated(kBodyPartCount + 2, 0);
+  std::vector<std::uint8_t> separated(kLabelGroupCount + 2, 0);
   for (const LimbSeparation& s : cuts)
     for (const Label g : {s.groupA, s.groupB})
       if (g < separated.size()) separated[g] = 1;

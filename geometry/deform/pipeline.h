@@ -33,50 +33,29 @@
 // rasterizing it reproduces the source voxel for voxel wherever the TM
 // covers it (countUncoveredVoxels is reported).
 
-#include "geometry/deform/adaptive_refinement.h"
-#include "geometry/deform/cage_builder.h"
-#include "geometry/deform/envelope.h"
-#include "geometry/deform/frame_deformer.h"
-#include "geometry/deform/pose.h"
-#include "geometry/deform/rigid_bones.h"
+#include "geometry/deform/solve/adaptive_refinement.h"
+#include "geometry/deform/cage/cage_builder.h"
+#include "geometry/deform/cage/envelope.h"
+#include "geometry/deform/solve/frame_deformer.h"
+#include "geometry/deform/pose/pose.h"
+#include "geometry/deform/solve/rigid_bones.h"
 #include "geometry/raster/rasterize.h"
 #include "geometry/deform/transfer_mesh.h"
 #include "geometry/body_projection.h"
 #include "geometry/label_grid.h"
 #include "geometry/organ_table.h"
 #include "geometry/scalar_grid.h"
+#include "geometry/stage_timer.h"
 #include "geometry/tet_mesh.h"
 #include "geometry/tri_mesh.h"
 
 #include <Eigen/Core>
-#include <chrono>
 #include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace vox {
-
-// Wall and process CPU time of one stage (CPU time counts every thread, so
-// on a loaded machine it is the steadier figure).
-struct StageTime {
-  std::string name;
-  double seconds = 0.0;
-  double cpuSeconds = 0.0;
-};
-
-// Times a stage from construction to stop().
-class StageTimer {
-public:
-  explicit StageTimer(std::string name);
-  StageTime stop() const;
-
-private:
-  std::string name_;
-  std::chrono::steady_clock::time_point wall_;
-  double cpu_ = 0.0;
-};
-double processCpuSeconds();
 
 struct PipelineOptions {
   // Organ table of the grid: label groups for limb separation. Required when
@@ -98,11 +77,11 @@ struct PipelineOptions {
   bool rigidBones = false;
   int rigidJointRings = 2;  // tet rings left free around the vertices between two parts' bones (rigidBoneGroups)
   // Per body part (index = skeleton::Part; empty: none): the rigid motion its
-  // bones take (a joint pose's forward kinematics, skeleton/joint_pose.h),
+  // bones take (a joint pose's forward kinematics, deform/pose/joint_pose.h),
   // applied by the frame's fraction. Without it each part's bones take the
   // rigid fit to where the cage puts them.
   std::vector<PoseTransform> partMotions;
-  // Automatic cage; its separations (groups are BodyPart values) also cut
+  // Automatic cage; its separations (groups are LabelGroup values) also cut
   // the transfer mesh.
   CageOptions cage;
   // Where the transfer mesh is cut (cutTransferMesh); empty: the cage's

@@ -1,7 +1,7 @@
 #include "geometry/deform/transfer_mesh.h"
 
-#include "geometry/deform/distance_transform.h"
-#include "geometry/deform/restricted_delaunay.h"
+#include "geometry/distance_transform.h"
+#include "geometry/deform/cage/restricted_delaunay.h"
 #include "geometry/error.h"
 #include "geometry/progress.h"
 

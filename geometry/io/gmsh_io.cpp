@@ -8,7 +8,7 @@
 // tag; our writer numbers nodes and tets in mesh order, so a round trip keeps
 // both orders even though it groups the tets by label.
 #include "geometry/error.h"
-#include "geometry/io/atomic_file.h"
+#include "geometry/atomic_file.h"
 #include "geometry/io/mesh_io.h"
 #include "geometry/io/text_scanner.h"
 

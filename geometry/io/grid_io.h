@@ -8,6 +8,7 @@
 // fault. Writers are atomic (AtomicFile) and store uint8 when every label fits,
 // uint16 otherwise.
 
+#include "geometry/grid_slices.h"
 #include "geometry/label_grid.h"
 
 #include <cstdint>
@@ -35,28 +36,10 @@ void writeNrrd(const std::string& path, const LabelGrid& grid);
 LabelGrid readInr(const std::string& path);
 void writeInr(const std::string& path, const LabelGrid& grid);
 
-// Streaming access by whole z-slices, for grids that do not fit in memory.
-// Slices must be requested in non-decreasing order for compressed files.
-class GridSliceReader {
-public:
-  virtual ~GridSliceReader() = default;
-  virtual const GridGeometry& geometry() const = 0;
-  // Reads `count` slices starting at slice k0 into out (count * nx * ny labels).
-  virtual void readSlices(std::int64_t k0, std::int64_t count, Label* out) = 0;
-};
 // Supported for every grid format; compressed files read backwards restart
 // from the beginning (slow), so read them forwards.
 std::unique_ptr<GridSliceReader> openGridSlices(const std::string& path);
 
-// Writes a grid slice by slice to a temporary file; commit() renames it into
-// place once every slice was written. Destroying it without commit() removes
-// the temporary.
-class GridSliceWriter {
-public:
-  virtual ~GridSliceWriter() = default;
-  virtual void writeSlices(const Label* in, std::int64_t count) = 0;
-  virtual void commit() = 0;
-};
 // Supported for every grid format (.mha stores its data uncompressed when
 // streamed). `maxLabel` decides the stored type (uint8 when <= 255).
 std::unique_ptr<GridSliceWriter> createGridSlices(const std::string& path, const GridGeometry& geometry, Label maxLabel);

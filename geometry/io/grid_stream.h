@@ -4,7 +4,7 @@
 // and encoding label slices into a format's output stream. Internal to
 // geometry/io; each format file provides the open/create functions below.
 
-#include "geometry/io/atomic_file.h"
+#include "geometry/atomic_file.h"
 #include "geometry/io/byte_stream.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/io/voxel_codec.h"

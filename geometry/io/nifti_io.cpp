@@ -12,7 +12,7 @@
 #include <znzlib.h>
 
 #include "geometry/error.h"
-#include "geometry/io/atomic_file.h"
+#include "geometry/atomic_file.h"
 #include "geometry/io/grid_stream.h"
 
 #include <bit>

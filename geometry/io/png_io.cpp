@@ -1,7 +1,7 @@
 #include "geometry/io/png_io.h"
 
 #include "geometry/error.h"
-#include "geometry/io/atomic_file.h"
+#include "geometry/atomic_file.h"
 
 #include <png.h>
 

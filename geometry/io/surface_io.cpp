@@ -8,7 +8,7 @@
 // properties are skipped.
 #include "geometry/ascii_text.h"
 #include "geometry/error.h"
-#include "geometry/io/atomic_file.h"
+#include "geometry/atomic_file.h"
 #include "geometry/io/mesh_io.h"
 #include "geometry/io/text_scanner.h"
 

@@ -11,7 +11,7 @@
 // Format: https://vtk.org/wp-content/uploads/2015/04/file-formats.pdf and
 // vtkXMLDataParser (binary block layout, compressed block headers).
 #include "geometry/error.h"
-#include "geometry/io/atomic_file.h"
+#include "geometry/atomic_file.h"
 #include "geometry/io/mesh_io.h"
 #include "geometry/io/text_scanner.h"
 

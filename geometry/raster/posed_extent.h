@@ -4,7 +4,7 @@
 // to integers only once it is known to fit, so a pose that moves vertices
 // astronomically far is an error naming the fault, never a wrapped or
 // collapsed dimension. The growth rule on top of it is the deformation's
-// (geometry/deform/posed_extent.h).
+// (geometry/deform/pose/posed_extent.h).
 
 #include "geometry/label_grid.h"
 

@@ -217,11 +217,6 @@ LabelGrid rasterizeAllSlabs(SlabRasterizer& engine) {
   return out;
 }
 
-void LabelGridSlices::readSlices(std::int64_t k0, std::int64_t count, Label* out) {
-  const std::int64_t slice = grid_.geometry().sliceVoxels();
-  std::copy(grid_.data() + k0 * slice, grid_.data() + (k0 + count) * slice, out);
-}
-
 CpuSlabRasterizer::CpuSlabRasterizer(const RasterizationPlan& plan, GridSliceReader& source, const CpuRasterizerLimits& limits,
                                      int threads)
     : plan_(plan), source_(source), limits_(limits), threads_(threads) {}

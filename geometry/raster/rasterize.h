@@ -23,7 +23,7 @@
 // -> voxel label).
 
 #include "geometry/raster/lattice_tets.h"
-#include "geometry/io/grid_io.h"
+#include "geometry/grid_slices.h"
 #include "geometry/label_grid.h"
 #include "geometry/tet_mesh.h"
 
@@ -138,18 +138,6 @@ public:
 
 // The whole of G' from `engine`, slab by slab (reports "rasterize" progress).
 LabelGrid rasterizeAllSlabs(SlabRasterizer& engine);
-
-// A GridSliceReader over an in-memory grid (which must outlive it).
-class LabelGridSlices : public GridSliceReader {
-public:
-  explicit LabelGridSlices(const LabelGrid& grid) : grid_(grid) {}
-  const GridGeometry& geometry() const override { return grid_.geometry(); }
-  void readSlices(std::int64_t k0, std::int64_t count, Label* out) override;
-  const LabelGrid& grid() const { return grid_; }
-
-private:
-  const LabelGrid& grid_;
-};
 
 struct CpuRasterizerLimits {
   std::int64_t slabSamples = kSlabPoints;             // sample states held at once

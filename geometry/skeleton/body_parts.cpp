@@ -1,6 +1,6 @@
 #include "geometry/skeleton/body_parts.h"
 
-#include "geometry/deform/distance_transform.h"
+#include "geometry/distance_transform.h"
 #include "geometry/error.h"
 #include "geometry/progress.h"
 
@@ -204,23 +204,23 @@ Part bonePart(Bone bone, Side side) {
   }
 }
 
-BodyPart labelGroupOf(Part part) {
+LabelGroup labelGroupOf(Part part) {
   switch (part) {
     case Part::Head:
-    case Part::Neck: return BodyPart::Head;
+    case Part::Neck: return LabelGroup::Head;
     case Part::RightUpperArm:
     case Part::RightForearm:
-    case Part::RightHand: return BodyPart::RightArm;
+    case Part::RightHand: return LabelGroup::RightArm;
     case Part::LeftUpperArm:
     case Part::LeftForearm:
-    case Part::LeftHand: return BodyPart::LeftArm;
+    case Part::LeftHand: return LabelGroup::LeftArm;
     case Part::RightThigh:
     case Part::RightLowerLeg:
-    case Part::RightFoot: return BodyPart::RightLeg;
+    case Part::RightFoot: return LabelGroup::RightLeg;
     case Part::LeftThigh:
     case Part::LeftLowerLeg:
-    case Part::LeftFoot: return BodyPart::LeftLeg;
-    default: return BodyPart::Trunk;
+    case Part::LeftFoot: return LabelGroup::LeftLeg;
+    default: return LabelGroup::Trunk;
   }
 }
 

@@ -29,7 +29,7 @@
 // Memory: the part grid (uint8), one float distance per voxel and the
 // Dijkstra heap (8 bytes an entry).
 
-#include "geometry/deform/label_groups.h"
+#include "geometry/skeleton/label_groups.h"
 #include "geometry/label_grid.h"
 #include "geometry/organ_table.h"
 #include "geometry/skeleton/bones.h"
@@ -77,7 +77,7 @@ std::string partNames();
 Part bonePart(Bone bone, Side side);
 // The label group (label_groups.h) a part belongs to: head and neck -> head,
 // trunk and pelvis -> trunk, a limb's parts -> that limb.
-BodyPart labelGroupOf(Part part);
+LabelGroup labelGroupOf(Part part);
 
 // Directions of the body in the grid frame (unit vectors) and a point of the
 // mid-sagittal plane.

@@ -5,10 +5,10 @@
 //
 //   build/release/bench/deform_mesh_bench [--benchmark_filter=...]
 
-#include "geometry/deform/cage_builder.h"
-#include "geometry/deform/envelope.h"
-#include "geometry/deform/label_groups.h"
-#include "geometry/deform/surface_checks.h"
+#include "geometry/deform/cage/cage_builder.h"
+#include "geometry/deform/cage/envelope.h"
+#include "geometry/skeleton/label_groups.h"
+#include "geometry/deform/cage/surface_checks.h"
 #include "geometry/deform/transfer_mesh.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/organ_table.h"
@@ -67,8 +67,8 @@ void BM_Cage(benchmark::State& state) {
 void BM_InsetCage(benchmark::State& state) {
   vox::CageOptions options;
   const Eigen::AlignedBox3d belowShoulders(Eigen::Vector3d::Constant(-1e4), Eigen::Vector3d(1e4, 1e4, 1300.0));
-  for (const auto arm : {vox::BodyPart::RightArm, vox::BodyPart::LeftArm})
-    options.separations.push_back({vox::Label(arm), vox::Label(vox::BodyPart::Trunk), belowShoulders});
+  for (const auto arm : {vox::LabelGroup::RightArm, vox::LabelGroup::LeftArm})
+    options.separations.push_back({vox::Label(arm), vox::Label(vox::LabelGroup::Trunk), belowShoulders});
   const vox::LabelGrid& groups = adultMaleGroups();
   vox::CageResult r;
   for (auto _ : state) r = vox::buildCage(groups, options);

@@ -21,12 +21,12 @@
 // Counters: per-stage milliseconds (averaged over the iterations), the
 // fastest frame, sizes.
 
-#include "geometry/deform/frame_deformer.h"
-#include "geometry/deform/green_coordinates.h"
+#include "geometry/deform/solve/frame_deformer.h"
+#include "geometry/deform/solve/green_coordinates.h"
 #include "geometry/deform/pipeline.h"
-#include "geometry/deform/pose.h"
-#include "geometry/skeleton/joint_pose.h"
-#include "geometry/deform/sparse_cholesky.h"
+#include "geometry/deform/pose/pose.h"
+#include "geometry/deform/pose/joint_pose.h"
+#include "geometry/deform/solve/sparse_cholesky.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/voxel_tetrahedralization.h"
 

@@ -21,7 +21,7 @@
 //   build/release/bench/raycast_bench [--benchmark_filter=...]
 //   VOXMORPH_BENCH_SIZE=1920x1080 build/release/bench/raycast_bench
 
-#include "geometry/deform/label_groups.h"
+#include "geometry/skeleton/label_groups.h"
 #include "geometry/deform/transfer_mesh.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/io/mesh_io.h"
@@ -33,7 +33,7 @@
 #include "gpu/context.h"
 #include "gpu/kernels/rasterize.h"
 #include "gpu/kernels/raycast.h"
-#include "tests/geometry/render_fixtures.h"
+#include "tests/geometry/render/fixtures.h"
 
 #include <benchmark/benchmark.h>
 

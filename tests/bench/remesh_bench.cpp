@@ -36,7 +36,7 @@
 // junction or Euler characteristic, or holds a tet of volume <= 0 (the
 // acceptance check of the full phantom at l = 2 voxels, too slow for ctest).
 
-#include "geometry/deform/restricted_delaunay.h"
+#include "geometry/deform/cage/restricted_delaunay.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/io/mesh_io.h"
 #include "geometry/mesh_quality.h"

@@ -1,6 +1,6 @@
 // libFuzzer harness: the pose JSON parser on arbitrary bytes (in memory).
 
-#include "geometry/deform/pose.h"
+#include "geometry/deform/pose/pose.h"
 #include "geometry/error.h"
 
 #include <cstdint>

@@ -8,6 +8,7 @@
 #include "geometry/io/grid_files.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/provenance.h"
+#include "geometry/io/input_provenance.h"
 #include "geometry/synth.h"
 #include "tests/support/test_environment.h"
 

@@ -14,8 +14,8 @@
 // an identity mesh shows, except at silhouette ties, and matches golden
 // images.
 
-#include "geometry/deform/deformation_report.h"
-#include "geometry/deform/label_volumes.h"
+#include "geometry/deform/report/deformation_report.h"
+#include "geometry/deform/solve/label_volumes.h"
 #include "gpu/context.h"
 #include "geometry/render/camera.h"
 #include "geometry/render/cutting_planes.h"

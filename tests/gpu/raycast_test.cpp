@@ -1,7 +1,7 @@
 // GPU transfer-mesh-guided ray caster against its CPU reference and the
 // golden images: at most 0.1% of the pixels may differ by more than 5/255.
 
-#include "geometry/deform/label_groups.h"
+#include "geometry/skeleton/label_groups.h"
 #include "geometry/deform/transfer_mesh.h"
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
@@ -14,7 +14,7 @@
 #include "gpu/context.h"
 #include "gpu/image.h"
 #include "gpu/kernels/raycast.h"
-#include "tests/geometry/render_fixtures.h"
+#include "tests/geometry/render/fixtures.h"
 #include "tests/support/test_environment.h"
 
 #include <gtest/gtest.h>

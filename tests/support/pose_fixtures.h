@@ -10,7 +10,7 @@
 #include "geometry/raster/rasterize.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/organ_table.h"
-#include "geometry/skeleton/joint_pose.h"
+#include "geometry/deform/pose/joint_pose.h"
 #include "tests/support/test_environment.h"
 
 #include <algorithm>

@@ -1,6 +1,6 @@
-#include "cage_fixtures.h"
+#include "tests/geometry/deform/cage_fixtures.h"
 
-#include "geometry/deform/green_coordinates.h"
+#include "geometry/deform/solve/green_coordinates.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>

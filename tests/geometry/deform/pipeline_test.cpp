@@ -6,7 +6,7 @@
 // within 2 %, the foreground within 0.1 %; with the label-volume correction
 // (label_volumes.h) every label within 1 %.
 
-#include "geometry/deform/label_volumes.h"
+#include "geometry/deform/solve/label_volumes.h"
 #include "geometry/deform/pipeline.h"
 #include "geometry/raster/rasterize.h"
 #include "geometry/io/grid_io.h"

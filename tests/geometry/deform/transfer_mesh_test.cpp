@@ -1,6 +1,6 @@
 #include "geometry/deform/transfer_mesh.h"
 
-#include "geometry/deform/label_groups.h"
+#include "geometry/skeleton/label_groups.h"
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/label_stats.h"
@@ -83,7 +83,7 @@ TEST(TransferMesh, MultiMaterialFromLabelGroups) {
   checkedVolume(tm);
   EXPECT_EQ(countUncoveredVoxels(tm, grid), 0);
   std::set<std::int32_t> present(tm.labels.begin(), tm.labels.end());
-  EXPECT_EQ(present.size(), std::size_t(kBodyPartCount));
+  EXPECT_EQ(present.size(), std::size_t(kLabelGroupCount));
   EXPECT_GT(*present.begin(), 0);
   // Interfaces pass between voxel centres: a tet whose centroid lies in a
   // voxel whose 26 neighbours all share its group carries that group.
@@ -219,7 +219,7 @@ TEST(TransferMesh, CutStickFigureArmFromTrunk) {
   const LabelGrid groups = labelGroupGrid(grid, synthOrganTable(SynthKind::StickFigure));
   TetMesh tm = buildTransferMesh(groups, defaultSizingField(grid.geometry()));
   const double volume = checkedVolume(tm);
-  const auto arm = std::int32_t(BodyPart::RightArm), trunk = std::int32_t(BodyPart::Trunk);
+  const auto arm = std::int32_t(LabelGroup::RightArm), trunk = std::int32_t(LabelGroup::Trunk);
   ASSERT_GT(sharedFaces(tm, arm, trunk, std::nullopt) + sharedFaces(tm, trunk, arm, std::nullopt), 0u);
   const CutReport r = cutTransferMesh(tm, trunk, arm);
   EXPECT_GT(r.cutFaces, 0u);

@@ -5,7 +5,7 @@
 // give outer boundaries that are not manifold; the input travels through the
 // writers and readers first (.mesh, .vtu, .msh), as a user's file would.
 
-#include "geometry/deform/restricted_delaunay.h"
+#include "geometry/deform/cage/restricted_delaunay.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/io/mesh_io.h"
 #include "geometry/remesh/mesh_topology.h"

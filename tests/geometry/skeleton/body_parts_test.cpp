@@ -33,8 +33,8 @@ const Skeleton& figure() {
   return s;
 }
 
-bool isRightArm(Part p) { return labelGroupOf(p) == BodyPart::RightArm; }
-bool isLeftArm(Part p) { return labelGroupOf(p) == BodyPart::LeftArm; }
+bool isRightArm(Part p) { return labelGroupOf(p) == LabelGroup::RightArm; }
+bool isLeftArm(Part p) { return labelGroupOf(p) == LabelGroup::LeftArm; }
 
 // Voxels of the right arm's parts on the body's left of the mid-sagittal
 // plane, and of the left arm's on its right; and legs whose centroid is on
@@ -102,7 +102,7 @@ TEST(BodyParts, SkeletonFigurePartsAreConnectedAndOnTheirSide) {
         const Part part = Part(p.parts.at(i, j, k));
         if (part == Part::None) continue;
         ++trunkVoxels;
-        armInTrunk += labelGroupOf(part) == BodyPart::RightArm || labelGroupOf(part) == BodyPart::LeftArm;
+        armInTrunk += labelGroupOf(part) == LabelGroup::RightArm || labelGroupOf(part) == LabelGroup::LeftArm;
       }
   EXPECT_GT(trunkVoxels, 10000);
   EXPECT_EQ(armInTrunk, 0);

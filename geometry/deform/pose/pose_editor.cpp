@@ -1,0 +1,312 @@
+#include "geometry/deform/pose/pose_editor.h"
+
+#include "geometry/skeleton/label_groups.h"
+#include "geometry/deform/pose/joint_pose.h"
+#include "geometry/error.h"
+#include "geometry/tet_mesh.h"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace vox {
+
+namespace {
+
+constexpr double kDegrees = 3.14159265358979323846 / 180.0;
+
+bool sameShape(const PoseSelection& a, const PoseSelection& b) {
+  return a.shape == b.shape && a.boxMin == b.boxMin && a.boxMax == b.boxMax && a.center == b.center && a.radius == b.radius &&
+         a.points == b.points && a.fixed == b.fixed && a.part == b.part && a.group == b.group && a.bodyParts == b.bodyParts;
+}
+
+}  // namespace
+
+bool EditState::operator==(const EditState& o) const {
+  if (cuts != o.cuts || hidden != o.hidden || active != o.active || pose.arapIterations != o.pose.arapIterations ||
+      !sameHandleSets(pose, o.pose))
+    return false;
+  for (std::size_t k = 0; k < pose.selections.size(); ++k) {
+    const PoseTransform &a = pose.selections[k].transform, &b = o.pose.selections[k].transform;
+    if (a.axis != b.axis || a.angleDeg != b.angleDeg || a.center != b.center || a.translation != b.translation) return false;
+  }
+  return true;
+}
+
+bool sameHandleSets(const Pose& a, const Pose& b) {
+  if (a.selections.size() != b.selections.size()) return false;
+  for (std::size_t k = 0; k < a.selections.size(); ++k)
+    if (!sameShape(a.selections[k], b.selections[k])) return false;
+  return true;
+}
+
+PoseEditor::PoseEditor(const LabelGrid& grid, std::optional<OrganTable> organs, const Pose& setup, const std::string& setupSource,
+                       const std::vector<LimbSeparation>& extraSeparations)
+    : grid_(grid), organs_(std::move(organs)), setupSource_(setupSource), separations_(setup.separations) {
+  for (const LimbSeparation& s : extraSeparations) separations_.push_back({s, std::nullopt});
+  Pose shaping = setup;
+  shaping.separations = separations_;
+  PipelineOptions options;
+  if (!setup.joints.empty() || usesBodyParts(setup)) {
+    if (!organs_)
+      throw InputError(setupSource, "a pose with joints or body parts needs the grid's organ table (--organs) to find the bones");
+    skeleton_ = std::make_unique<skeleton::Skeleton>(skeleton::buildSkeleton(grid_, *organs_, {"grid", "organ table", "body parts"}));
+    options = skeleton::skeletalPoseOptions(shaping, setupSource, *skeleton_, organs_);
+    shaping = *options.pose;
+    separations_ = shaping.separations;
+  } else {
+    options = poseOptions(shaping, setupSource, organs_);
+  }
+  // The selections are embedded by update(); a pose without any has none.
+  options.pose.reset();
+  pipeline_ = std::make_unique<DeformationPipeline>(grid_, options);
+  tetVoxels_ = tetLabelVoxels(grid_, pipeline_->transferMesh());
+  state_.pose = shaping;
+  // The session works in the grid frame, and saves its poses so.
+  state_.pose.frame = PoseFrame::Grid;
+  if (!state_.pose.selections.empty())
+    selectHandles(state_.pose, pipeline_->builtCage(), setupSource_, pipeline_->cageGroups(), pipeline_->cageBodyParts());
+  refreshFigures();
+}
+
+PoseEditor::~PoseEditor() = default;
+
+void PoseEditor::pick(const std::vector<std::int32_t>& vertices, bool add) {
+  if (!add) picked_.clear();
+  for (std::int32_t v : vertices)
+    if (v >= 0 && std::size_t(v) < pipeline_->builtCage().vertexCount()) picked_.push_back(v);
+  std::sort(picked_.begin(), picked_.end());
+  picked_.erase(std::unique(picked_.begin(), picked_.end()), picked_.end());
+}
+
+std::vector<std::int32_t> PoseEditor::groupVertices(const std::string& group) const {
+  if (pipeline_->cageGroups().empty()) throw InputError("label group '" + group + "'", "selecting by label group needs the grid's organ table");
+  const Label g = Label(labelGroupFromName(group));
+  std::vector<std::int32_t> out;
+  for (std::size_t v = 0; v < pipeline_->cageGroups().size(); ++v)
+    if (pipeline_->cageGroups()[v] == g) out.push_back(std::int32_t(v));
+  return out;
+}
+
+void PoseEditor::push() {
+  undo_.push_back(state_);
+  redo_.clear();
+}
+
+int PoseEditor::addPickedSelection(const std::string& name, bool fixed) {
+  if (picked_.empty()) throw InputError("selection '" + name + "'", "no cage vertex is picked");
+  PoseSelection s;
+  s.name = name;
+  s.shape = SelectionShape::Points;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (std::int32_t v : picked_) {
+    s.points.push_back(pipeline_->builtCage().positions[std::size_t(v)]);
+    centre += s.points.back();
+  }
+  s.fixed = fixed;
+  if (!fixed) s.transform.center = centre / double(picked_.size());
+  push();
+  state_.pose.selections.push_back(std::move(s));
+  const int index = int(state_.pose.selections.size()) - 1;
+  if (!fixed) state_.active = index;
+  return index;
+}
+
+int PoseEditor::addGroupSelection(const std::string& group, bool fixed) {
+  const std::vector<std::int32_t> vertices = groupVertices(group);
+  if (vertices.empty()) throw InputError("label group '" + group + "'", "no cage vertex lies nearest this group");
+  PoseSelection s;
+  s.name = group;
+  s.shape = SelectionShape::Box;
+  Eigen::AlignedBox3d box;
+  for (const Eigen::Vector3d& p : pipeline_->builtCage().positions) box.extend(p);
+  s.boxMin = box.min() - Eigen::Vector3d::Constant(1.0);
+  s.boxMax = box.max() + Eigen::Vector3d::Constant(1.0);
+  s.group = Label(labelGroupFromName(group));
+  s.fixed = fixed;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (std::int32_t v : vertices) centre += pipeline_->builtCage().positions[std::size_t(v)];
+  if (!fixed) s.transform.center = centre / double(vertices.size());
+  push();
+  state_.pose.selections.push_back(std::move(s));
+  const int index = int(state_.pose.selections.size()) - 1;
+  if (!fixed) state_.active = index;
+  return index;
+}
+
+void PoseEditor::removeSelection(int index) {
+  if (index < 0 || std::size_t(index) >= state_.pose.selections.size()) return;
+  push();
+  state_.pose.selections.erase(state_.pose.selections.begin() + index);
+  if (state_.active == index) state_.active = -1;
+  else if (state_.active > index) --state_.active;
+}
+
+void PoseEditor::setActive(int index) {
+  if (index >= int(state_.pose.selections.size())) index = -1;
+  if (index >= 0 && state_.pose.selections[std::size_t(index)].fixed) index = -1;
+  if (index == state_.active) return;
+  push();
+  state_.active = index;
+}
+
+void PoseEditor::beginDrag() { push(); }
+
+void PoseEditor::rotateActive(const Eigen::Vector3d& axis, double degrees, bool continuing) {
+  if (state_.active < 0 || axis.norm() == 0.0) return;
+  if (!continuing) push();
+  PoseTransform& t = state_.pose.selections[std::size_t(state_.active)].transform;
+  // x -> R (x - c) + c + d, then a turn Q about the centre moved by d:
+  // Q R (x - c) + c + d, so only the rotation changes. A turn about the
+  // current axis adds to the angle, so angles read as the user typed them.
+  const Eigen::Vector3d u = axis.normalized();
+  if (t.angleDeg == 0.0) {
+    t.axis = u;
+    t.angleDeg = degrees;
+    return;
+  }
+  const Eigen::Vector3d a = t.axis.normalized();
+  if (a.cross(u).norm() < 1e-12) {
+    t.angleDeg += a.dot(u) > 0.0 ? degrees : -degrees;
+    return;
+  }
+  const Eigen::AngleAxisd composed(Eigen::Quaterniond(Eigen::AngleAxisd(degrees * kDegrees, u)) *
+                                   Eigen::Quaterniond(Eigen::AngleAxisd(t.angleDeg * kDegrees, a)));
+  t.axis = composed.axis();
+  t.angleDeg = composed.angle() / kDegrees;
+}
+
+void PoseEditor::translateActive(const Eigen::Vector3d& delta, bool continuing) {
+  if (state_.active < 0) return;
+  if (!continuing) push();
+  state_.pose.selections[std::size_t(state_.active)].transform.translation += delta;
+}
+
+void PoseEditor::setActiveCenter(const Eigen::Vector3d& centre) {
+  if (state_.active < 0) return;
+  push();
+  state_.pose.selections[std::size_t(state_.active)].transform.center = centre;
+}
+
+void PoseEditor::setArapIterations(int iterations) {
+  if (iterations == state_.pose.arapIterations) return;
+  push();
+  state_.pose.arapIterations = std::max(0, iterations);
+}
+
+void PoseEditor::setCuts(std::vector<std::string> cuts) {
+  if (cuts == state_.cuts) return;
+  push();
+  state_.cuts = std::move(cuts);
+}
+
+void PoseEditor::setHidden(std::vector<Label> hidden) {
+  std::sort(hidden.begin(), hidden.end());
+  if (hidden == state_.hidden) return;
+  push();
+  state_.hidden = std::move(hidden);
+}
+
+void PoseEditor::loadPose(const Pose& given, const std::string& source) {
+  Pose pose = given;
+  if (!given.joints.empty()) {
+    if (!skeleton_)
+      throw InputError(source, "a pose with joints opens with view --pose (this session was not built from the skeleton)");
+    pose = skeleton::compileJointPose(given, *skeleton_, source, skeleton::jointPoseOptions(given.jointOptions));
+  }
+  if (pose.separations.size() != separations_.size())
+    throw InputError(source, "its limb separations differ from the ones this session was built with; open it with view --pose");
+  selectHandles(pose, pipeline_->builtCage(), source, pipeline_->cageGroups(), pipeline_->cageBodyParts());
+  push();
+  state_.pose = pose;
+  state_.pose.frame = PoseFrame::Grid;
+  state_.pose.separations = separations_;
+  state_.active = -1;
+  for (std::size_t k = 0; k < pose.selections.size(); ++k)
+    if (!pose.selections[k].fixed) state_.active = int(k);
+}
+
+bool PoseEditor::undo() {
+  if (undo_.empty()) return false;
+  redo_.push_back(state_);
+  state_ = undo_.back();
+  undo_.pop_back();
+  return true;
+}
+
+bool PoseEditor::redo() {
+  if (redo_.empty()) return false;
+  undo_.push_back(state_);
+  state_ = redo_.back();
+  redo_.pop_back();
+  return true;
+}
+
+bool PoseEditor::update() {
+  const auto t0 = std::chrono::steady_clock::now();
+  const Pose& pose = state_.pose;
+  bool changed = false;
+  if (pose.selections.empty()) {
+    changed = embedded_;
+    embedded_ = false;
+    embeddedPose_ = pose;
+  } else {
+    if (!embedded_ || !sameHandleSets(pose, embeddedPose_)) {
+      pipeline_->setPose(pose, setupSource_);
+      embedded_ = true;
+      deformed_ = false;
+    }
+    const bool transformsChanged = !deformed_ || !(EditState{pose, {}, {}, -1} == EditState{embeddedPose_, {}, {}, -1});
+    if (transformsChanged) {
+      pipeline_->deformTo(handleTargets(pose, pipeline_->handles(), pipeline_->cage()), pose.arapIterations);
+      deformed_ = true;
+      changed = true;
+    }
+    embeddedPose_ = pose;
+  }
+  if (changed) refreshFigures();
+  figures_.deformMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return changed;
+}
+
+const std::vector<Eigen::Vector3d>& PoseEditor::transferMeshPositions() const {
+  return embedded_ ? pipeline_->deformedTransferMesh() : pipeline_->transferMesh().positions;
+}
+
+std::vector<Eigen::Vector3d> PoseEditor::builtCagePositions() const {
+  std::vector<Eigen::Vector3d> out = pipeline_->builtCage().positions;
+  if (!embedded_) return out;
+  const std::vector<Eigen::Vector3d>& deformed = pipeline_->deformedCage();
+  const std::vector<std::int32_t>& source = pipeline_->cageSource();
+  for (std::size_t v = 0; v < source.size() && v < deformed.size(); ++v) out[std::size_t(source[v])] = deformed[v];
+  return out;
+}
+
+std::vector<std::int32_t> PoseEditor::handleOwners() const {
+  std::vector<std::int32_t> owners(pipeline_->builtCage().vertexCount(), -1);
+  if (state_.pose.selections.empty()) return owners;
+  try {
+    const PoseHandles h = selectHandles(state_.pose, pipeline_->builtCage(), setupSource_, pipeline_->cageGroups());
+    for (std::size_t k = 0; k < h.vertices.size(); ++k) owners[std::size_t(h.vertices[k])] = h.selection[k];
+  } catch (const InputError&) {
+    // A selection that selects nothing shows no handles; update() reports it.
+  }
+  return owners;
+}
+
+void PoseEditor::refreshFigures() {
+  const TetMesh& rest = pipeline_->transferMesh();
+  const std::vector<Eigen::Vector3d>& now = transferMeshPositions();
+  figures_.restVoxels = deformedLabelVolumes(tetVoxels_, rest, rest.positions);
+  figures_.deformedVoxels = deformedLabelVolumes(tetVoxels_, rest, now);
+  figures_.tmOutsideCage = 0;
+  if (embedded_)
+    for (std::uint8_t inside : pipeline_->transferMeshInside()) figures_.tmOutsideCage += inside ? 0 : 1;
+  figures_.tmInverted = 0;
+  for (const Tet& t : rest.tets)
+    if (signedVolume(now, t) <= 0.0) ++figures_.tmInverted;
+}
+
+}  // namespace vox

@@ -1,0 +1,506 @@
+#include "geometry/deform/report/deformation_report.h"
+
+#include "geometry/skeleton/body_parts.h"
+#include "geometry/skeleton/bones.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+namespace vox {
+
+namespace {
+
+using nlohmann::json;
+
+double percentChange(double before, double after) { return before > 0 ? 100.0 * (after - before) / before : 0.0; }
+
+EdgeDistortion summarize(std::vector<double>& values) {
+  EdgeDistortion d;
+  d.edges = values.size();
+  if (values.empty()) return d;
+  double sum = 0;
+  for (const double v : values) sum += v;
+  d.mean = sum / double(values.size());
+  std::sort(values.begin(), values.end());
+  d.median = values[values.size() / 2];
+  d.p95 = values[std::min(values.size() - 1, std::size_t(0.95 * double(values.size())))];
+  d.max = values.back();
+  return d;
+}
+
+json toJson(const EdgeDistortion& d) { return {{"edges", d.edges}, {"mean", d.mean}, {"median", d.median}, {"p95", d.p95}, {"max", d.max}}; }
+
+json toJson(const DistortionHistogram& h) {
+  return {{"lo", h.lo},     {"hi", h.hi},   {"bins", h.fractions}, {"below", h.below},
+          {"above", h.above}, {"mean", h.mean}, {"min", h.min},   {"max", h.max}, {"rms_deviation", h.rmsDeviation}};
+}
+
+json toJson(const BodyProjection& p) {
+  return {{"front_area_mm2", p.frontMm2}, {"side_area_mm2", p.sideMm2}, {"top_area_mm2", p.topMm2}, {"height_mm", p.heightMm},
+          {"foreground_voxels", p.foregroundVoxels}, {"exact", p.exact}};
+}
+
+json toJson(const GridGeometry& g) {
+  return {{"dims", {g.dims[0], g.dims[1], g.dims[2]}},
+          {"spacing_mm", {g.spacing.x(), g.spacing.y(), g.spacing.z()}},
+          {"origin_mm", {g.origin.x(), g.origin.y(), g.origin.z()}},
+          {"voxels", g.voxelCount()}};
+}
+
+std::string fixed(double v, int digits) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
+  return buf;
+}
+
+std::string changeFlag(const LabelChange& c, double flagPercent) {
+  if (c.unnamed) return "unnamed";
+  if (std::abs(c.volumeChangePercent) <= flagPercent) return "";
+  return c.before < kSmallOrganVoxels ? "small" : "*";
+}
+
+std::string csvQuoted(const std::string& s) {
+  std::string q = "\"";
+  for (const char ch : s) q += ch == '"' ? std::string("\"\"") : std::string(1, ch);
+  return q + "\"";
+}
+
+}  // namespace
+
+std::vector<LabelChange> labelChanges(std::span<const std::uint64_t> before, std::span<const std::uint64_t> after,
+                                      double voxelVolumeMm3, const OrganTable* organs) {
+  std::vector<LabelChange> out;
+  const std::size_t n = std::max(before.size(), after.size());
+  for (std::size_t l = 1; l < n; ++l) {
+    LabelChange c;
+    c.label = Label(l);
+    c.before = l < before.size() ? before[l] : 0;
+    c.after = l < after.size() ? after[l] : 0;
+    if (c.before == 0 && c.after == 0) continue;
+    c.volumeChangePercent = percentChange(double(c.before), double(c.after));
+    if (organs) {
+      if (const Organ* o = organs->find(int(l))) c.name = o->name;
+      else c.unnamed = true;
+      c.massBeforeGrams = organs->mass(int(l), c.before, voxelVolumeMm3);
+      c.massAfterGrams = organs->mass(int(l), c.after, voxelVolumeMm3);
+    }
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+WholeBodyChange wholeBodyChange(std::span<const LabelChange> labels) {
+  WholeBodyChange w;
+  for (const LabelChange& c : labels) {
+    w.before += c.before;
+    w.after += c.after;
+    w.massBeforeGrams += c.massBeforeGrams;
+    w.massAfterGrams += c.massAfterGrams;
+  }
+  w.volumeChangePercent = percentChange(double(w.before), double(w.after));
+  w.massChangePercent = percentChange(w.massBeforeGrams, w.massAfterGrams);
+  return w;
+}
+
+OutlierDistortion outlierEdgeDistortion(const TetMesh& rest, std::span<const Eigen::Vector3d> deformed,
+                                        std::span<const std::uint8_t> inside, int neighbourhoodRings) {
+  std::vector<std::pair<std::int32_t, std::int32_t>> edges;
+  edges.reserve(rest.tetCount() * 6);
+  for (const Tet& t : rest.tets)
+    for (int a = 0; a < 4; ++a)
+      for (int b = a + 1; b < 4; ++b) edges.emplace_back(std::min(t[a], t[b]), std::max(t[a], t[b]));
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+
+  // Rings around the outside vertices.
+  const std::size_t nv = rest.vertexCount();
+  std::vector<int> ring(nv, -1);
+  for (std::size_t v = 0; v < nv; ++v)
+    if (!inside[v]) ring[v] = 0;
+  for (int r = 1; r <= neighbourhoodRings; ++r)
+    for (const auto& [a, b] : edges) {
+      if (ring[std::size_t(a)] == r - 1 && ring[std::size_t(b)] < 0) ring[std::size_t(b)] = r;
+      if (ring[std::size_t(b)] == r - 1 && ring[std::size_t(a)] < 0) ring[std::size_t(a)] = r;
+    }
+
+  std::vector<double> outside, nearby, all;
+  for (const auto& [a, b] : edges) {
+    const double restLength = (rest.positions[std::size_t(a)] - rest.positions[std::size_t(b)]).norm();
+    const double length = (deformed[std::size_t(a)] - deformed[std::size_t(b)]).norm();
+    if (!(restLength > 0)) continue;
+    const double d = std::abs(std::log(length / restLength));
+    if (!inside[std::size_t(a)] || !inside[std::size_t(b)]) {
+      outside.push_back(d);
+      continue;
+    }
+    all.push_back(d);
+    if (ring[std::size_t(a)] >= 0 && ring[std::size_t(b)] >= 0) nearby.push_back(d);
+  }
+  return {summarize(outside), summarize(nearby), summarize(all)};
+}
+
+void describePipeline(DeformationReport& report, const DeformationPipeline& pipeline) {
+  const PipelineStats& s = pipeline.stats();
+  report.automaticCage = s.automaticCage;
+  report.selections.clear();
+  for (const PoseSelection& sel : pipeline.pose().selections) report.selections.emplace_back(sel.name, 0);
+  for (const std::int32_t k : pipeline.handles().selection) ++report.selections[std::size_t(k)].second;
+  report.cageVertices = pipeline.cage().vertexCount();
+  report.cageFaces = pipeline.cage().faceCount();
+  report.cage = s.cage;
+  report.foregroundOutsideCage = s.foregroundOutsideCage;
+  report.envelopeVertices = pipeline.envelope().vertexCount();
+  report.envelopeFaces = pipeline.envelope().faceCount();
+  report.envelopeOutside = pipeline.deformer().stats().envelopeOutside;
+  const TetMesh& tm = pipeline.transferMesh();
+  report.tmVertices = tm.vertexCount();
+  report.tmTets = tm.tetCount();
+  report.tmInside = pipeline.deformer().stats().transferMeshInside;
+  report.tmOutside = pipeline.deformer().stats().transferMeshOutside;
+  report.uncoveredVoxels = s.uncoveredVoxels;
+  report.cuts = s.cuts;
+  const auto& deformed = pipeline.deformedTransferMesh();
+  report.distortion = distortionHistograms(tm, deformed);
+  report.outlierDistortion = outlierEdgeDistortion(tm, deformed, pipeline.transferMeshInside());
+  const RigidBoneGroups& rigid = pipeline.rigidBones();
+  report.rigidGroups = pipeline.deformer().stats().rigidGroups;
+  report.rigidVertices = pipeline.deformer().stats().rigidVertices;
+  report.sharedBoneVertices = rigid.sharedVertices;
+  report.uncoveredBoneVoxels = rigid.uncoveredVoxels;
+  report.bones = measureBoneRigidity(rigid, tm, deformed);
+  report.tmInverted = 0;
+  double inverted = 0.0, total = 0.0;
+  for (const Tet& t : tm.tets) {
+    const double rest = signedVolume(tm.positions, t);
+    total += rest;
+    if (!(signedVolume(deformed, t) > 0.0)) {
+      ++report.tmInverted;
+      inverted += rest;
+    }
+  }
+  report.tmInvertedVolumeFraction = total > 0.0 ? inverted / total : 0.0;
+}
+
+std::string deformationReportJson(const DeformationReport& r) {
+  json root;
+  root["input"] = r.input;
+  root["output"] = r.output;
+  root["pose"] = r.pose;
+  root["engine"] = r.engine;
+  root["source_grid"] = toJson(r.source);
+  root["posed_grid"] = toJson(r.posed);
+  root["working_grid"] = {{"downsample_factor", r.workingFactor}, {"voxels", r.workingVoxels}};
+  root["max_memory_bytes"] = r.maxMemoryBytes;
+  root["samples"] = r.samples;
+
+  json stages = json::array();
+  double wall = 0, cpu = 0;
+  for (const StageTime& t : r.stages) {
+    stages.push_back({{"stage", t.name}, {"seconds", t.seconds}, {"cpu_seconds", t.cpuSeconds}});
+    wall += t.seconds;
+    cpu += t.cpuSeconds;
+  }
+  root["stages"] = stages;
+  root["total_seconds"] = wall;
+  root["total_cpu_seconds"] = cpu;
+
+  root["cage"] = {{"automatic", r.automaticCage},
+                  {"vertices", r.cageVertices},
+                  {"faces", r.cageFaces},
+                  {"meshed_vertices_before_qem", r.cage.meshedVertices},
+                  {"eroded_voxels", r.cage.erodedVoxels},
+                  {"valid", r.cage.check.validCage()},
+                  {"genus", r.cage.check.genus},
+                  {"self_intersections", r.cage.check.selfIntersections},
+                  {"volume_mm3", r.cage.check.volume}};
+  json selections = json::array();
+  for (const auto& [name, vertices] : r.selections) selections.push_back({{"name", name}, {"cage_vertices", vertices}});
+  root["selections"] = selections;
+  root["envelope"] = {{"vertices", r.envelopeVertices}, {"faces", r.envelopeFaces}, {"vertices_outside_cage", r.envelopeOutside}};
+  json cuts = json::array();
+  for (const CutReport& c : r.cuts)
+    cuts.push_back({{"cut_faces", c.cutFaces}, {"duplicated_vertices", c.duplicatedVertices}, {"opened_rim_faces", c.openedRimFaces}, {"contact_vertices", c.contactVertices}});
+  root["transfer_mesh"] = {{"vertices", r.tmVertices},
+                           {"tets", r.tmTets},
+                           {"vertices_inside_cage", r.tmInside},
+                           {"vertices_outside_cage", r.tmOutside},
+                           {"uncovered_foreground_voxels", r.uncoveredVoxels},
+                           {"tets_inverted_by_deformation", r.tmInverted},
+                           {"inverted_rest_volume_fraction", r.tmInvertedVolumeFraction},
+                           {"cuts", cuts}};
+  root["outliers"] = {{"transfer_mesh_vertices_outside_cage", r.tmOutside},
+                      {"foreground_voxels_outside_cage", r.foregroundOutsideCage},
+                      {"edge_length_distortion",
+                       {{"outside", toJson(r.outlierDistortion.outside)},
+                        {"inside_nearby", toJson(r.outlierDistortion.insideNearby)},
+                        {"inside", toJson(r.outlierDistortion.inside)}}}};
+
+  json steps = json::array();
+  for (std::size_t k = 0; k < r.refinement.steps.size(); ++k) {
+    const RefinementStep& s = r.refinement.steps[k];
+    steps.push_back({{"iteration", k},
+                     {"vertices", s.vertices},
+                     {"tets", s.tets},
+                     {"mean_error", s.meanError},
+                     {"max_error", s.maxError},
+                     {"update_strength", s.strength},
+                     {"seconds", s.seconds}});
+  }
+  root["refinement"] = {{"iterations", steps}, {"stop", r.refinement.stopReason}};
+  root["distortion"] = {{"volume_mm3", r.distortion.volume},
+                        {"angle_deg", toJson(r.distortion.angle)},
+                        {"stretch", toJson(r.distortion.stretch)}};
+
+  json labels = json::array();
+  json small = json::array();
+  double largest = 0;
+  json largestLabel = nullptr;
+  for (const LabelChange& c : r.labels) {
+    json j = {{"label", c.label}, {"voxels_before", c.before}, {"voxels_after", c.after}, {"volume_change_pct", c.volumeChangePercent}};
+    if (!c.name.empty()) j["name"] = c.name;
+    if (c.unnamed) j["unnamed"] = true;
+    if (c.deformedVolumeVoxels >= 0) j["deformed_volume_voxels"] = c.deformedVolumeVoxels;
+    if (r.withMasses) {
+      j["mass_before_g"] = c.massBeforeGrams;
+      j["mass_after_g"] = c.massAfterGrams;
+      j["mass_change_pct"] = c.volumeChangePercent;
+    }
+    labels.push_back(std::move(j));
+    if (c.before < kSmallOrganVoxels) {
+      small.push_back({{"label", c.label}, {"name", c.name}, {"voxels_before", c.before}, {"change_pct", c.volumeChangePercent}});
+    } else if (std::abs(c.volumeChangePercent) > std::abs(largest) || largestLabel.is_null()) {
+      largest = c.volumeChangePercent;
+      largestLabel = {{"label", c.label}, {"name", c.name}, {"change_pct", c.volumeChangePercent}};
+    }
+  }
+  root["labels"] = labels;
+  root["small_labels"] = {{"threshold_voxels", kSmallOrganVoxels}, {"labels", small}};
+  root["largest_change_above_threshold"] = largestLabel;
+  json whole = {{"voxels_before", r.wholeBody.before},
+                {"voxels_after", r.wholeBody.after},
+                {"volume_change_pct", r.wholeBody.volumeChangePercent}};
+  if (r.withMasses) {
+    whole["mass_before_g"] = r.wholeBody.massBeforeGrams;
+    whole["mass_after_g"] = r.wholeBody.massAfterGrams;
+    whole["mass_change_pct"] = r.wholeBody.massChangePercent;
+  }
+  root["whole_body"] = whole;
+  root["body_projection"] = {
+      {"frame", "world, RAS+ (x to the subject's right, y anterior, z superior); front: along y onto the x-z plane, side: "
+                "along x onto the y-z plane, top: along z onto the x-y plane; height: extent along z"},
+      {"rest", toJson(r.restProjection)},
+      {"posed", toJson(r.posedProjection)}};
+  root["provenance"] = json::parse(provenanceJson(r.provenance));
+  if (!r.bones.empty()) {
+    json bones = json::array();
+    for (const BoneRigidity& b : r.bones)
+      bones.push_back({{"part", skeleton::partName(skeleton::Part(b.key / kBoneKeyStride))},
+                       {"bone", skeleton::boneName(skeleton::Bone(b.key % kBoneKeyStride))},
+                       {"voxels", b.voxels},
+                       {"tm_tets", b.tets},
+                       {"tm_vertices", b.vertices},
+                       {"rigid_vertices", r.rigidGroups > 0 ? b.rigidVertices : 0},
+                       {"tm_edges", b.edges},
+                       {"max_strain", b.maxStrain},
+                       {"volume_rest_ml", b.restVolumeMm3 * 1e-3},
+                       {"volume_posed_ml", b.posedVolumeMm3 * 1e-3},
+                       {"volume_change_percent", b.volumeChangePercent()}});
+    root["bones"] = {{"held_rigid", r.rigidGroups > 0},
+                     {"rigid_groups", r.rigidGroups},
+                     {"rigid_vertices", r.rigidVertices},
+                     {"free_joint_vertices", r.sharedBoneVertices},
+                     {"uncovered_bone_voxels", r.uncoveredBoneVoxels},
+                     {"per_bone", bones}};
+  }
+  if (const auto& c = r.collisions) {
+    json pairs = json::array();
+    for (const CollisionPair& p : c->pairs)
+      pairs.push_back({{"parts", {skeleton::partName(skeleton::Part(p.partA)), skeleton::partName(skeleton::Part(p.partB))}},
+                       {"voxels", p.voxels},
+                       {"volume_ml", double(p.voxels) * c->lattice.voxelVolume() * 1e-3}});
+    root["collisions"] = {{"lattice", toJson(c->lattice)},
+                          {"body_voxels", c->bodyVoxels},
+                          {"voxels", c->voxels},
+                          {"volume_ml", c->volumeMm3() * 1e-3},
+                          {"body_fraction", c->bodyFraction()},
+                          {"pairs", pairs}};
+  }
+  root["warnings"] = deformationWarnings(r);
+  if (const auto& c = r.volumeCorrection)
+    root["volume_correction"] = {{"targets", c->toRestVolumes ? "rest" : "deformed"},
+                                 {"boundary_voxels", c->candidates},
+                                 {"relabelled_voxels", c->relabelled},
+                                 {"still_boundary_voxels_kept", c->still},
+                                 {"sweeps", c->sweeps},
+                                 {"deviation_before_voxels", c->deviationBefore},
+                                 {"deviation_after_voxels", c->deviationAfter},
+                                 {"worst_label_pct_before", c->worstPercentBefore},
+                                 {"worst_label_pct_after", c->worstPercentAfter}};
+  return root.dump(2) + "\n";
+}
+
+std::string deformationSummary(const DeformationReport& r) {
+  std::ostringstream s;
+  double wall = 0, cpu = 0;
+  for (const StageTime& t : r.stages) {
+    wall += t.seconds;
+    cpu += t.cpuSeconds;
+  }
+  s << r.output << ": " << r.posed.dims[0] << " x " << r.posed.dims[1] << " x " << r.posed.dims[2] << " voxels";
+  if (r.samples > 1) s << ", " << r.samples << "^3 samples per voxel";
+  s << ", " << r.engine << ", " << fixed(wall, 1) << " s (" << fixed(cpu, 1) << " CPU s)\n";
+  s << "  stages:";
+  for (const StageTime& t : r.stages) s << " " << t.name << " " << fixed(t.seconds, 1) << " s;";
+  s << "\n";
+  s << "  cage " << r.cageVertices << " vertices (" << (r.automaticCage ? "automatic" : "from file") << "), envelope "
+    << r.envelopeVertices << " vertices, transfer mesh " << r.tmVertices << " vertices / " << r.tmTets << " tets";
+  if (r.workingFactor > 1) s << " (working grid downsampled by " << r.workingFactor << ")";
+  s << "\n  handles:";
+  for (const auto& [name, vertices] : r.selections) s << " " << name << " " << vertices << ";";
+  s << "\n";
+  s << "  outliers: " << r.tmOutside << " TM vertices and " << r.foregroundOutsideCage << " foreground voxels outside the cage; "
+    << r.tmInverted << " TM tets inverted by the deformation\n";
+  if (!r.refinement.steps.empty()) {
+    s << "  refinement (" << r.refinement.stopReason << "):";
+    for (const RefinementStep& st : r.refinement.steps)
+      s << " " << st.tets << " tets max/mean error " << fixed(st.maxError, 4) << "/" << fixed(st.meanError, 4) << ";";
+    s << "\n";
+  }
+  s << "  whole body: " << r.wholeBody.before << " -> " << r.wholeBody.after << " voxels (" << fixed(r.wholeBody.volumeChangePercent, 2)
+    << " % volume";
+  if (r.withMasses) s << ", " << fixed(r.wholeBody.massChangePercent, 2) << " % mass";
+  s << ")\n";
+  const auto areas = [](const BodyProjection& p) {
+    return fixed(p.frontMm2 * 1e-6, 4) + " / " + fixed(p.sideMm2 * 1e-6, 4) + " / " + fixed(p.topMm2 * 1e-6, 4) + " m^2, height " +
+           fixed(p.heightMm, 1) + " mm";
+  };
+  s << "  projected area front / side / top: " << areas(r.restProjection) << " at rest -> " << areas(r.posedProjection) << " posed\n";
+  const LabelChange* worst = nullptr;
+  std::size_t small = 0;
+  for (const LabelChange& c : r.labels) {
+    if (c.before < kSmallOrganVoxels) {
+      ++small;
+      continue;
+    }
+    if (!worst || std::abs(c.volumeChangePercent) > std::abs(worst->volumeChangePercent)) worst = &c;
+  }
+  if (worst)
+    s << "  largest change of a label with >= " << kSmallOrganVoxels << " voxels: " << worst->label
+      << (worst->name.empty() ? "" : " (" + worst->name + ")") << " " << fixed(worst->volumeChangePercent, 2) << " %; " << small
+      << " labels under " << kSmallOrganVoxels << " voxels\n";
+  if (const auto& c = r.volumeCorrection)
+    s << "  volume correction: " << c->relabelled << " of " << c->candidates << " boundary voxels relabelled (" << c->still
+      << " where the deformation did not move the tissue kept); largest gap "
+      << "between a label's voxels and its " << (c->toRestVolumes ? "rest" : "deformed") << " volume "
+      << fixed(c->worstPercentBefore, 2) << " % -> "
+      << fixed(c->worstPercentAfter, 2) << " %\n";
+  if (!r.bones.empty()) {
+    const BoneRigidity* strained = nullptr;
+    const BoneRigidity* changed = nullptr;
+    for (const BoneRigidity& b : r.bones) {
+      if (!strained || b.maxStrain > strained->maxStrain) strained = &b;
+      if (!changed || std::abs(b.volumeChangePercent()) > std::abs(changed->volumeChangePercent())) changed = &b;
+    }
+    const auto name = [](const BoneRigidity& b) {
+      return std::string(skeleton::boneName(skeleton::Bone(b.key % kBoneKeyStride))) + " of the " +
+             skeleton::partName(skeleton::Part(b.key / kBoneKeyStride));
+    };
+    if (r.rigidGroups > 0)
+      s << "  rigid bones: " << r.rigidGroups << " parts, " << r.rigidVertices << " TM vertices held rigid, " << r.sharedBoneVertices
+        << " between two parts' bones left free";
+    else
+      s << "  bones (not held rigid)";
+    if (strained)
+      s << "; largest |ln(l'/l)| over a bone's TM edges " << fixed(strained->maxStrain, 4) << " (" << name(*strained)
+        << "), largest bone volume change " << fixed(changed->volumeChangePercent(), 2) << " % (" << name(*changed) << ")";
+    s << "\n";
+  }
+  if (const auto& c = r.collisions) {
+    s << "  collisions: " << c->voxels << " voxels (" << fixed(c->volumeMm3() * 1e-3, 2) << " mL, " << fixed(100.0 * c->bodyFraction(), 3)
+      << " % of the body) hold tissue of two body parts";
+    for (std::size_t k = 0; k < c->pairs.size() && k < 3; ++k)
+      s << (k ? ", " : ": ") << skeleton::partName(skeleton::Part(c->pairs[k].partA)) << " / "
+        << skeleton::partName(skeleton::Part(c->pairs[k].partB)) << " " << c->pairs[k].voxels;
+    s << "\n";
+  }
+  s << "  distortion: angle mean " << fixed(r.distortion.angle.mean, 2) << " deg (rms deviation " << fixed(r.distortion.angle.rmsDeviation, 2)
+    << "), stretch mean " << fixed(r.distortion.stretch.mean, 4) << " (rms deviation " << fixed(r.distortion.stretch.rmsDeviation, 4) << ")\n";
+  return s.str();
+}
+
+std::string labelChangeTable(const DeformationReport& r, double flagPercent) {
+  std::ostringstream s;
+  char line[256];
+  if (r.withMasses)
+    std::snprintf(line, sizeof line, "%6s  %-36s %10s %10s %11s %11s %8s  %s\n", "label", "organ", "voxels", "after", "mass g",
+                  "after g", "change %", "flag");
+  else
+    std::snprintf(line, sizeof line, "%6s  %-36s %10s %10s %8s  %s\n", "label", "organ", "voxels", "after", "change %", "flag");
+  s << line;
+  for (const LabelChange& c : r.labels) {
+    const std::string name = c.unnamed ? "(not in organ table)" : c.name;
+    const std::string flag = changeFlag(c, flagPercent);
+    if (r.withMasses)
+      std::snprintf(line, sizeof line, "%6d  %-36.36s %10llu %10llu %11.3f %11.3f %+8.2f  %s\n", int(c.label), name.c_str(),
+                    (unsigned long long)c.before, (unsigned long long)c.after, c.massBeforeGrams, c.massAfterGrams,
+                    c.volumeChangePercent, flag.c_str());
+    else
+      std::snprintf(line, sizeof line, "%6d  %-36.36s %10llu %10llu %+8.2f  %s\n", int(c.label), name.c_str(),
+                    (unsigned long long)c.before, (unsigned long long)c.after, c.volumeChangePercent, flag.c_str());
+    std::string row(line);
+    while (row.size() > 1 && row[row.size() - 2] == ' ') row.erase(row.size() - 2, 1);
+    s << row;
+  }
+  std::size_t flagged = 0;
+  for (const LabelChange& c : r.labels) flagged += changeFlag(c, flagPercent) == "*";
+  s << "  " << flagged << " organs of " << kSmallOrganVoxels << " voxels or more changed by more than " << fixed(flagPercent, 1)
+    << " % (*); small: the same under " << kSmallOrganVoxels << " voxels\n";
+  return s.str();
+}
+
+std::string labelChangeCsv(const DeformationReport& r, double flagPercent) {
+  std::ostringstream s;
+  s << "label,name,voxels_before,voxels_after,volume_before_mm3,volume_after_mm3,mass_before_g,mass_after_g,change_pct,flag\n";
+  const double vv = r.source.voxelVolume();
+  for (const LabelChange& c : r.labels) {
+    s << c.label << "," << csvQuoted(c.name) << "," << c.before << "," << c.after << "," << fixed(double(c.before) * vv, 3) << ","
+      << fixed(double(c.after) * vv, 3) << ",";
+    if (r.withMasses && !c.unnamed) s << fixed(c.massBeforeGrams, 4) << "," << fixed(c.massAfterGrams, 4);
+    else s << ",";
+    s << "," << fixed(c.volumeChangePercent, 4) << "," << changeFlag(c, flagPercent) << "\n";
+  }
+  return s.str();
+}
+
+std::vector<std::string> deformationWarnings(const DeformationReport& r) {
+  std::vector<std::string> w;
+  if (r.tmInverted > 0)
+    w.push_back(std::to_string(r.tmInverted) + " transfer-mesh tets inverted by the deformation (" +
+                fixed(100.0 * r.tmInvertedVolumeFraction, 3) +
+                " % of the volume): the map folds there and the posed grid takes one side of the fold");
+  const DistortionHistogram& st = r.distortion.stretch;
+  const DistortionHistogram& an = r.distortion.angle;
+  if (st.max >= kLargeStretch || (st.min > 0 && st.min <= 1.0 / kLargeStretch))
+    w.push_back("large distortion: dual edges stretched up to " + fixed(st.max, 2) + "x and shrunk down to " + fixed(st.min, 2) +
+                "x (" + fixed(100.0 * (st.above + st.below), 2) + " % of the volume outside 0.5x-1.5x)");
+  if (std::max(an.max - 90.0, 90.0 - an.min) >= kLargeAngleDeviationDeg)
+    w.push_back("large distortion: right angles sheared to " + fixed(an.min, 1) + "-" + fixed(an.max, 1) + " degrees");
+  if (r.rigidBonesRequested && r.rigidGroups == 0)
+    w.push_back(r.bones.empty() ? "--rigid-bones: no bones to hold rigid (a joint pose or --parts gives the body parts)"
+                                : "--rigid-bones: no bone could be held rigid: every transfer-mesh vertex at a bone lies near another part's bone "
+                                  "(a transfer mesh too coarse for the skeleton)");
+  std::string unnamed;
+  std::size_t count = 0;
+  for (const LabelChange& c : r.labels)
+    if (c.unnamed) {
+      unnamed += (count++ ? ", " : " ") + std::to_string(c.label) + " (" + std::to_string(c.before) + " voxels)";
+    }
+  if (count > 0) w.push_back("labels without a name in the organ table:" + unnamed + "; their mass is left out of the totals");
+  return w;
+}
+
+}  // namespace vox

@@ -1,0 +1,253 @@
+#include "geometry/deform/solve/label_volumes.h"
+
+#include "geometry/raster/lattice_tets.h"
+#include "geometry/raster/rasterize.h"
+#include "geometry/error.h"
+#include "geometry/parallel.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <string>
+
+namespace vox {
+
+namespace {
+
+// Slices per located slab of `lattice`: half the default slab, since the
+// correction keeps its candidate moves beside the point states.
+std::int64_t slabSlicesFor(const GridGeometry& lattice) { return slabSlicesHolding(kSlabPoints / 2, lattice.sliceVoxels()); }
+
+struct Move {
+  std::int64_t voxel;
+  float cost;  // w_from - w_to
+  Label from, to;
+};
+
+// Labels and trilinear weights of the 8 source voxels around continuous index p
+// (voxels off the grid count as label 0), merged per label.
+int stencilLabels(const LabelGrid& source, const Eigen::Vector3d& p, std::array<Label, 8>& labels,
+                  std::array<float, 8>& weights) {
+  const Eigen::Vector3d base = p.array().floor();
+  const Eigen::Vector3d f = p - base;
+  const std::int64_t i0 = std::int64_t(base.x()), j0 = std::int64_t(base.y()), k0 = std::int64_t(base.z());
+  int n = 0;
+  for (int c = 0; c < 8; ++c) {
+    const int dx = c & 1, dy = (c >> 1) & 1, dz = (c >> 2) & 1;
+    const double w = (dx ? f.x() : 1.0 - f.x()) * (dy ? f.y() : 1.0 - f.y()) * (dz ? f.z() : 1.0 - f.z());
+    const Label l = source.atOr(i0 + dx, j0 + dy, k0 + dz);
+    int m = 0;
+    while (m < n && labels[std::size_t(m)] != l) ++m;
+    if (m == n) {
+      labels[std::size_t(n)] = l;
+      weights[std::size_t(n)] = 0.0f;
+      ++n;
+    }
+    weights[std::size_t(m)] += float(w);
+  }
+  return n;
+}
+
+double worstPercent(std::span<const std::int64_t> counts, std::span<const double> targets) {
+  double worst = 0.0;
+  for (std::size_t l = 1; l < targets.size(); ++l)
+    if (targets[l] >= 0.5) worst = std::max(worst, 100.0 * std::abs(double(counts[l]) / targets[l] - 1.0));
+  return worst;
+}
+
+}  // namespace
+
+std::vector<double> deformedLabelVolumes(const LabelGrid& source, const TetMesh& rest,
+                                         const std::vector<Eigen::Vector3d>& deformed, int threads) {
+  rest.validate("transfer mesh");
+  if (deformed.size() != rest.positions.size())
+    throw InputError("deformed positions", std::to_string(deformed.size()) + " positions for a transfer mesh of " +
+                                               std::to_string(rest.positions.size()) + " vertices");
+  std::vector<double> jacobian(rest.tets.size(), 0.0);
+  for (std::size_t t = 0; t < rest.tets.size(); ++t) {
+    const double v0 = signedVolume(rest.positions, rest.tets[t]);
+    if (v0 > 0.0) jacobian[t] = signedVolume(deformed, rest.tets[t]) / v0;
+  }
+  const GridGeometry& lattice = source.geometry();
+  const std::vector<LatticeTet> tets = latticeTets(lattice, rest.positions, rest.tets);
+  std::vector<double> volumes(std::size_t(source.maxLabel()) + 1, 0.0);
+  const std::int64_t slice = lattice.sliceVoxels();
+  forEachLocatedSlab(tets, lattice, slabSlicesFor(lattice), threads, [&](const SlabTets& slab, const std::uint32_t* state) {
+    const Label* labels = source.data() + slab.z0 * slice;
+    const std::int64_t points = (slab.z1 - slab.z0) * slice;
+    for (std::int64_t i = 0; i < points; ++i)
+      if (state[i] != kNoTet) volumes[labels[i]] += jacobian[std::size_t(slab.tets[state[i]])];
+  });
+  return volumes;
+}
+
+TetLabelVoxels tetLabelVoxels(const LabelGrid& source, const TetMesh& rest, int threads) {
+  rest.validate("transfer mesh");
+  const GridGeometry& lattice = source.geometry();
+  const std::vector<LatticeTet> tets = latticeTets(lattice, rest.positions, rest.tets);
+  // (tet, label) keys of every located voxel, slab by slab, then counted.
+  std::vector<std::uint64_t> keys;
+  const std::int64_t slice = lattice.sliceVoxels();
+  forEachLocatedSlab(tets, lattice, slabSlicesFor(lattice), threads, [&](const SlabTets& slab, const std::uint32_t* state) {
+    const Label* labels = source.data() + slab.z0 * slice;
+    const std::int64_t points = (slab.z1 - slab.z0) * slice;
+    for (std::int64_t i = 0; i < points; ++i)
+      if (state[i] != kNoTet) keys.push_back((std::uint64_t(slab.tets[state[i]]) << 16) | labels[i]);
+  });
+  std::sort(keys.begin(), keys.end());
+  TetLabelVoxels out;
+  out.start.assign(rest.tets.size() + 1, 0);
+  for (std::size_t i = 0; i < keys.size();) {
+    std::size_t j = i;
+    while (j < keys.size() && keys[j] == keys[i]) ++j;
+    const std::size_t t = std::size_t(keys[i] >> 16);
+    const Label l = Label(keys[i] & 0xFFFF);
+    out.labels.push_back(l);
+    out.counts.push_back(std::uint32_t(j - i));
+    ++out.start[t + 1];
+    out.maxLabel = std::max(out.maxLabel, l);
+    i = j;
+  }
+  for (std::size_t t = 0; t < rest.tets.size(); ++t) out.start[t + 1] += out.start[t];
+  out.maxLabel = std::max(out.maxLabel, source.maxLabel());
+  return out;
+}
+
+std::vector<double> deformedLabelVolumes(const TetLabelVoxels& voxels, const TetMesh& rest,
+                                         const std::vector<Eigen::Vector3d>& deformed) {
+  if (deformed.size() != rest.positions.size() || voxels.start.size() != rest.tets.size() + 1)
+    throw InputError("deformed positions", "they do not belong to the transfer mesh the voxels were counted in");
+  std::vector<double> volumes(std::size_t(voxels.maxLabel) + 1, 0.0);
+  for (std::size_t t = 0; t < rest.tets.size(); ++t) {
+    if (voxels.start[t] == voxels.start[t + 1]) continue;
+    const double v0 = signedVolume(rest.positions, rest.tets[t]);
+    if (!(v0 > 0.0)) continue;
+    const double jacobian = signedVolume(deformed, rest.tets[t]) / v0;
+    for (std::int64_t k = voxels.start[t]; k < voxels.start[t + 1]; ++k)
+      volumes[voxels.labels[std::size_t(k)]] += jacobian * double(voxels.counts[std::size_t(k)]);
+  }
+  return volumes;
+}
+
+LabelVolumeCorrection preserveLabelVolumes(LabelGrid& posed, const LabelGrid& source, const TetMesh& rest,
+                                           const std::vector<Eigen::Vector3d>& deformed, std::span<const double> targets,
+                                           int threads) {
+  const RasterizationPlan plan(source.geometry(), rest, deformed, 1);
+  const GridGeometry& out = plan.output();
+  if (out.dims != posed.dims() || (out.origin - posed.origin()).norm() > 1e-6 * out.spacing.norm() ||
+      (out.spacing - posed.spacing()).norm() > 1e-9 * out.spacing.norm())
+    throw InputError("posed grid", "its geometry is not the output grid of this deformation");
+
+  // Still tets (every vertex within kStillFraction of a voxel of its rest
+  // position): their voxels are not candidates.
+  const double stillMm = kStillFraction * source.spacing().minCoeff();
+  std::vector<std::uint8_t> still(rest.tetCount(), 1);
+  for (std::size_t t = 0; t < rest.tetCount(); ++t)
+    for (const std::int32_t v : rest.tets[t])
+      if ((deformed[std::size_t(v)] - rest.positions[std::size_t(v)]).norm() >= stillMm) still[t] = 0;
+  std::vector<std::uint64_t> rowStill;
+  std::uint64_t stillVoxels = 0;
+  // Candidate moves, per output row so that the order is independent of the threads.
+  // (The plan samples once per voxel: its lattice is the output grid.)
+  const std::int64_t nx = out.dims[0], ny = out.dims[1];
+  std::vector<Move> moves;
+  std::uint64_t candidates = 0;
+  std::vector<std::vector<Move>> rowMoves;
+  std::vector<std::uint64_t> rowCandidates;
+  forEachLocatedSlab(plan.tets(), plan.lattice(), slabSlicesFor(out), threads, [&](const SlabTets& slab, const std::uint32_t* state) {
+    const std::int64_t z0 = slab.z0, z1 = slab.z1;
+    rowMoves.assign(std::size_t((z1 - z0) * ny), {});
+    rowCandidates.assign(std::size_t((z1 - z0) * ny), 0);
+    rowStill.assign(std::size_t((z1 - z0) * ny), 0);
+    parallelFor((z1 - z0) * ny, threads, [&](std::int64_t r) {
+      const std::int32_t y = std::int32_t(r % ny), z = std::int32_t(z0 + r / ny);
+      std::vector<Move>& row = rowMoves[std::size_t(r)];
+      std::array<Label, 8> labels;
+      std::array<float, 8> weights;
+      for (std::int32_t x = 0; x < nx; ++x) {
+        const std::uint32_t s = state[r * nx + x];
+        if (s == kNoTet) continue;
+        const std::int32_t t = slab.tets[s];
+        const Eigen::Vector4d lambda = plan.tets()[std::size_t(t)].barycentric(x, y, z);
+        const auto c = plan.restCorners(t);
+        const Eigen::Vector3d p = lambda[0] * c[0] + lambda[1] * c[1] + lambda[2] * c[2] + lambda[3] * c[3];
+        const int n = stencilLabels(source, p, labels, weights);
+        const std::int64_t voxel = out.index(x, y, z);
+        const Label a = posed.data()[voxel];
+        if (n == 1 && labels[0] == a) continue;
+        if (still[std::size_t(t)]) {
+          ++rowStill[std::size_t(r)];
+          continue;
+        }
+        float wa = 0.0f;
+        for (int m = 0; m < n; ++m)
+          if (labels[std::size_t(m)] == a) wa = weights[std::size_t(m)];
+        for (int m = 0; m < n; ++m)
+          if (labels[std::size_t(m)] != a && weights[std::size_t(m)] > 0.0f)
+            row.push_back({voxel, wa - weights[std::size_t(m)], a, labels[std::size_t(m)]});
+        ++rowCandidates[std::size_t(r)];
+      }
+    });
+    for (std::size_t r = 0; r < rowMoves.size(); ++r) {
+      moves.insert(moves.end(), rowMoves[r].begin(), rowMoves[r].end());
+      candidates += rowCandidates[r];
+      stillVoxels += rowStill[r];
+    }
+  });
+  std::sort(moves.begin(), moves.end(), [](const Move& a, const Move& b) {
+    if (a.cost != b.cost) return a.cost < b.cost;
+    if (a.voxel != b.voxel) return a.voxel < b.voxel;
+    return a.to < b.to;
+  });
+
+  // Counts and targets over every label either side holds; label 0 takes the rest of G'.
+  Label maxLabel = posed.maxLabel();
+  for (const Move& m : moves) maxLabel = std::max(maxLabel, m.to);
+  const std::size_t labelCount = std::max<std::size_t>(std::size_t(maxLabel) + 1, targets.size());
+  std::vector<std::int64_t> counts(labelCount, 0);
+  for (const Label l : posed.labels()) ++counts[l];
+  std::vector<double> goal(labelCount, 0.0);
+  double foreground = 0.0;
+  for (std::size_t l = 1; l < targets.size(); ++l) {
+    goal[l] = targets[l];
+    foreground += targets[l];
+  }
+  goal[0] = double(posed.voxelCount()) - foreground;
+  auto deviation = [&] {
+    double d = 0.0;
+    for (std::size_t l = 0; l < labelCount; ++l) d += std::abs(double(counts[l]) - goal[l]);
+    return d;
+  };
+
+  // Each label's deviation counts relative to its volume, so that a voxel
+  // moves from a large label on target to a small one short of it.
+  std::vector<double> scale(labelCount);
+  for (std::size_t l = 0; l < labelCount; ++l) scale[l] = 1.0 / std::max(goal[l], 1.0);
+
+  LabelVolumeCorrection result;
+  result.candidates = candidates;
+  result.still = stillVoxels;
+  result.deviationBefore = deviation();
+  result.worstPercentBefore = worstPercent(counts, goal);
+  Label* labels = posed.data();
+  for (bool changed = true; changed && result.sweeps < 64;) {
+    changed = false;
+    ++result.sweeps;
+    for (const Move& m : moves) {
+      if (labels[m.voxel] != m.from) continue;
+      const double cf = double(counts[m.from]) - goal[m.from], ct = double(counts[m.to]) - goal[m.to];
+      const double gain = (std::abs(cf) - std::abs(cf - 1.0)) * scale[m.from] + (std::abs(ct) - std::abs(ct + 1.0)) * scale[m.to];
+      if (!(gain > 1e-9 * (scale[m.from] + scale[m.to]))) continue;
+      labels[m.voxel] = m.to;
+      --counts[m.from];
+      ++counts[m.to];
+      ++result.relabelled;
+      changed = true;
+    }
+  }
+  result.deviationAfter = deviation();
+  result.worstPercentAfter = worstPercent(counts, goal);
+  return result;
+}
+
+}  // namespace vox

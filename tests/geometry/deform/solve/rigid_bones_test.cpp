@@ -1,0 +1,210 @@
+// Rigid bones and collisions. The fit reproduces a rigid motion exactly and
+// yields to a given motion; on the synthetic skeleton figure a joint pose
+// with rigid bones puts every vertex of the upper arm's rigid group exactly
+// where the forward kinematics send it (8 mm off without the constraint); the bone measures of the report see the difference.
+// Collisions: tissue of two parts moved onto each other is counted, per
+// pair and in the mask; at rest there is none.
+
+#include "geometry/deform/report/collisions.h"
+#include "geometry/deform/pipeline.h"
+#include "geometry/deform/pose/pose.h"
+#include "geometry/deform/solve/rigid_bones.h"
+#include "geometry/deform/pose/joint_pose.h"
+#include "geometry/io/grid_io.h"
+#include "geometry/synth.h"
+#include "tests/support/test_environment.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <filesystem>
+#include <limits>
+#include <random>
+
+namespace vox::skeleton {
+namespace {
+
+TEST(RigidBones, FitReproducesARigidMotionAndYieldsToAGivenOne) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-50.0, 50.0);
+  std::vector<Eigen::Vector3d> rest(40);
+  for (Eigen::Vector3d& p : rest) p = {u(rng), u(rng), u(rng)};
+  // Group 0: vertices 0..19 (10..19 not fitted, e.g. outside the cage); group 1: 20..29; 30..39 none.
+  std::vector<std::int32_t> group(rest.size(), -1);
+  std::vector<std::uint8_t> fitted(rest.size(), 1);
+  for (int v = 0; v < 20; ++v) group[std::size_t(v)] = 0;
+  for (int v = 10; v < 20; ++v) fitted[std::size_t(v)] = 0;
+  for (int v = 20; v < 30; ++v) group[std::size_t(v)] = 1;
+  Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();
+  motion.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  motion.translation() = Eigen::Vector3d(5, -3, 12);
+  std::vector<Eigen::Vector3d> positions(rest.size());
+  for (std::size_t v = 0; v < rest.size(); ++v) positions[v] = motion * rest[v];
+  // The unfitted members start anywhere.
+  for (int v = 10; v < 20; ++v) positions[std::size_t(v)] = Eigen::Vector3d::Zero();
+  RigidBoneFit fit;
+  fit.precompute(group, fitted, rest);
+  EXPECT_EQ(fit.groups(), 2u);
+  fit.apply(positions);
+  for (int v = 0; v < 30; ++v) EXPECT_LT((positions[std::size_t(v)] - motion * rest[std::size_t(v)]).norm(), 1e-9) << v;
+  // A given motion wins over the fit.
+  std::vector<Eigen::Isometry3d> given(2, Eigen::Isometry3d::Identity());
+  given[1].translation() = Eigen::Vector3d(0, 0, 7);
+  fit.apply(positions, given);
+  for (int v = 0; v < 20; ++v) EXPECT_LT((positions[std::size_t(v)] - rest[std::size_t(v)]).norm(), 1e-12);
+  for (int v = 20; v < 30; ++v) EXPECT_LT((positions[std::size_t(v)] - (rest[std::size_t(v)] + Eigen::Vector3d(0, 0, 7))).norm(), 1e-12);
+  // Fewer than four fitted vertices: the group is dropped, not guessed.
+  std::fill(fitted.begin(), fitted.end(), 0);
+  fitted[0] = fitted[1] = fitted[2] = 1;
+  fit.precompute(group, fitted, rest);
+  EXPECT_EQ(fit.droppedGroups(), 2u);
+  EXPECT_EQ(std::count(fit.placed().begin(), fit.placed().end(), 1), 0);
+}
+
+// The largest distance of a part's rigid TM vertices from where its motion sends them.
+double rigidError(const DeformationPipeline& pipeline, const PartMotions& motions, Part part, std::size_t& count) {
+  const RigidBoneGroups& g = pipeline.rigidBones();
+  const TetMesh& tm = pipeline.transferMesh();
+  double worst = 0.0;
+  count = 0;
+  for (std::size_t v = 0; v < tm.vertexCount(); ++v) {
+    const std::int32_t k = g.vertexGroup[v];
+    if (k < 0 || g.groupPart[std::size_t(k)] != Label(part)) continue;
+    ++count;
+    worst = std::max(worst, (pipeline.deformedTransferMesh()[v] - motions[std::size_t(part)] * tm.positions[v]).norm());
+  }
+  return worst;
+}
+
+TEST(RigidBones, JointPoseMovesEachPartsBonesWithItsKinematics) {
+  const LabelGrid grid = synthesize(SynthKind::SkeletonFigure, 128);
+  const OrganTable organs = synthOrganTable(SynthKind::SkeletonFigure);
+  const Pose pose = parsePose(R"({"joints": {"right_shoulder": {"abduction": 30}, "right_elbow": {"flexion": 45}}})", "pose.json");
+  const Skeleton s = buildSkeleton(grid, organs, {});
+  const PartMotions motions = partMotions(s.joints, pose.joints);
+  double soft = 0.0;
+  for (const bool rigid : {false, true}) {
+    PipelineOptions options = skeletalPoseOptions(pose, "pose.json", grid, organs, {}, std::nullopt);
+    options.envelope = false;
+    options.rigidBones = rigid;
+    options.sizingFraction = 0.02;  // a TM that resolves the figure's bones
+    DeformationPipeline pipeline(grid, options);
+    pipeline.deform();
+    ASSERT_FALSE(pipeline.rigidBones().empty());
+    for (const Part part : {Part::RightUpperArm, Part::RightForearm, Part::RightHand}) {
+      std::size_t count = 0;
+      const double error = rigidError(pipeline, motions, part, count);
+      if (part == Part::RightUpperArm) {
+        EXPECT_GT(count, 3u);
+      }
+      if (rigid) {
+        EXPECT_LT(error, 1e-9) << partName(part) << ", " << count << " vertices";
+      } else {
+        soft = std::max(soft, error);
+      }
+    }
+    // Half-way, the rigid parts are half-way along their screw.
+    if (rigid) {
+      pipeline.deform(0.5);
+      const PoseTransform t = options.partMotions[std::size_t(Part::RightUpperArm)];
+      const TetMesh& tm = pipeline.transferMesh();
+      for (std::size_t v = 0; v < tm.vertexCount(); ++v) {
+        const std::int32_t k = pipeline.rigidBones().vertexGroup[v];
+        if (k >= 0 && pipeline.rigidBones().groupPart[std::size_t(k)] == Label(Part::RightUpperArm)) {
+          EXPECT_LT((pipeline.deformedTransferMesh()[v] - t.apply(tm.positions[v], 0.5)).norm(), 1e-9);
+        }
+      }
+    }
+    const std::vector<BoneRigidity> bones = measureBoneRigidity(pipeline.rigidBones(), pipeline.transferMesh(), pipeline.deformedTransferMesh());
+    ASSERT_FALSE(bones.empty());
+    for (const BoneRigidity& b : bones) {
+      EXPECT_GT(b.vertices, 3u);
+      EXPECT_GT(b.restVolumeMm3, 0.0);
+    }
+  }
+  // Without the constraint the soft deformation bends the bones' tets.
+  EXPECT_GT(soft, 0.05);
+}
+
+TEST(Collisions, TissueOfTwoPartsMovedOntoEachOtherIsCounted) {
+  GridGeometry g;
+  g.dims = {30, 12, 12};
+  LabelGrid parts(g, 0);
+  for (std::int64_t k = 1; k < 11; ++k)
+    for (std::int64_t j = 1; j < 11; ++j)
+      for (std::int64_t i = 1; i < 29; ++i) parts.at(i, j, k) = i < 15 ? 1 : 2;
+  TetMesh tm;
+  // One tet in each part.
+  tm.positions = {{2, 2, 2}, {12, 2, 2}, {2, 10, 2}, {2, 2, 10}, {17, 2, 2}, {27, 2, 2}, {17, 10, 2}, {17, 2, 10}};
+  tm.tets = {{0, 1, 2, 3}, {4, 5, 6, 7}};
+  tm.labels = {1, 1};
+  const Collisions atRest = findCollisions(tm, tm.positions, parts, g, true);
+  EXPECT_EQ(atRest.voxels, 0);
+  EXPECT_GT(atRest.bodyVoxels, 100);
+  EXPECT_TRUE(atRest.pairs.empty());
+  // Part 2's tet slid onto part 1's.
+  std::vector<Eigen::Vector3d> moved = tm.positions;
+  for (std::size_t v = 4; v < 8; ++v) moved[v].x() -= 15.0;
+  const Collisions c = findCollisions(tm, moved, parts, g, true);
+  EXPECT_GT(c.voxels, 50);
+  ASSERT_EQ(c.pairs.size(), 1u);
+  EXPECT_EQ(c.pairs[0].partA, 1);
+  EXPECT_EQ(c.pairs[0].partB, 2);
+  EXPECT_EQ(c.pairs[0].voxels, c.voxels);
+  EXPECT_EQ(std::count(c.mask.labels().begin(), c.mask.labels().end(), Label(1)), c.voxels);
+  EXPECT_GT(c.bodyFraction(), 0.0);
+  EXPECT_LE(c.bodyFraction(), 1.0);
+}
+
+}  // namespace
+}  // namespace vox::skeleton
+
+namespace vox::skeleton {
+namespace {
+
+// The hard postures of assets/poses/hard (docs/POSES.md) stay valid pose
+// files that compile against the adult male's skeleton, and the phone call
+// puts the right hand beside the head by its kinematics: above the shoulder,
+// clear of the head, near its side.
+TEST(HardPostures, CompileOnTheAdultMaleAndThePhoneCallReachesTheHead) {
+  const LabelGrid grid = readGrid(test::assetPath("icrp110_am.nii.gz"));
+  const OrganTable organs = OrganTable::read(test::assetPath("icrp110_am_organs.dat"));
+  const Skeleton s = buildSkeleton(grid, organs, {});
+  std::vector<std::string> files;
+  for (const auto& e : std::filesystem::directory_iterator(test::assetPath("poses/hard")))
+    if (e.path().extension() == ".json") files.push_back(e.path().string());
+  ASSERT_GE(files.size(), 3u);
+  for (const std::string& f : files) {
+    const Pose pose = readPose(f);
+    EXPECT_FALSE(pose.joints.empty()) << f;
+    const Pose compiled = compileJointPose(pose, s, f);
+    EXPECT_FALSE(compiled.selections.empty()) << f;
+  }
+  const Pose phone = readPose(test::assetPath("poses/hard/am_phone_call_joints.json"));
+  const PartMotions m = partMotions(posedJoints(s, phone.joints, "phone"), phone.joints);
+  const GridGeometry& g = grid.geometry();
+  std::vector<Eigen::Vector3d> hand, head;
+  for (std::int64_t k = 0; k < g.dims[2]; ++k)
+    for (std::int64_t j = 0; j < g.dims[1]; ++j)
+      for (std::int64_t i = 0; i < g.dims[0]; ++i) {
+        const Part p = Part(s.parts.parts.at(i, j, k));
+        if (p == Part::RightHand) hand.push_back(m[std::size_t(p)] * g.voxelCenter(i, j, k));
+        if (p == Part::Head) head.push_back(g.voxelCenter(i, j, k));
+      }
+  ASSERT_FALSE(hand.empty());
+  ASSERT_FALSE(head.empty());
+  Eigen::Vector3d handCentre = Eigen::Vector3d::Zero(), headCentre = Eigen::Vector3d::Zero();
+  for (const auto& p : hand) handCentre += p / double(hand.size());
+  for (const auto& p : head) headCentre += p / double(head.size());
+  double gap = std::numeric_limits<double>::infinity();
+  for (std::size_t a = 0; a < hand.size(); a += 7)
+    for (std::size_t b = 0; b < head.size(); b += 7) gap = std::min(gap, (hand[a] - head[b]).norm());
+  EXPECT_GT(handCentre.z(), s.joint(JointId::RightShoulder)->centre.z());
+  EXPECT_GT(gap, 10.0);
+  EXPECT_LT((handCentre - headCentre).norm(), 160.0) << "hand centre " << handCentre.transpose() << ", head centre " << headCentre.transpose()
+                                                     << ", gap " << gap;
+}
+
+}  // namespace
+}  // namespace vox::skeleton
