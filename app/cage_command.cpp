@@ -74,8 +74,7 @@ void buildCageCommand(const CageCommandOptions& o) {
   checkOutputPath(o.report, OutputKind::Json, "--report");
   CageOptions options = o.cage;
   for (const std::string& s : o.separations) options.separations.push_back(parseSeparation(s));
-  if (!options.separations.empty() && o.organs.empty())
-    throw UsageError("--separate", "limb separation needs the grid's organ table (--organs) to find the label groups");
+  if (!options.separations.empty()) requireOrganTable(!o.organs.empty(), OrganTableNeed::Separation, "--separate", true);
 
   checkGridFitsMemory(o.input, o.maxMemoryMb, kCageMemory, "build the cage", "the cage needs the whole grid in memory");
   const auto t0 = std::chrono::steady_clock::now();
@@ -126,8 +125,7 @@ void buildCageCommand(const CageCommandOptions& o) {
 
 void addCageCommand(CLI::App& app) {
   auto o = std::make_shared<CageCommandOptions>();
-  CLI::App* cmd = app.add_subcommand("cage", "Build the automatic deformation cage of a label grid (inset where limbs are separated)");
-  cmd->add_option("grid", o->input, "Label grid (.nii .nii.gz .mha .mhd .nrrd .nhdr .inr)")->required();
+  CLI::App* cmd = addGridSubcommand(app, "cage", "Build the automatic deformation cage of a label grid (inset where limbs are separated)", o->input);
   cmd->add_option("-o,--output", o->output, "Output cage (.obj .off .ply)")->required();
   cmd->add_option("--report", o->report, "JSON report (sizes, validity, voxels outside); '-' for stdout");
   cmd->add_option("--organs", o->organs, "Organ table (ID name tissue density): label groups for --separate");
@@ -138,9 +136,9 @@ void addCageCommand(CLI::App& app) {
                   "Separate two label groups (trunk, head, right_arm, left_arm, right_leg, left_leg), optionally inside a "
                   "box in mm: right_arm:trunk or right_arm:trunk@xmin,ymin,zmin,xmax,ymax,zmax (repeatable)")
       ->allow_extra_args(false);
-  cmd->add_option("--dilation", o->cage.dilationMm, "Offset of the cage from the foreground, mm (default 20)")
+  cmd->add_option("--dilation", o->cage.dilationMm, "Offset of the cage from the foreground, mm")->capture_default_str()
       ->check(numberIn(0, 10000, "mm", true));
-  cmd->add_option("--vertices", o->cage.targetVertices, "Cage vertices after QEM simplification (default 300)")
+  cmd->add_option("--vertices", o->cage.targetVertices, "Cage vertices after QEM simplification")->capture_default_str()
       ->check(integerIn(8, 100000));
   cmd->add_flag("-q,--quiet", o->quiet, "No progress or summary (warnings still go to stderr)");
   cmd->callback([o] { buildCageCommand(*o); });

@@ -62,6 +62,12 @@ std::string& commandLineText() {
 }
 }  // namespace
 
+CLI::App* addGridSubcommand(CLI::App& app, const std::string& name, const std::string& description, std::string& grid) {
+  CLI::App* cmd = app.add_subcommand(name, description);
+  cmd->add_option("grid", grid, "Label grid (.nii .nii.gz .mha .mhd .nrrd .nhdr .inr)")->required();
+  return cmd;
+}
+
 void recordCommandLine(int argc, const char* const* argv) { commandLineText() = shellCommandLine(argc, argv); }
 const std::string& recordedCommandLine() { return commandLineText(); }
 

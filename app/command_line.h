@@ -33,6 +33,10 @@ void addViewCommand(CLI::App& app);
 // line on a terminal and printing every 10% otherwise.
 void installStderrProgress(bool quiet);
 
+// A subcommand whose first argument is a label grid (any format the readers
+// know), required, into `grid`.
+CLI::App* addGridSubcommand(CLI::App& app, const std::string& name, const std::string& description, std::string& grid);
+
 // The command line of this process, shell-quoted; main records it before
 // parsing.
 void recordCommandLine(int argc, const char* const* argv);

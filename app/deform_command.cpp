@@ -5,8 +5,9 @@
 //   deformation-adaptive refinement (eq. 4.5-4.7; field interpolation on the
 //   GPU) -> rasterization of G' (GPU; --cpu for the CPU reference), streamed
 //   slab by slab to the output file.
-// --max-memory runs out of core. The run itself is gpu::deformGrid
-// (gpu/deform_grid.h), which the viewer's export calls too.
+// --max-memory runs out of core. The run itself is deformGrid
+// (geometry/deform/run/deform_run.h), which the viewer's export calls too,
+// on the GPU's engines (gpu/raster_engines.h) or the CPU's.
 
 #include "app/command_line.h"
 #include "geometry/deform/report/deformation_report.h"
@@ -22,7 +23,8 @@
 #include "geometry/organ_table.h"
 #include "geometry/raster/rasterize.h"
 #include "geometry/world_frame.h"
-#include "gpu/deform_grid.h"
+#include "geometry/deform/run/deform_run.h"
+#include "gpu/raster_engines.h"
 
 #include <cstdio>
 #include <filesystem>
@@ -33,19 +35,14 @@ namespace vox::app {
 namespace {
 
 struct DeformOptions {
-  std::string input, pose, output, report, organs, parts, cage, posedCage, posedMesh, plots, collisionMask;
+  // The options the run takes as they are (input, output, parts, cage
+  // options, samples, memory, growth, rigid bones, refinement, extra outputs).
+  DeformGridRequest run;
+  std::string pose, report, organs, cage, plots;
   double flagPercent = kDefaultFlagPercent;
   std::vector<std::string> separations;
-  double dilationMm = 20.0;
-  int vertices = 300;
-  int samples = 1;
-  std::int64_t maxMemoryMb = 0;
   bool cpu = false;
   std::string volumeTarget;  // --preserve-volumes[=deformed|rest]; "" without it
-  bool allowGrowth = false;
-  bool rigidBones = false;
-  std::int64_t maxTets = RefinementOptions{}.maxTets;
-  int refineIterations = RefinementOptions{}.maxIterations;
   bool quiet = false;
 };
 
@@ -58,48 +55,28 @@ std::string tablePath(const DeformOptions& o) {
 
 void deform(const DeformOptions& o) {
   installStderrProgress(o.quiet);
-  checkOutputPath(o.output, OutputKind::Grid, "--output");
+  checkOutputPath(o.run.output, OutputKind::Grid, "--output");
   checkOutputPath(o.report, OutputKind::Json, "--report");
-  checkOutputPath(o.posedCage, OutputKind::Surface, "--posed-cage");
-  checkOutputPath(o.posedMesh, OutputKind::TetMesh, "--posed-mesh");
-  checkOutputPath(o.collisionMask, OutputKind::Grid, "--collision-mask");
+  checkOutputPath(o.run.posedCage, OutputKind::Surface, "--posed-cage");
+  checkOutputPath(o.run.posedMesh, OutputKind::TetMesh, "--posed-mesh");
+  checkOutputPath(o.run.collisionMask, OutputKind::Grid, "--collision-mask");
   checkOutputPath(tablePath(o), OutputKind::Csv, "--report");
   checkOutputPath(o.plots, OutputKind::Png, "--plots");
-  const bool preserveVolumes = !o.volumeTarget.empty();
-  if (preserveVolumes && o.maxMemoryMb > 0)
-    throw UsageError("--preserve-volumes", "needs the posed grid in memory; it cannot be combined with --max-memory");
-  if (o.maxMemoryMb == 0)
-    checkGridFitsMemory(o.input, 0, kDeformMemory, "deform in memory", "run out of core with --max-memory MB");
-  gpu::DeformGridRequest request;
-  request.input = o.input;
-  request.output = o.output;
+  if (o.run.maxMemoryMb == 0)
+    checkGridFitsMemory(o.run.input, 0, kDeformMemory, "deform in memory", "run out of core with --max-memory MB");
+  DeformGridRequest request = o.run;
   request.poseSource = o.pose;
-  request.dilationMm = o.dilationMm;
-  request.vertices = o.vertices;
-  request.samples = o.samples;
-  request.maxMemoryMb = o.maxMemoryMb;
-  request.cpu = o.cpu;
-  request.preserveVolumes = preserveVolumes;
-  request.volumeTarget = o.volumeTarget == "rest" ? gpu::DeformGridRequest::VolumeTarget::Rest
-                                                  : gpu::DeformGridRequest::VolumeTarget::Deformed;
-  request.allowGrowth = o.allowGrowth;
-  request.rigidBones = o.rigidBones;
-  request.maxTets = o.maxTets;
-  request.refineIterations = o.refineIterations;
-  request.posedCage = o.posedCage;
-  request.posedMesh = o.posedMesh;
-  request.collisionMask = o.collisionMask;
+  request.preserveVolumes = !o.volumeTarget.empty();
+  request.volumeTarget = o.volumeTarget == "rest" ? DeformGridRequest::VolumeTarget::Rest
+                                                  : DeformGridRequest::VolumeTarget::Deformed;
   request.warn = [](const std::string& message) { std::fprintf(stderr, "voxmorph: warning: %s\n", message.c_str()); };
   // Everything the command can reject cheaply is checked before the work.
   // Poses, cages and --separate boxes are in the world frame (world_frame.h);
   // the pipeline works in the grid frame.
-  const GridGeometry frame = openGridSlices(o.input)->geometry();
+  const GridGeometry frame = openGridSlices(o.run.input)->geometry();
   request.pose = poseInGridFrame(readPose(o.pose), frame, o.pose);
   if (!o.organs.empty()) request.organs = OrganTable::read(o.organs);
   request.organsSource = o.organs;
-  request.parts = o.parts;
-  if (!o.parts.empty() && openGridSlices(o.parts)->geometry().dims != frame.dims)
-    throw InputError(o.parts, "has other dims than the grid " + o.input);
   for (const std::string& text : o.separations) {
     request.extraSeparations.push_back(parseSeparation(text));
     regionInGridFrame(request.extraSeparations.back().region, frame, "--separate " + text);
@@ -108,10 +85,11 @@ void deform(const DeformOptions& o) {
     request.cage = readCage(o.cage);
     surfaceWorldToGrid(*request.cage, frame);
   }
-  gpu::checkDeformGridRequest(request);
-  request.provenance = commandProvenance({{"grid", o.input}, {"organs", o.organs}, {"pose", o.pose}, {"cage", o.cage}});
+  checkDeformGridRequest(request);
+  request.provenance = commandProvenance({{"grid", o.run.input}, {"organs", o.organs}, {"pose", o.pose}, {"cage", o.cage}});
 
-  const DeformationReport report = gpu::deformGrid(request);
+  const std::unique_ptr<RasterEngines> engines = gpu::makeRasterEngines(o.cpu, request.warn);
+  const DeformationReport report = deformGrid(request, *engines);
   if (!o.report.empty()) {
     const std::string json = deformationReportJson(report);
     if (o.report == "-") {
@@ -133,39 +111,38 @@ void deform(const DeformOptions& o) {
 
 void addDeformCommand(CLI::App& app) {
   auto o = std::make_shared<DeformOptions>();
-  CLI::App* cmd = app.add_subcommand("deform", "Re-pose a label grid with a pose file and write the posed grid");
-  cmd->add_option("grid", o->input, "Label grid (.nii .nii.gz .mha .mhd .nrrd .nhdr .inr)")->required();
+  CLI::App* cmd = addGridSubcommand(app, "deform", "Re-pose a label grid with a pose file and write the posed grid", o->run.input);
   cmd->add_option("--pose", o->pose, "Pose file (JSON, docs/POSES.md)")->required();
-  cmd->add_option("-o,--output", o->output, "Posed grid (.nii .nii.gz .mha .mhd; any grid format in core)")->required();
+  cmd->add_option("-o,--output", o->run.output, "Posed grid (.nii .nii.gz .mha .mhd; any grid format in core)")->required();
   cmd->add_option("--report", o->report, "JSON report, and the per-organ table as CSV beside it (r.json -> r.csv) (stage times, sizes, outliers, per-label volume and mass change, "
                                          "distortion, refinement); '-' for stdout");
   cmd->add_option("--plots", o->plots, "Also draw the distortion and organ volume-change histograms (thesis Figure 3.19) as PNG");
-  cmd->add_option("--flag", o->flagPercent, "Flag organs whose volume changes by more than this, % (default 2)")
+  cmd->add_option("--flag", o->flagPercent, "Flag organs whose volume changes by more than this, %")->capture_default_str()
       ->check(numberIn(0, 1000, "%"));
   cmd->add_option("--organs", o->organs, "Organ table (ID name tissue density): masses, label groups for limb separation, the bones "
                                          "of a joint pose");
-  cmd->add_option("--parts", o->parts, "Body-part grid (voxmorph parts, corrected) to use for a joint pose instead of the assignment "
+  cmd->add_option("--parts", o->run.parts, "Body-part grid (voxmorph parts, corrected) to use for a joint pose instead of the assignment "
                                        "from the bones (same dims as the grid)");
   auto* cage = cmd->add_option("--cage", o->cage, "Use this cage (.obj .off .ply; closed, outward, no self-intersections)");
   cmd->add_option("--separate", o->separations,
                   "Separate two label groups in the cage and the transfer mesh, optionally inside a box in mm: right_arm:trunk "
                   "or right_arm:trunk@xmin,ymin,zmin,xmax,ymax,zmax (repeatable; adds to the pose's \"separations\")")
       ->allow_extra_args(false);
-  cmd->add_option("--dilation", o->dilationMm, "Automatic cage: offset from the foreground, mm (default 20)")
+  cmd->add_option("--dilation", o->run.dilationMm, "Automatic cage: offset from the foreground, mm")->capture_default_str()
       ->check(numberIn(0, 10000, "mm", true))
       ->excludes(cage);
-  cmd->add_option("--vertices", o->vertices, "Automatic cage: vertices after QEM (default 300)")
+  cmd->add_option("--vertices", o->run.vertices, "Automatic cage: vertices after QEM")->capture_default_str()
       ->check(integerIn(8, 100000))
       ->excludes(cage);
-  cmd->add_option("--samples", o->samples, "k: k^3 samples per output voxel, majority label (default 1; odd k recommended)")
+  cmd->add_option("--samples", o->run.samples, "k: k^3 samples per output voxel, majority label (odd k recommended)")->capture_default_str()
       ->check(integerIn(1, kMaxRasterSamples));
-  cmd->add_option("--max-memory", o->maxMemoryMb,
+  cmd->add_option("--max-memory", o->run.maxMemoryMb,
                   "Out of core under this budget (MB): the pipeline runs on a downsampled grid, G' is rasterized from "
                   "streamed source slices and written slab by slab")
       ->check(integerIn(256, std::int64_t(1) << 30, "MB"));
-  cmd->add_option("--posed-cage", o->posedCage, "Also write the posed cage (.obj .off .ply), to check a pose's handles");
-  cmd->add_option("--posed-mesh", o->posedMesh, "Also write the posed transfer mesh (.mesh .vtu .msh)");
-  cmd->add_option("--collision-mask", o->collisionMask,
+  cmd->add_option("--posed-cage", o->run.posedCage, "Also write the posed cage (.obj .off .ply), to check a pose's handles");
+  cmd->add_option("--posed-mesh", o->run.posedMesh, "Also write the posed transfer mesh (.mesh .vtu .msh)");
+  cmd->add_option("--collision-mask", o->run.collisionMask,
                   "With body parts (an organ table that names the bones, or --parts): also write a grid, 1 where the posed tissue of two body parts overlaps "
                   "(the posed grid's extent at the working grid's spacing)");
   cmd->add_flag("--preserve-volumes{deformed}", o->volumeTarget,
@@ -173,17 +150,18 @@ void addDeformCommand(CLI::App& app) {
                 "(sum of the transfer mesh's Jacobian determinants over its voxels), within about a voxel; "
                 "--preserve-volumes=rest: its rest volume instead, so organ masses are kept; in core only")
       ->check(CLI::IsMember({"deformed", "rest"}));
-  cmd->add_flag("--rigid-bones", o->rigidBones,
+  cmd->add_flag("--rigid-bones", o->run.rigidBones,
                 "With body parts (a joint pose, --parts): hold each part's bones rigid (its forward-kinematics motion, else the rigid fit) "
                 "and turn the cage near each turned joint with the moving part (joint_options zone 'child' unless the pose sets it); "
                 "the tissue between bones turning against each other may fold (docs/POSES.md)");
-  cmd->add_flag("--allow-growth", o->allowGrowth,
+  cmd->add_flag("--allow-growth", o->run.allowGrowth,
                 "Accept a posed grid of more than 8 times the source's voxels (a pose that moves parts far from the body)");
   cmd->add_flag("--cpu", o->cpu, "Rasterize and interpolate fields with the CPU reference instead of the GPU");
-  cmd->add_option("--max-tets", o->maxTets, "Tet budget of the refined transfer mesh (default 250000)")
+  cmd->add_option("--max-tets", o->run.maxTets, "Tet budget of the refined transfer mesh")->capture_default_str()
       ->check(integerIn(1000, std::int64_t(1) << 30));
-  cmd->add_option("--refine-iterations", o->refineIterations,
-                  "Transfer-mesh regenerations of the deformation-adaptive refinement at most (default 1; 0: none)")
+  cmd->add_option("--refine-iterations", o->run.refineIterations,
+                  "Transfer-mesh regenerations of the deformation-adaptive refinement at most (0: none)")
+      ->capture_default_str()
       ->check(integerIn(0, 100));
   cmd->add_flag("-q,--quiet", o->quiet, "No progress or summary (warnings still go to stderr)");
   cmd->callback([o] { deform(*o); });

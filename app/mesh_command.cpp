@@ -16,8 +16,7 @@ namespace vox::app {
 
 void addMeshCommand(CLI::App& app) {
   auto o = std::make_shared<RemeshCliOptions>();
-  CLI::App* cmd = app.add_subcommand("mesh", "Mesh a label grid into a multi-material tet mesh (M-MAd)");
-  cmd->add_option("grid", o->input, "Label grid (.nii .nii.gz .mha .mhd .nrrd .nhdr .inr)")->required();
+  CLI::App* cmd = addGridSubcommand(app, "mesh", "Mesh a label grid into a multi-material tet mesh (M-MAd)", o->input);
   addRemeshOptions(*cmd, *o);
   cmd->callback([o] {
     installStderrProgress(o->quiet);

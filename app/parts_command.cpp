@@ -51,8 +51,7 @@ void parts(const PartsOptions& o) {
 
 void addPartsCommand(CLI::App& app) {
   auto o = std::make_shared<PartsOptions>();
-  CLI::App* cmd = app.add_subcommand("parts", "Body parts from the bones (nearest bone inside the body) and the joints");
-  cmd->add_option("grid", o->input, "Label grid (.nii .nii.gz .mha .mhd .nrrd .nhdr .inr)")->required();
+  CLI::App* cmd = addGridSubcommand(app, "parts", "Body parts from the bones (nearest bone inside the body) and the joints", o->input);
   cmd->add_option("--organs", o->organs, "Organ table (ID name tissue density) that names the bones")->required();
   cmd->add_option("-o,--output", o->output, "Body-part grid (.nii.gz ...; values: the part ids of the report)")->required();
   cmd->add_option("--report", o->report, "JSON report: parts (id, name, voxels, volume, bones), joints (centre, axes, ranges; mm, world frame); "

@@ -43,14 +43,14 @@ inline void addRemeshOptions(CLI::App& cmd, RemeshCliOptions& o) {
   cmd.add_option("-o,--output", o.output, "Output tet mesh (.mesh .vtu .msh), domain tets (label > 0)")
       ->required()
       ->check(meshExtension);
-  cmd.add_option("--iterations", o.remesh.iterations, "Split-collapse-flip-smooth iterations (default 5)")
+  cmd.add_option("--iterations", o.remesh.iterations, "Split-collapse-flip-smooth iterations")->capture_default_str()
       ->check(integerIn(0, 100));
-  cmd.add_option("--flip-smooth", o.remesh.flipSmoothCycles, "Final flip-smooth cycles (default 3)")->check(integerIn(0, 100));
-  cmd.add_option("--surface", o.surface, "Interface model boundary vertices are projected on: hpss (default), pss, none")
+  cmd.add_option("--flip-smooth", o.remesh.flipSmoothCycles, "Final flip-smooth cycles")->capture_default_str()->check(integerIn(0, 100));
+  cmd.add_option("--surface", o.surface, "Interface model boundary vertices are projected on: hpss, pss, none")->capture_default_str()
       ->check(CLI::IsMember({"hpss", "pss", "none"}));
   cmd.add_option("--mls-radius", o.remesh.mlsRadius, "Width of the interface model's kernel (mm; default automatic)")
       ->check(numberIn(0, 100000, "mm"));
-  cmd.add_option("--threads", o.remesh.threads, "Threads (default 2)")->check(integerIn(1, 64));
+  cmd.add_option("--threads", o.remesh.threads, "Threads")->capture_default_str()->check(integerIn(1, 64));
   cmd.add_option("--organs", o.organs,
                  "Organ table (ID name tissue density): label names in the report, the .msh physical names and the "
                  ".vtu field data");

@@ -97,8 +97,7 @@ void render(const RenderOptions& o) {
   if (!o.pose.empty()) {
     worldPose = readPose(o.pose);
     const bool skeletal = !worldPose->joints.empty() || usesBodyParts(*worldPose) || !o.parts.empty();
-    if (skeletal && !organs)
-      throw InputError(o.pose, "a pose with joints or body parts needs the grid's organ table (--organs) to find the bones");
+    if (skeletal) requireOrganTable(organs.has_value(), OrganTableNeed::Bones, o.pose);
     if (skeletal) skeleton::requireBones(*organs, o.organs);
   } else if (!o.parts.empty()) {
     throw UsageError("--parts", "needs a --pose");
@@ -179,14 +178,13 @@ void render(const RenderOptions& o) {
 
 void addRenderCommand(CLI::App& app) {
   auto o = std::make_shared<RenderOptions>();
-  CLI::App* cmd = app.add_subcommand("render", "Ray-cast a label grid to a PNG image, voxel faces visible (at rest: identity TM)");
-  cmd->add_option("grid", o->input, "Label grid (.nii .nii.gz .mha .mhd .nrrd .nhdr .inr)")->required();
+  CLI::App* cmd = addGridSubcommand(app, "render", "Ray-cast a label grid to a PNG image, voxel faces visible (at rest: identity TM)", o->input);
   cmd->add_option("-o,--output", o->output, "Output image (.png)")->required();
   cmd->add_option("--camera", o->camera,
                   "Camera: \"azimuth=30,elevation=10,distance=2.5,fov=35\" (degrees; distance in scene diagonals or "
                   "with an mm suffix; default fits the foreground) or \"eye=x,y,z,target=x,y,z,up=x,y,z,fov=35\" (mm). "
                   "Azimuth 0 looks along +y with z up");
-  cmd->add_option("--size", o->size, "Image size WIDTHxHEIGHT (default 640x480)");
+  cmd->add_option("--size", o->size, "Image size WIDTHxHEIGHT")->capture_default_str();
   cmd->add_option("--cut", o->cuts,
                   "Cutting plane (repeatable: one per axis and one free plane): \"x>120mm\" removes the voxels whose centre "
                   "has x > 120 mm, \"z<400\" those below 400 mm, \"plane=nx,ny,nz,d\" those with n.c > d")

@@ -27,8 +27,8 @@ void addViewCommand(CLI::App& app) {
   cmd->add_option("--script", o->script, "Run a scripted session (JSON list of steps; docs/VIEWER.md) and quit");
   cmd->add_option("--screenshot-dir", o->screenshotDir, "Directory for the script's screenshots");
   cmd->add_option("--frame-log", o->frameLog, "Write per-frame times (deformation, ray casting, UI, present) as CSV");
-  cmd->add_option("--width", o->width, "Window width (default 1280)")->check(CLI::Range(720, 8192));
-  cmd->add_option("--height", o->height, "Window height (default 720)")->check(CLI::Range(240, 8192));
+  cmd->add_option("--width", o->width, "Window width")->capture_default_str()->check(CLI::Range(720, 8192));
+  cmd->add_option("--height", o->height, "Window height")->capture_default_str()->check(CLI::Range(240, 8192));
   cmd->add_flag("!--no-vsync", o->vsync, "Present as fast as frames are made (for timing)");
   cmd->add_option("--max-memory", *maxMemoryMb, "Refuse a grid whose in-core work exceeds this budget (MB; default the machine's memory)")
       ->check(integerIn(64, std::int64_t(1) << 30, "MB"));

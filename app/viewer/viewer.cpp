@@ -16,7 +16,8 @@
 #include "geometry/render/raycast_scene.h"
 #include "gpu/command.h"
 #include "gpu/context.h"
-#include "gpu/deform_grid.h"
+#include "geometry/deform/run/deform_run.h"
+#include "gpu/raster_engines.h"
 #include "gpu/image.h"
 #include "gpu/kernels/raycast.h"
 #include "gpu/swapchain.h"
@@ -115,7 +116,7 @@ Eigen::Vector3d cutHandle(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, 
 
 ImU32 rgba(int r, int g, int b, int a = 255) { return IM_COL32(r, g, b, a); }
 
-// Export on a worker thread: gpu::deformGrid with the viewer's pose. The
+// Export on a worker thread: deformGrid with the viewer's pose. The
 // progress sink is process-wide; only the worker's reports move the bar, and
 // a cancel request ends the worker at its next report (the writers are
 // atomic, so no partial file is left).
@@ -129,7 +130,7 @@ public:
     setProgressSink(nullptr);
   }
   bool running() const { return running_; }
-  void start(gpu::DeformGridRequest request, std::string reportPath) {
+  void start(DeformGridRequest request, std::string reportPath) {
     if (thread_.joinable()) thread_.join();
     cancel_ = false;
     running_ = true;
@@ -150,7 +151,7 @@ public:
       });
       std::string message;
       try {
-        const DeformationReport report = gpu::deformGrid(request);
+        const DeformationReport report = deformGrid(request, *gpu::makeRasterEngines(false, request.warn));
         if (!reportPath.empty()) writeFileAtomic(reportPath, deformationReportJson(report));
         message = "exported " + request.output;
       } catch (const ExportCancelled&) {
@@ -300,8 +301,8 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options) {
   }
   std::vector<LimbSeparation> extra;
   for (const std::string& s : options.separations) extra.push_back(parseSeparation(s));
-  if ((!setupPose_.separations.empty() || !extra.empty() || usesLabelGroups(setupPose_)) && !organs)
-    throw InputError(setupSource, "limb separations and label groups need the grid's organ table (--organs)");
+  if (!setupPose_.separations.empty() || !extra.empty()) requireOrganTable(organs.has_value(), OrganTableNeed::Separation, setupSource);
+  if (usesLabelGroups(setupPose_)) requireOrganTable(organs.has_value(), OrganTableNeed::LabelGroup, setupSource);
   if (!options.frameLog.empty()) checkOutputPath(options.frameLog);
   const int width = script_ && script_->width ? script_->width : options.width;
   const int height = script_ && script_->height ? script_->height : options.height;
@@ -798,7 +799,7 @@ void Viewer::startExport(const std::string& path, const std::string& report, con
     status("an export is already running");
     return;
   }
-  gpu::DeformGridRequest request;
+  DeformGridRequest request;
   request.input = options_.grid;
   request.output = path;
   request.pose = editor_->pose();
@@ -807,7 +808,7 @@ void Viewer::startExport(const std::string& path, const std::string& report, con
   request.preserveVolumes = preserve;
   request.warn = [](const std::string& m) { std::fprintf(stderr, "view: warning: %s\n", m.c_str()); };
   try {
-    gpu::checkDeformGridRequest(request);
+    checkDeformGridRequest(request);
     request.provenance = commandProvenance({{"grid", options_.grid}, {"organs", options_.organs}});
     addTextInput(request.provenance, "pose", "edited in the viewer (grid frame, as poseToJson writes it)", poseToJson(request.pose));
     checkOutputPath(path);

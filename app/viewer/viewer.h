@@ -3,7 +3,7 @@
 // Vulkan swapchain and Dear ImGui panels around the TM-guided ray casting of
 // the full-resolution grid (gpu::RaycastKernel::renderTo, blitted to the
 // screen). The posing state is a PoseEditor (geometry/deform/pose/pose_editor.h);
-// the export runs gpu::deformGrid, the function `voxmorph deform` runs.
+// the export runs deformGrid, the function `voxmorph deform` runs.
 
 #include <string>
 #include <vector>

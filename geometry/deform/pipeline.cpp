@@ -3,7 +3,7 @@
 
 #include "geometry/deform/solve/green_coordinates.h"
 #include "geometry/skeleton/label_groups.h"
-#include "geometry/deform/out_of_core.h"
+#include "geometry/raster/out_of_core.h"
 #include "geometry/deform/cage/surface_checks.h"
 #include "geometry/error.h"
 #include "geometry/label_stats.h"
@@ -52,23 +52,6 @@ std::string cageFault(const SurfaceCheck& c) {
   return "non-positive volume";
 }
 
-void MeasuringRasterizer::rasterizeSlab(std::int64_t z0, std::int64_t z1, Label* out) {
-  engine_.rasterizeSlab(z0, z1, out);
-  projection_.addSlices(z0, z1 - z0, out);
-  const std::int64_t n = (z1 - z0) * outputGeometry().sliceVoxels();
-  for (std::int64_t v = 0; v < n; ++v) {
-    const Label l = out[v];
-    if (l >= counts_.size()) counts_.resize(std::size_t(l) + 1, 0);
-    ++counts_[l];
-  }
-}
-
-PosedGridMeasures writePosedGrid(SlabRasterizer& engine, const std::string& path, Label maxLabel) {
-  MeasuringRasterizer measuring(engine);
-  writeDeformedGrid(measuring, path, maxLabel);
-  return {measuring.counts(), measuring.projection()};
-}
-
 DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOptions& options) : options_(options) {
   const std::vector<LimbSeparation>& separations = options_.cage.separations;
   const bool groupSelections = options_.pose && usesLabelGroups(*options_.pose);
@@ -85,14 +68,12 @@ DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOp
   LabelGrid selectionGroups;  // S, for selections by label group
   {
     StageTimer timer("label groups");
-    if (groupSelections && !withGroups)
-      throw InputError(options_.poseSource, "a selection by label group needs the grid's organ table (--organs)");
+    if (groupSelections) requireOrganTable(withGroups, OrganTableNeed::LabelGroup, options_.poseSource);
     if (separations.empty()) {
       groups_ = binaryGroupGrid(grid);
       if (withGroups) selectionGroups = labelGroups();
     } else {
-      if (!withGroups)
-        throw InputError("separation", "limb separation needs the grid's organ table (--organs) to find the label groups");
+      requireOrganTable(withGroups, OrganTableNeed::Separation, "separation");
       groups_ = labelGroups();
       std::vector<std::int64_t> count(kLabelGroupCount + 1, 0);
       for (const Label l : groups_.labels()) ++count[l];
@@ -321,8 +302,7 @@ std::vector<std::uint8_t> DeformationPipeline::acrossSeparation() const {
 
 void DeformationPipeline::setPose(const Pose& pose, const std::string& source) {
   StageTimer timer("embedding");
-  if (usesLabelGroups(pose) && !options_.organs && !options_.bodyParts)
-    throw InputError(source, "a selection by label group needs the grid's organ table (--organs)");
+  if (usesLabelGroups(pose)) requireOrganTable(options_.organs || options_.bodyParts, OrganTableNeed::LabelGroup, source);
   if (!pose.joints.empty())
     throw InputError(source, "a pose with joints is compiled against the grid's skeleton first (voxmorph deform, render and view do)");
   PoseHandles handles = selectHandles(pose, builtCage_, source, cageGroups_, cageBodyParts_);

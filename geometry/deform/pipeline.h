@@ -213,35 +213,6 @@ private:
 // ("12 boundary edges", "3 self-intersecting face pairs"...).
 std::string cageFault(const SurfaceCheck& check);
 
-// A slab engine that measures the slabs it hands out: the posed grid's
-// per-label voxel counts and its body projection (body_projection.h),
-// without holding the grid.
-class MeasuringRasterizer : public SlabRasterizer {
-public:
-  explicit MeasuringRasterizer(SlabRasterizer& engine) : engine_(engine), projection_(engine.outputGeometry()) {}
-  const GridGeometry& outputGeometry() const override { return engine_.outputGeometry(); }
-  std::int64_t slabSlices() const override { return engine_.slabSlices(); }
-  void rasterizeSlab(std::int64_t z0, std::int64_t z1, Label* out) override;
-  // Voxels per label (index = label) over every slab so far.
-  const std::vector<std::uint64_t>& counts() const { return counts_; }
-  BodyProjection projection() const { return projection_.result(); }
-
-private:
-  SlabRasterizer& engine_;
-  std::vector<std::uint64_t> counts_;
-  BodyProjectionAccumulator projection_;
-};
-
-struct PosedGridMeasures {
-  std::vector<std::uint64_t> counts;  // voxels per label (index = label)
-  BodyProjection projection;
-};
-
-// Writes G' from `engine` slab by slab (writeDeformedGrid; the file appears
-// complete or not at all) and returns its per-label voxel counts and body
-// projection.
-PosedGridMeasures writePosedGrid(SlabRasterizer& engine, const std::string& path, Label maxLabel);
-
 // Working grid. The pre-processing's memory and time grow with the voxels it
 // samples (distance transforms, the mesher's domain), not with the TM's
 // size, so a source above the working budget runs it on a block-downsampled

@@ -39,6 +39,9 @@ void writeInr(const std::string& path, const LabelGrid& grid);
 // Supported for every grid format; compressed files read backwards restart
 // from the beginning (slow), so read them forwards.
 std::unique_ptr<GridSliceReader> openGridSlices(const std::string& path);
+// Whether openGridSlices(path) reads slices in any order at no extra cost:
+// only an uncompressed NIfTI is sure to seek cheaply.
+bool gridSlicesSeekable(const std::string& path);
 
 // Supported for every grid format (.mha stores its data uncompressed when
 // streamed). `maxLabel` decides the stored type (uint8 when <= 255).

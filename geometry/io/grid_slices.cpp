@@ -15,6 +15,11 @@ std::unique_ptr<GridSliceReader> openGridSlices(const std::string& path) {
   return openNiftiSlices(path);
 }
 
+bool gridSlicesSeekable(const std::string& path) {
+  const std::string suffix = ".nii";
+  return path.size() >= suffix.size() && path.compare(path.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
 std::unique_ptr<GridSliceWriter> createGridSlices(const std::string& path, const GridGeometry& geometry, Label maxLabel) {
   switch (gridFormatFromPath(path)) {
     case GridFormat::Nifti: return createNiftiSlices(path, geometry, maxLabel);

@@ -48,4 +48,10 @@ ScalarGrid interpolateVertexField(const TetMesh& mesh, const std::vector<double>
   return out;
 }
 
+VertexFieldInterpolation cpuFieldInterpolation(int threads) {
+  return [threads](const TetMesh& mesh, const std::vector<double>& values, const GridGeometry& target, float fill) {
+    return interpolateVertexField(mesh, values, target, {.fill = fill, .threads = threads});
+  };
+}
+
 }  // namespace vox

@@ -10,6 +10,7 @@
 #include "geometry/scalar_grid.h"
 #include "geometry/tet_mesh.h"
 
+#include <functional>
 #include <vector>
 
 namespace vox {
@@ -28,5 +29,12 @@ void validateVertexField(const TetMesh& mesh, const std::vector<double>& values)
 // count mismatch, non-finite values or bad connectivity.
 ScalarGrid interpolateVertexField(const TetMesh& mesh, const std::vector<double>& values, const GridGeometry& target,
                                   const FieldInterpolationOptions& options = {});
+
+// Interpolation of a per-vertex field of a tet mesh onto a grid (CPU:
+// interpolateVertexField; GPU: gpu::FieldInterpolationKernel). `fill` for
+// voxel centres in no tet.
+using VertexFieldInterpolation =
+    std::function<ScalarGrid(const TetMesh& mesh, const std::vector<double>& values, const GridGeometry& target, float fill)>;
+VertexFieldInterpolation cpuFieldInterpolation(int threads = 0);
 
 }  // namespace vox

@@ -229,16 +229,4 @@ void RasterizeKernel::rasterizeSlab(std::int64_t z0, std::int64_t z1, Label* out
   output_.download(out, voxels * sizeof(Label));
 }
 
-void rasterizeOutOfCore(Context& context, OutOfCoreSource& source, const TetMesh& rest,
-                        const std::vector<Eigen::Vector3d>& deformed, const std::string& outputPath,
-                        const OutOfCoreOptions& options) {
-  const RasterMemoryLimits limits = rasterMemoryLimits(options.maxMemoryBytes, options.samples);
-  RasterizeKernel kernel(context, source.slices(), rest,
-                         {.samples = options.samples,
-                          .maxSlabSamples = std::uint64_t(limits.slabSamples),
-                          .maxWindowVoxels = std::uint64_t(limits.windowVoxels)});
-  kernel.setDeformedPositions(deformed);
-  writeDeformedGrid(kernel, outputPath, source.maxLabel());
-}
-
 }  // namespace vox::gpu

@@ -16,9 +16,7 @@
 // split. Supersampling is limited to output slices of at most
 // maxBindingBytes / (4 k^3) voxels.
 
-#include "geometry/deform/out_of_core.h"
 #include "geometry/raster/rasterize.h"
-#include "geometry/io/grid_io.h"
 #include "geometry/label_grid.h"
 #include "geometry/tet_mesh.h"
 #include "gpu/buffer.h"
@@ -95,12 +93,5 @@ private:
   double locateMs_ = 0.0;
   double resolveMs_ = 0.0;
 };
-
-// Out-of-core rasterization (geometry/deform/out_of_core.h) with this kernel
-// as the engine: slabs and source windows sized by options.maxMemoryBytes
-// (and by the device's limits).
-void rasterizeOutOfCore(Context& context, OutOfCoreSource& source, const TetMesh& rest,
-                        const std::vector<Eigen::Vector3d>& deformed, const std::string& outputPath,
-                        const OutOfCoreOptions& options = {});
 
 }  // namespace vox::gpu

@@ -11,11 +11,11 @@
 // the downsampled grid): a six-tet mesh of the downsampled grid's foreground,
 // 4 downsampled voxels per cube, bent like the rasterization benchmark.
 
-#include "geometry/deform/out_of_core.h"
+#include "geometry/raster/out_of_core.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/progress.h"
 #include "gpu/context.h"
-#include "gpu/kernels/rasterize.h"
+#include "gpu/raster_engines.h"
 #include "tests/support/deformation_fixtures.h"
 
 #include <chrono>
@@ -53,7 +53,7 @@ int deform(const std::string& input, const std::string& output, std::int64_t max
   const auto t0 = Clock::now();
   const std::string tempDirectory = std::filesystem::path(output).parent_path().string();
   // The pipeline's grid: at most 16 M voxels.
-  vox::OutOfCoreSource source(input, std::int64_t(1) << 24, tempDirectory);
+  vox::OutOfCoreSource source(vox::openGridSlices(input), input, vox::gridSlicesSeekable(input), std::int64_t(1) << 24, tempDirectory);
   const double readSeconds = secondsSince(t0);
   const vox::GridGeometry& g = source.geometry();
   std::printf("source %lld x %lld x %lld = %lld voxels, downsampled by %d to %lld voxels, read in %.1f s\n",
@@ -67,13 +67,10 @@ int deform(const std::string& input, const std::string& output, std::int64_t max
   std::printf("transfer mesh %zu vertices %zu tets, deformed in %.1f s\n", tm.vertexCount(), tm.tetCount(), secondsSince(t1));
 
   const auto t2 = Clock::now();
-  const vox::OutOfCoreOptions options{.maxMemoryBytes = maxMemoryMb << 20};
-  if (cpu) {
-    vox::rasterizeOutOfCore(source, tm, deformed, output, options);
-  } else {
-    vox::gpu::Context context;
-    vox::gpu::rasterizeOutOfCore(context, source, tm, deformed, output, options);
-  }
+  // The path `voxmorph deform --max-memory` takes.
+  const std::unique_ptr<vox::RasterEngines> engines = vox::gpu::makeRasterEngines(cpu, [](const std::string& m) { std::fprintf(stderr, "warning: %s\n", m.c_str()); });
+  const auto engine = vox::makeRasterizer(*engines, {.slices = &source.slices()}, tm, deformed, 1, maxMemoryMb << 20);
+  vox::writePosedGrid(*engine, *vox::createGridSlices(output, engine->outputGeometry(), source.maxLabel()));
   const vox::GridGeometry out = vox::deformedGridGeometry(g, deformed);
   const double rasterSeconds = secondsSince(t2);
   std::printf("rasterized and wrote %lld x %lld x %lld = %lld voxels (%s) in %.1f s: %.1f M voxels/s; total %.1f s\n",

@@ -5,7 +5,7 @@
 // windows) does not change the GPU output.
 
 #include "geometry/raster/field_interpolation.h"
-#include "geometry/deform/out_of_core.h"
+#include "geometry/raster/out_of_core.h"
 #include "geometry/raster/rasterize.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/synth.h"
@@ -13,6 +13,7 @@
 #include "gpu/context.h"
 #include "gpu/kernels/field_interpolation.h"
 #include "gpu/kernels/rasterize.h"
+#include "gpu/raster_engines.h"
 #include "tests/support/deformation_fixtures.h"
 #include "tests/support/raster_compare.h"
 #include "tests/support/test_environment.h"
@@ -185,7 +186,8 @@ TEST(RasterizeGpu, OutOfCoreEqualsInCore) {
   const std::string dir = test::tempDir();
   const LabelGrid grid = stickFigure(64);
   writeGrid(dir + "/source.nii.gz", grid);
-  OutOfCoreSource source(dir + "/source.nii.gz", grid.voxelCount() / 27, dir);
+  const std::string sourcePath = dir + "/source.nii.gz";
+  OutOfCoreSource source(openGridSlices(sourcePath), sourcePath, gridSlicesSeekable(sourcePath), grid.voxelCount() / 27, dir);
   const TetMesh tm = tetrahedralizeVoxels(source.downsampled(), {.includeBackground = false});
   const auto deformed = test::deformPositions(tm.positions, deformations(grid.geometry()).at("bend"));
   // Device memory staged as on a discrete GPU, through a staging buffer of
@@ -195,8 +197,11 @@ TEST(RasterizeGpu, OutOfCoreEqualsInCore) {
     gpu::RasterizeKernel kernel(context(), grid, tm, {.samples = samples});
     const LabelGrid inCore = kernel.rasterize(deformed);
     for (gpu::Context* ctx : {&context(), &staged}) {
-      // 64 KiB: several slabs, several windows per slab.
-      gpu::rasterizeOutOfCore(*ctx, source, tm, deformed, dir + "/posed.nii.gz", {.maxMemoryBytes = 64 << 10, .samples = samples});
+      // 64 KiB: several slabs, several windows per slab; the path `deform
+      // --max-memory` takes.
+      gpu::GpuRasterEngines engines(*ctx);
+      const auto engine = makeRasterizer(engines, {.slices = &source.slices()}, tm, deformed, samples, 64 << 10);
+      writePosedGrid(*engine, *createGridSlices(dir + "/posed.nii.gz", engine->outputGeometry(), source.maxLabel()));
       const LabelGrid got = readGrid(dir + "/posed.nii.gz");
       ASSERT_EQ(got.dims(), inCore.dims());
       EXPECT_EQ(got.labels(), inCore.labels()) << "samples " << samples << (ctx == &staged ? ", staged" : "");

@@ -6,7 +6,7 @@
 // voxel, its corners on full-resolution voxel corners), deformed by analytic
 // non-rigid maps (bend, twist) or a rotation.
 
-#include "geometry/deform/out_of_core.h"
+#include "geometry/raster/out_of_core.h"
 #include "geometry/raster/rasterize.h"
 #include "geometry/label_grid.h"
 #include "geometry/tet_mesh.h"

@@ -282,9 +282,7 @@ PipelineOptions skeletalPoseOptions(const Pose& pose, const std::string& poseSou
                                     const std::optional<OrganTable>& organs, const SkeletonSources& sources,
                                     std::optional<LabelGrid> userParts, const JointPoseOptions& options) {
   if (pose.joints.empty() && !usesBodyParts(pose) && !userParts) return poseOptions(pose, poseSource, organs);
-  if (!organs)
-    throw InputError(poseSource, pose.joints.empty() ? "selections by body part need the grid's organ table (--organs) to find the bones"
-                                                     : "a pose with joints needs the grid's organ table (--organs) to find the bones");
+  requireOrganTable(organs.has_value(), OrganTableNeed::Bones, poseSource);
   return skeletalPoseOptions(pose, poseSource, buildSkeleton(grid, *organs, sources, std::move(userParts)), organs, options);
 }
 

@@ -169,7 +169,8 @@ struct Pose {
   PoseJointOptions jointOptions;
 };
 
-// Throws InputError(source, ...) on any fault listed above.
+// Reading and writing (pose_json.cpp). Throws InputError(source, ...) on
+// any fault listed above.
 Pose parsePose(const std::string& jsonText, const std::string& source);
 Pose readPose(const std::string& path);
 // Serializes with the same schema (readPose(writePose(p)) == p); atomic write.
@@ -198,6 +199,15 @@ PoseHandles selectHandles(const Pose& pose, const TriMesh& cage, const std::stri
 bool usesLabelGroups(const Pose& pose);
 // True when a selection restricts itself to body parts.
 bool usesBodyParts(const Pose& pose);
+
+// What a pose (or a command's option) needs the grid's organ table for: limb
+// separation and selections by label group find the label groups from the
+// organ names, joints and body parts find the bones.
+enum class OrganTableNeed { Separation, LabelGroup, Bones };
+// The one place the rule is stated: unless `present`, throws
+// InputError(source, "<what> needs the grid's organ table (--organs) ...")
+// (a UsageError when `usage`: the source is a command-line option).
+void requireOrganTable(bool present, OrganTableNeed need, const std::string& source, bool usage = false);
 
 // Targets of the handles (#handles by 3, rows in handles.vertices order) for
 // the pose applied by `fraction` in [0, 1]: fixed handles stay at their rest

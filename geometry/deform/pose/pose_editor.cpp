@@ -50,8 +50,7 @@ PoseEditor::PoseEditor(const LabelGrid& grid, std::optional<OrganTable> organs, 
   shaping.separations = separations_;
   PipelineOptions options;
   if (!setup.joints.empty() || usesBodyParts(setup)) {
-    if (!organs_)
-      throw InputError(setupSource, "a pose with joints or body parts needs the grid's organ table (--organs) to find the bones");
+    requireOrganTable(organs_.has_value(), OrganTableNeed::Bones, setupSource);
     skeleton_ = std::make_unique<skeleton::Skeleton>(skeleton::buildSkeleton(grid_, *organs_, {"grid", "organ table", "body parts"}));
     options = skeleton::skeletalPoseOptions(shaping, setupSource, *skeleton_, organs_);
     shaping = *options.pose;
@@ -82,7 +81,7 @@ void PoseEditor::pick(const std::vector<std::int32_t>& vertices, bool add) {
 }
 
 std::vector<std::int32_t> PoseEditor::groupVertices(const std::string& group) const {
-  if (pipeline_->cageGroups().empty()) throw InputError("label group '" + group + "'", "selecting by label group needs the grid's organ table");
+  requireOrganTable(!pipeline_->cageGroups().empty(), OrganTableNeed::LabelGroup, "label group '" + group + "'");
   const Label g = Label(labelGroupFromName(group));
   std::vector<std::int32_t> out;
   for (std::size_t v = 0; v < pipeline_->cageGroups().size(); ++v)

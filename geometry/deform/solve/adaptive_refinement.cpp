@@ -71,12 +71,6 @@ void applyFactors(ScalarGrid& sizing, const std::vector<float>& factor, double s
 
 }  // namespace
 
-VertexFieldInterpolation cpuFieldInterpolation(int threads) {
-  return [threads](const TetMesh& mesh, const std::vector<double>& values, const GridGeometry& target, float fill) {
-    return interpolateVertexField(mesh, values, target, {.fill = fill, .threads = threads});
-  };
-}
-
 GridError gridDeformationError(const TetMesh& rest, std::span<const Eigen::Vector3d> deformed, const GridGeometry& geometry,
                                const VertexFieldInterpolation& interpolate) {
   const std::vector<double> tetError = tetDeformationError(rest, deformed);

@@ -29,6 +29,7 @@
 //    fits maxTets would change F by less than a few percent.
 
 #include "geometry/label_grid.h"
+#include "geometry/raster/field_interpolation.h"
 #include "geometry/scalar_grid.h"
 #include "geometry/tet_mesh.h"
 
@@ -48,13 +49,6 @@ struct RefinementOptions {
   double negligibleError = 1e-3;    // ||Delta B|| below this changes no voxel (1e-3 of a tet's size)
   double minImprovement = 0.1;      // stalled when max e_g drops by less than this fraction
 };
-
-// Interpolation of a per-vertex field of a tet mesh onto a grid (CPU:
-// interpolateVertexField; GPU: gpu::FieldInterpolationKernel). `fill` for
-// voxel centres in no tet.
-using VertexFieldInterpolation =
-    std::function<ScalarGrid(const TetMesh& mesh, const std::vector<double>& values, const GridGeometry& target, float fill)>;
-VertexFieldInterpolation cpuFieldInterpolation(int threads = 0);
 
 // The grid error e_g of a deformed TM on `geometry` (eq. 4.5-4.6 and the
 // interpolation through the rest TM), with its statistics over the voxels

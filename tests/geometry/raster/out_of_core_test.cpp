@@ -2,7 +2,8 @@
 // the slab-streamed output equal to the in-core result, through compressed
 // and plain files, with a memory budget that forces many slabs and windows.
 
-#include "geometry/deform/out_of_core.h"
+#include "geometry/raster/out_of_core.h"
+#include "geometry/raster/raster_engines.h"
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/synth.h"
@@ -72,13 +73,25 @@ LabelGrid figure() {
   return grid;
 }
 
+OutOfCoreSource openSource(const std::string& path, std::int64_t maxVoxels, const std::string& dir) {
+  return OutOfCoreSource(openGridSlices(path), path, gridSlicesSeekable(path), maxVoxels, dir);
+}
+
+// G' written as `voxmorph deform --max-memory` writes it, on the CPU engines.
+void writeOutOfCore(OutOfCoreSource& source, const TetMesh& tm, const std::vector<Eigen::Vector3d>& deformed, const std::string& path,
+                    int samples = 1, std::int64_t budgetBytes = std::int64_t(2048) << 20) {
+  CpuRasterEngines engines;
+  const auto engine = makeRasterizer(engines, {.slices = &source.slices()}, tm, deformed, samples, budgetBytes);
+  writePosedGrid(*engine, *createGridSlices(path, engine->outputGeometry(), source.maxLabel()));
+}
+
 TEST(OutOfCore, StreamedOutputEqualsInCoreThroughFiles) {
   const std::string dir = test::tempDir();
   const LabelGrid grid = figure();
   for (const char* sourceName : {"source.nii.gz", "source.nii"}) {
     const std::string sourcePath = dir + "/" + sourceName;
     writeGrid(sourcePath, grid);
-    OutOfCoreSource source(sourcePath, grid.voxelCount() / 27, dir);
+    OutOfCoreSource source = openSource(sourcePath, grid.voxelCount() / 27, dir);
     EXPECT_EQ(source.downsampleFactor(), downsampleFactor(grid.geometry(), grid.voxelCount() / 27));
     EXPECT_GE(source.downsampleFactor(), 3);
     EXPECT_EQ(source.maxLabel(), grid.maxLabel());
@@ -91,7 +104,7 @@ TEST(OutOfCore, StreamedOutputEqualsInCoreThroughFiles) {
       for (const char* outputName : {"posed.nii.gz", "posed.mha"}) {
         const std::string outputPath = dir + "/" + outputName;
         // 64 KiB: windows of a few source slices, slabs of a few output slices.
-        rasterizeOutOfCore(source, tm, deformed, outputPath, {.maxMemoryBytes = 64 << 10, .samples = samples});
+        writeOutOfCore(source, tm, deformed, outputPath, samples, 64 << 10);
         const LabelGrid got = readGrid(outputPath);
         ASSERT_EQ(got.dims(), expected.dims());
         EXPECT_TRUE(got.geometry().origin.isApprox(expected.geometry().origin, 1e-5));
@@ -108,14 +121,14 @@ TEST(OutOfCore, StreamedOutputEqualsInCoreThroughFiles) {
 TEST(OutOfCore, FailuresLeaveNoOutput) {
   const std::string dir = test::tempDir();
   const LabelGrid grid = figure();
-  EXPECT_THROW(OutOfCoreSource(dir + "/missing.nii.gz", 1000, dir), InputError);
+  EXPECT_THROW(openSource(dir + "/missing.nii.gz", 1000, dir), InputError);
   writeGrid(dir + "/source.nii.gz", grid);
-  OutOfCoreSource source(dir + "/source.nii.gz", 1000, dir);
+  OutOfCoreSource source = openSource(dir + "/source.nii.gz", 1000, dir);
   const TetMesh tm = tetrahedralizeVoxels(source.downsampled(), {.includeBackground = false});
   auto bad = tm.positions;
   bad[0].x() = std::nan("");
-  EXPECT_THROW(rasterizeOutOfCore(source, tm, bad, dir + "/posed.nii.gz"), InputError);
-  EXPECT_ANY_THROW(rasterizeOutOfCore(source, tm, tm.positions, dir + "/no/such/dir/posed.nii.gz"));
+  EXPECT_THROW(writeOutOfCore(source, tm, bad, dir + "/posed.nii.gz"), InputError);
+  EXPECT_ANY_THROW(writeOutOfCore(source, tm, tm.positions, dir + "/no/such/dir/posed.nii.gz"));
   EXPECT_EQ(test::listFiles(dir), "source.nii.gz\n");
 }
 

@@ -1,9 +1,10 @@
-#include "gpu/deform_grid.h"
+#include "geometry/deform/run/deform_run.h"
 
 #include "geometry/deform/solve/label_volumes.h"
-#include "geometry/deform/out_of_core.h"
+#include "geometry/raster/out_of_core.h"
 #include "geometry/deform/pipeline.h"
 #include "geometry/deform/pose/posed_extent.h"
+#include "geometry/raster/out_of_core.h"
 #include "geometry/raster/rasterize.h"
 #include "geometry/error.h"
 #include "geometry/atomic_file.h"
@@ -12,16 +13,13 @@
 #include "geometry/label_stats.h"
 #include "geometry/deform/pose/joint_pose.h"
 #include "geometry/world_frame.h"
-#include "gpu/context.h"
-#include "gpu/kernels/field_interpolation.h"
-#include "gpu/kernels/rasterize.h"
 
 #include <algorithm>
 #include <filesystem>
 #include <memory>
 #include <optional>
 
-namespace vox::gpu {
+namespace vox {
 
 namespace {
 
@@ -51,7 +49,7 @@ Source openSource(const DeformGridRequest& o) {
     const std::int64_t budget = o.maxMemoryMb << 20;
     const std::int64_t maxWorking = std::min(kDefaultWorkingVoxels, budget / 2 / kPreprocessBytesPerVoxel);
     const std::string temp = std::filesystem::path(o.output).parent_path().string();
-    s.outOfCore = std::make_unique<OutOfCoreSource>(o.input, maxWorking, temp);
+    s.outOfCore = std::make_unique<OutOfCoreSource>(openGridSlices(o.input), o.input, gridSlicesSeekable(o.input), maxWorking, temp);
     s.factor = s.outOfCore->downsampleFactor();
     return s;
   }
@@ -79,47 +77,6 @@ private:
   LabelGrid grid_;
 };
 
-// The rasterization engine of G': the GPU kernel, or the CPU reference.
-struct Engine {
-  std::unique_ptr<Context> context;
-  std::unique_ptr<RasterizeKernel> kernel;
-  std::unique_ptr<RasterizationPlan> plan;
-  std::unique_ptr<LabelGridSlices> gridSlices;
-  std::unique_ptr<CpuSlabRasterizer> cpu;
-  std::string name;
-
-  SlabRasterizer& engine() { return kernel ? static_cast<SlabRasterizer&>(*kernel) : *cpu; }
-};
-
-void makeEngine(Engine& e, Source& source, const TetMesh& rest, const std::vector<Eigen::Vector3d>& deformed, const DeformGridRequest& o,
-                std::int64_t rasterBudget) {
-  // Without a budget the engines keep their own slab and window sizes (in core).
-  const RasterMemoryLimits limits = rasterBudget > 0 ? rasterMemoryLimits(rasterBudget, o.samples) : RasterMemoryLimits{};
-  const bool limited = rasterBudget > 0;
-  if (e.context) {
-    RasterizeKernelOptions ko{.samples = o.samples};
-    if (limited) {
-      ko.maxSlabSamples = std::uint64_t(limits.slabSamples);
-      ko.maxWindowVoxels = std::uint64_t(limits.windowVoxels);
-    }
-    e.kernel = source.grid ? std::make_unique<RasterizeKernel>(*e.context, *source.grid, rest, ko)
-                           : std::make_unique<RasterizeKernel>(*e.context, source.outOfCore->slices(), rest, ko);
-    e.kernel->setDeformedPositions(deformed);
-    return;
-  }
-  e.plan = std::make_unique<RasterizationPlan>(source.geometry(), rest, deformed, o.samples);
-  GridSliceReader* reader = nullptr;
-  if (source.grid) {
-    e.gridSlices = std::make_unique<LabelGridSlices>(*source.grid);
-    reader = e.gridSlices.get();
-  } else {
-    reader = &source.outOfCore->slices();
-  }
-  CpuRasterizerLimits cl;
-  if (limited) cl = {.slabSamples = limits.slabSamples, .windowVoxels = limits.windowVoxels};
-  e.cpu = std::make_unique<CpuSlabRasterizer>(*e.plan, *reader, cl);
-}
-
 void warn(const DeformGridRequest& o, const std::string& message) {
   if (o.warn) o.warn(message);
 }
@@ -130,9 +87,7 @@ void warn(const DeformGridRequest& o, const std::string& message) {
 PipelineOptions pipelineOptions(const DeformGridRequest& o, const Source& source) {
   std::optional<LabelGrid> userParts;
   if (!o.parts.empty()) {
-    LabelGrid parts = readGrid(o.parts);
-    if (parts.dims() != source.geometry().dims)
-      throw InputError(o.parts, "has other dims than the grid " + o.input);
+    LabelGrid parts = readGrid(o.parts);  // its dims checked with the request
     if (source.factor > 1) {
       LabelGridSlices slices(parts);
       parts = downsampleLabels(slices, source.factor);
@@ -175,36 +130,27 @@ void checkDeformGridRequest(const DeformGridRequest& o) {
   if (!o.posedCage.empty() && !hasSurfaceExtension(o.posedCage))
     throw InputError(o.posedCage, "unknown surface format for --posed-cage (use .obj, .off or .ply)");
   if (o.preserveVolumes && o.maxMemoryMb > 0)
-    throw InputError("--preserve-volumes", "needs the posed grid in memory; it cannot be combined with --max-memory");
+    throw UsageError("--preserve-volumes", "needs the posed grid in memory; it cannot be combined with --max-memory");
   if (!o.collisionMask.empty() && !hasGridExtension(o.collisionMask))
     throw InputError(o.collisionMask, "unknown grid format for --collision-mask");
   if (!o.posedMesh.empty() && !hasTetMeshExtension(o.posedMesh))
     throw InputError(o.posedMesh, "unknown tet mesh format for --posed-mesh (use .mesh, .meshb, .vtu or .msh)");
-  if ((!o.pose.separations.empty() || !o.extraSeparations.empty()) && !o.organs)
-    throw InputError(o.poseSource, "limb separation needs the grid's organ table (--organs) to find the label groups");
-  if (usesLabelGroups(o.pose) && !o.organs)
-    throw InputError(o.poseSource, "a selection by label group needs the grid's organ table (--organs)");
+  if (!o.pose.separations.empty() || !o.extraSeparations.empty())
+    requireOrganTable(o.organs.has_value(), OrganTableNeed::Separation, o.poseSource);
+  if (usesLabelGroups(o.pose)) requireOrganTable(o.organs.has_value(), OrganTableNeed::LabelGroup, o.poseSource);
   const bool skeletal = !o.pose.joints.empty() || usesBodyParts(o.pose) || !o.parts.empty();
-  if (skeletal && !o.organs)
-    throw InputError(o.poseSource, "a pose with joints or body parts needs the grid's organ table (--organs) to find the bones");
-  if (skeletal) skeleton::requireBones(*o.organs, o.organsSource);
+  if (skeletal) {
+    requireOrganTable(o.organs.has_value(), OrganTableNeed::Bones, o.poseSource);
+    skeleton::requireBones(*o.organs, o.organsSource);
+  }
+  if (!o.parts.empty() && openGridSlices(o.parts)->geometry().dims != openGridSlices(o.input)->geometry().dims)
+    throw InputError(o.parts, "has other dims than the grid " + o.input);
   if (!o.collisionMask.empty() && !skeletal && !(o.organs && skeleton::namesBones(*o.organs)))
     throw InputError(o.collisionMask, "collisions are between body parts: they need an organ table that names the bones (--organs) or --parts");
 }
 
-DeformationReport deformGrid(const DeformGridRequest& o) {
+DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines) {
   checkDeformGridRequest(o);
-
-  Engine engine;
-  if (!o.cpu) {
-    try {
-      engine.context = std::make_unique<Context>();
-      engine.name = "GPU (" + engine.context->info().name + ")";
-    } catch (const RuntimeFailure& e) {
-      warn(o, std::string(e.what()) + "; using the CPU");
-    }
-  }
-  if (!engine.context) engine.name = "CPU";
 
   DeformationReport report;
   report.input = o.input;
@@ -237,14 +183,7 @@ DeformationReport deformGrid(const DeformGridRequest& o) {
                    selectionMovingFarthest(pipeline->pose(), pipeline->handles(), pipeline->deformedCage(), source.geometry()),
                    o.allowGrowth);
 
-  std::unique_ptr<FieldInterpolationKernel> interpolationKernel;
-  VertexFieldInterpolation interpolate = cpuFieldInterpolation();
-  if (engine.context) {
-    interpolationKernel = std::make_unique<FieldInterpolationKernel>(*engine.context);
-    interpolate = [k = interpolationKernel.get()](const TetMesh& mesh, const std::vector<double>& values, const GridGeometry& target,
-                                                  float fill) { return k->run(mesh, values, target, fill); };
-  }
-  report.refinement = pipeline->refine({.maxIterations = o.refineIterations, .maxTets = o.maxTets}, interpolate);
+  report.refinement = pipeline->refine({.maxIterations = o.refineIterations, .maxTets = o.maxTets}, engines.interpolation());
   describePipeline(report, *pipeline);
   report.rigidBonesRequested = o.rigidBones;
   std::optional<StageTime> collisionTime;
@@ -283,7 +222,7 @@ DeformationReport deformGrid(const DeformGridRequest& o) {
   const TetMesh rest = pipeline->transferMesh();
   const std::vector<Eigen::Vector3d> deformed = pipeline->deformedTransferMesh();
   pipeline.reset();
-  interpolationKernel.reset();
+  engines.releaseInterpolation();
 
   StageTimer rasterTimer("rasterization");
   std::int64_t rasterBudget = 0;
@@ -292,12 +231,13 @@ DeformationReport deformGrid(const DeformGridRequest& o) {
                                   std::int64_t(rest.vertexCount()) * 48 + std::int64_t(rest.tetCount()) * 32;
     rasterBudget = std::max<std::int64_t>(std::int64_t(64) << 20, report.maxMemoryBytes - resident - kRasterOverheadBytes);
   }
-  makeEngine(engine, source, rest, deformed, o, rasterBudget);
+  const RasterSource raster = source.grid ? RasterSource{.grid = &*source.grid} : RasterSource{.slices = &source.outOfCore->slices()};
+  const std::unique_ptr<SlabRasterizer> engine = makeRasterizer(engines, raster, rest, deformed, o.samples, rasterBudget);
   const Label maxLabel = source.grid ? source.grid->maxLabel() : source.outOfCore->maxLabel();
   PosedGridMeasures after;
   std::vector<double> deformedVolumes;
   if (o.preserveVolumes) {
-    LabelGrid posed = rasterizeAllSlabs(engine.engine());
+    LabelGrid posed = rasterizeAllSlabs(*engine);
     report.stages.push_back(rasterTimer.stop());
     StageTimer correctionTimer("volume correction");
     deformedVolumes = deformedLabelVolumes(*source.grid, rest, deformed);
@@ -308,15 +248,15 @@ DeformationReport deformGrid(const DeformGridRequest& o) {
     report.stages.push_back(correctionTimer.stop());
     StageTimer writeTimer("write");
     HeldGrid held(std::move(posed));
-    after = writePosedGrid(held, o.output, maxLabel);
+    after = writePosedGrid(held, *createGridSlices(o.output, held.outputGeometry(), maxLabel));
     report.posed = held.outputGeometry();
     report.stages.push_back(writeTimer.stop());
   } else {
-    after = writePosedGrid(engine.engine(), o.output, maxLabel);
-    report.posed = engine.engine().outputGeometry();
+    after = writePosedGrid(*engine, *createGridSlices(o.output, engine->outputGeometry(), maxLabel));
+    report.posed = engine->outputGeometry();
     report.stages.push_back(rasterTimer.stop());
   }
-  report.engine = engine.name;
+  report.engine = engines.name();
 
   const std::vector<std::uint64_t> before = source.grid ? computeLabelStats(*source.grid).counts : source.outOfCore->labelCounts();
   const OrganTable* organs = options.organs ? &*options.organs : nullptr;
@@ -328,4 +268,4 @@ DeformationReport deformGrid(const DeformGridRequest& o) {
   return report;
 }
 
-}  // namespace vox::gpu
+}  // namespace vox

@@ -1,4 +1,4 @@
-#include "geometry/deform/out_of_core.h"
+#include "geometry/raster/out_of_core.h"
 
 #include "geometry/error.h"
 #include "geometry/progress.h"
@@ -15,10 +15,6 @@ namespace vox {
 namespace {
 
 std::string errnoText() { return std::strerror(errno); }
-
-bool endsWith(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
 
 // Full-resolution slices copied to an unlinked raw temporary (native uint16),
 // read back in any order.
@@ -142,12 +138,11 @@ int downsampleFactor(const GridGeometry& source, std::int64_t maxVoxels) {
   return f;
 }
 
-OutOfCoreSource::OutOfCoreSource(const std::string& path, std::int64_t maxDownsampledVoxels, const std::string& tempDirectory)
+OutOfCoreSource::OutOfCoreSource(std::unique_ptr<GridSliceReader> reader, const std::string& path, bool seekable,
+                                 std::int64_t maxDownsampledVoxels, const std::string& tempDirectory)
     : path_(path) {
-  std::unique_ptr<GridSliceReader> reader = openGridSlices(path);
   factor_ = vox::downsampleFactor(reader->geometry(), maxDownsampledVoxels);
-  // Only an uncompressed NIfTI is sure to seek cheaply; other files are
-  // copied to raw as they stream by.
+  // A source that does not seek cheaply is copied to raw as it streams by.
   const std::int64_t sliceVoxels = reader->geometry().sliceVoxels();
   BodyProjectionAccumulator projection(reader->geometry());
   std::int64_t slicesRead = 0;
@@ -159,7 +154,7 @@ OutOfCoreSource::OutOfCoreSource(const std::string& path, std::int64_t maxDownsa
     projection.addSlices(slicesRead, n, s);
     slicesRead += n;
   };
-  if (endsWith(path, ".nii")) {
+  if (seekable) {
     downsampled_ = streamDownsample(*reader, factor_, maxLabel_, count);
     slices_ = std::move(reader);
   } else {
@@ -185,29 +180,32 @@ RasterMemoryLimits rasterMemoryLimits(std::int64_t budgetBytes, int samples) {
   return l;
 }
 
-void writeDeformedGrid(SlabRasterizer& engine, const std::string& outputPath, Label maxLabel) {
-  const GridGeometry& g = engine.outputGeometry();
-  auto writer = createGridSlices(outputPath, g, maxLabel);
-  const std::int64_t nz = g.dims[2], step = std::min(nz, engine.slabSlices());
+void MeasuringRasterizer::rasterizeSlab(std::int64_t z0, std::int64_t z1, Label* out) {
+  engine_.rasterizeSlab(z0, z1, out);
+  projection_.addSlices(z0, z1 - z0, out);
+  const std::int64_t n = (z1 - z0) * outputGeometry().sliceVoxels();
+  for (std::int64_t v = 0; v < n; ++v) {
+    const Label l = out[v];
+    if (l >= counts_.size()) counts_.resize(std::size_t(l) + 1, 0);
+    ++counts_[l];
+  }
+}
+
+PosedGridMeasures writePosedGrid(SlabRasterizer& engine, GridSliceWriter& sink) {
+  MeasuringRasterizer measuring(engine);
+  const GridGeometry& g = measuring.outputGeometry();
+  const std::int64_t nz = g.dims[2], step = std::min(nz, measuring.slabSlices());
   std::vector<Label> slab(std::size_t(step * g.sliceVoxels()));
   ProgressCounter progress("rasterize", double(nz));
   for (std::int64_t z0 = 0; z0 < nz; z0 += step) {
     const std::int64_t z1 = std::min(nz, z0 + step);
-    engine.rasterizeSlab(z0, z1, slab.data());
-    writer->writeSlices(slab.data(), z1 - z0);
+    measuring.rasterizeSlab(z0, z1, slab.data());
+    sink.writeSlices(slab.data(), z1 - z0);
     progress.advance(double(z1 - z0));
   }
-  writer->commit();
+  sink.commit();
   progress.finish();
-}
-
-void rasterizeOutOfCore(OutOfCoreSource& source, const TetMesh& rest, const std::vector<Eigen::Vector3d>& deformed,
-                        const std::string& outputPath, const OutOfCoreOptions& options) {
-  const RasterizationPlan plan(source.geometry(), rest, deformed, options.samples);
-  const RasterMemoryLimits limits = rasterMemoryLimits(options.maxMemoryBytes, options.samples);
-  CpuSlabRasterizer engine(plan, source.slices(), {.slabSamples = limits.slabSamples, .windowVoxels = limits.windowVoxels},
-                           options.threads);
-  writeDeformedGrid(engine, outputPath, source.maxLabel());
+  return {measuring.counts(), measuring.projection()};
 }
 
 }  // namespace vox

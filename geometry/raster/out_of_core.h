@@ -4,17 +4,19 @@
 // resolution, reading the source and writing G' in slabs so that neither is
 // ever whole in memory.
 //
-//   OutOfCoreSource source(path, maxDownsampledVoxels, tempDirectory);
+//   OutOfCoreSource source(openGridSlices(path), path, gridSlicesSeekable(path), maxDownsampledVoxels, tempDirectory);
 //   ... cage, transfer mesh, deformation on source.downsampled() ...
-//   rasterizeOutOfCore(source, tm, deformed, outputPath, options);        // CPU
-//   gpu::rasterizeOutOfCore(context, source, tm, deformed, outputPath, options);  // GPU
+//   engine = engines.rasterizer(...source.slices()..., rasterMemoryLimits(budget, samples));
+//   writePosedGrid(*engine, *createGridSlices(outputPath, engine->outputGeometry(), source.maxLabel()));
 //
+// (geometry/deform/run/deform_run.cpp does this under --max-memory; the
+// engines are raster_engines.h's.)
 // The downsampled grid keeps the source's grid frame (its voxel corners are
 // source voxel corners), so a transfer mesh built on it applies to the source.
 
 #include "geometry/body_projection.h"
 #include "geometry/raster/rasterize.h"
-#include "geometry/io/grid_io.h"
+#include "geometry/grid_slices.h"
 #include "geometry/label_grid.h"
 #include "geometry/tet_mesh.h"
 
@@ -36,14 +38,16 @@ LabelGrid downsampleLabels(GridSliceReader& source, int factor);
 int downsampleFactor(const GridGeometry& source, std::int64_t maxVoxels);
 
 // A full-resolution source opened for out-of-core deformation. Construction
-// reads the source once, in slice order: it builds the downsampled grid,
-// finds the largest label, counts the labels, and copies a compressed file
-// (.gz) to a raw temporary in `tempDirectory` so that slab windows can be
-// read in any order (the temporary is unlinked at once: nothing is left
-// behind, even on a crash). Uncompressed files are read in place.
+// reads `reader` once, in slice order: it builds the downsampled grid, finds
+// the largest label, counts the labels, and unless the reader is `seekable`
+// (an uncompressed file) copies the slices to a raw temporary in
+// `tempDirectory` so that slab windows can be read in any order (the
+// temporary is unlinked at once: nothing is left behind, even on a crash).
+// `path` names the source in messages.
 class OutOfCoreSource {
 public:
-  OutOfCoreSource(const std::string& path, std::int64_t maxDownsampledVoxels, const std::string& tempDirectory);
+  OutOfCoreSource(std::unique_ptr<GridSliceReader> reader, const std::string& path, bool seekable,
+                  std::int64_t maxDownsampledVoxels, const std::string& tempDirectory);
   ~OutOfCoreSource();
   OutOfCoreSource(const OutOfCoreSource&) = delete;
   OutOfCoreSource& operator=(const OutOfCoreSource&) = delete;
@@ -71,13 +75,6 @@ private:
   BodyProjection projection_;
 };
 
-struct OutOfCoreOptions {
-  // Budget (bytes) for the rasterization's slab and source window buffers.
-  std::int64_t maxMemoryBytes = std::int64_t(2048) << 20;
-  int samples = 1;  // RasterizeOptions::samples
-  int threads = 0;  // CPU engine threads; 0 = every hardware thread
-};
-
 // How a memory budget splits between a slab's sample states (4 bytes each,
 // plus 4 bytes of output per voxel) and the source window (2 bytes a voxel).
 struct RasterMemoryLimits {
@@ -86,13 +83,33 @@ struct RasterMemoryLimits {
 };
 RasterMemoryLimits rasterMemoryLimits(std::int64_t budgetBytes, int samples);
 
-// Writes G' to `outputPath` (any format createGridSlices streams: .nii,
-// .nii.gz, .mha, .mhd) slab by slab from `engine`; the file appears only
-// when complete. `maxLabel` (the source's) decides the stored type.
-void writeDeformedGrid(SlabRasterizer& engine, const std::string& outputPath, Label maxLabel);
+// A slab engine that measures the slabs it hands out: the posed grid's
+// per-label voxel counts and its body projection (body_projection.h),
+// without holding the grid.
+class MeasuringRasterizer : public SlabRasterizer {
+public:
+  explicit MeasuringRasterizer(SlabRasterizer& engine) : engine_(engine), projection_(engine.outputGeometry()) {}
+  const GridGeometry& outputGeometry() const override { return engine_.outputGeometry(); }
+  std::int64_t slabSlices() const override { return engine_.slabSlices(); }
+  void rasterizeSlab(std::int64_t z0, std::int64_t z1, Label* out) override;
+  // Voxels per label (index = label) over every slab so far.
+  const std::vector<std::uint64_t>& counts() const { return counts_; }
+  BodyProjection projection() const { return projection_.result(); }
 
-// Out-of-core rasterization with the CPU reference engine.
-void rasterizeOutOfCore(OutOfCoreSource& source, const TetMesh& rest, const std::vector<Eigen::Vector3d>& deformed,
-                        const std::string& outputPath, const OutOfCoreOptions& options = {});
+private:
+  SlabRasterizer& engine_;
+  std::vector<std::uint64_t> counts_;
+  BodyProjectionAccumulator projection_;
+};
+
+struct PosedGridMeasures {
+  std::vector<std::uint64_t> counts;  // voxels per label (index = label)
+  BodyProjection projection;
+};
+
+// Writes G' from `engine` to `sink` slab by slab and commits it (a grid file
+// appears complete or not at all); returns G''s per-label voxel counts and
+// body projection.
+PosedGridMeasures writePosedGrid(SlabRasterizer& engine, GridSliceWriter& sink);
 
 }  // namespace vox

@@ -1,17 +1,17 @@
 #pragma once
 // deformGrid: re-poses a label grid file and writes the posed full-resolution
 // grid (thesis chapters 3 and 4), as `voxmorph deform` and the viewer's export
-// both run it:
+// both run it, on the engines the caller chooses (raster/raster_engines.h:
+// the GPU kernels of gpu/raster_engines.h, or the CPU references):
 //   a pose with joints compiled against the skeleton (deform/pose/joint_pose.h) ->
 //   pre-process (label groups, envelope, cage, transfer mesh, embedding) ->
 //   deformation (ARAP -> Green coordinates -> propagation) ->
-//   deformation-adaptive refinement (eq. 4.5-4.7; field interpolation on the
-//   GPU) -> rasterization of G' (GPU, or the CPU reference), streamed slab by
-//   slab to the output file (held in memory and corrected with
+//   deformation-adaptive refinement (eq. 4.5-4.7; the engines' field
+//   interpolation) -> rasterization of G' (the engines' rasterizer), streamed
+//   slab by slab to the output file (held in memory and corrected with
 //   preserveVolumes) -> report.
-// The engine choice (GPU, else the CPU with a warning), the memory budgets of
-// the out-of-core path and the report's assembly live here, not in the
-// callers. With maxMemoryMb the source is read once (downsampled for the
+// The memory budgets of the out-of-core path and the report's assembly live
+// here, not in the callers. With maxMemoryMb the source is read once (downsampled for the
 // pipeline, spooled to an unlinked raw temporary when compressed) and G' is
 // rasterized from source windows under the budget.
 
@@ -19,6 +19,7 @@
 #include "geometry/deform/report/deformation_report.h"
 #include "geometry/deform/pose/pose.h"
 #include "geometry/organ_table.h"
+#include "geometry/raster/raster_engines.h"
 #include "geometry/provenance.h"
 #include "geometry/tri_mesh.h"
 
@@ -28,7 +29,7 @@
 #include <string>
 #include <vector>
 
-namespace vox::gpu {
+namespace vox {
 
 struct DeformGridRequest {
   std::string input;          // label grid file
@@ -42,11 +43,10 @@ struct DeformGridRequest {
   std::string parts;
   std::vector<LimbSeparation> extraSeparations;  // beside the pose's own
   std::optional<TriMesh> cage;                   // instead of the automatic cage (grid frame)
-  double dilationMm = 20.0;
-  int vertices = 300;
+  double dilationMm = CageOptions{}.dilationMm;
+  int vertices = CageOptions{}.targetVertices;
   int samples = 1;
   std::int64_t maxMemoryMb = 0;  // 0: in core
-  bool cpu = false;
   bool preserveVolumes = false;
   // What --preserve-volumes brings each label to: the volume the deformation
   // gives it (Jacobians of the transfer mesh), or its rest volume (the
@@ -63,18 +63,19 @@ struct DeformGridRequest {
   std::string collisionMask;
   // Copied into the report: the caller's command line and input digests.
   Provenance provenance;
-  // Warnings (a GPU that could not be used, foreground outside the cage).
+  // Warnings (foreground outside the cage).
   std::function<void(const std::string&)> warn;
 };
 
 // Checks what can be checked cheaply (options that exclude each other, output
 // extensions, separations and label groups without an organ table, joints
-// without one or with one that names no bones): throws InputError naming
-// the file or option.
+// without one or with one that names no bones, a parts grid whose dims are
+// not the grid's, from the headers): throws InputError naming the file or
+// option (UsageError for options that exclude each other).
 void checkDeformGridRequest(const DeformGridRequest& request);
 
-// Runs the whole deformation and writes request.output (and the optional
-// outputs); the returned report has every field of the JSON report.
-DeformationReport deformGrid(const DeformGridRequest& request);
+// Runs the whole deformation on `engines` and writes request.output (and the
+// optional outputs); the returned report has every field of the JSON report.
+DeformationReport deformGrid(const DeformGridRequest& request, RasterEngines& engines);
 
-}  // namespace vox::gpu
+}  // namespace vox

@@ -1,0 +1,195 @@
+#include "geometry/deform/report/deformation_report.h"
+
+#include "geometry/skeleton/body_parts.h"
+#include "geometry/skeleton/bones.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+
+// The JSON report of `voxmorph deform` (docs/POSES.md lists its fields).
+
+namespace vox {
+
+namespace {
+
+using nlohmann::json;
+
+json toJson(const DistortionHistogram& h) {
+  return {{"lo", h.lo},     {"hi", h.hi},   {"bins", h.fractions}, {"below", h.below},
+          {"above", h.above}, {"mean", h.mean}, {"min", h.min},   {"max", h.max}, {"rms_deviation", h.rmsDeviation}};
+}
+
+json toJson(const BodyProjection& p) {
+  return {{"front_area_mm2", p.frontMm2}, {"side_area_mm2", p.sideMm2}, {"top_area_mm2", p.topMm2}, {"height_mm", p.heightMm},
+          {"foreground_voxels", p.foregroundVoxels}, {"exact", p.exact}};
+}
+
+json toJson(const GridGeometry& g) {
+  return {{"dims", {g.dims[0], g.dims[1], g.dims[2]}},
+          {"spacing_mm", {g.spacing.x(), g.spacing.y(), g.spacing.z()}},
+          {"origin_mm", {g.origin.x(), g.origin.y(), g.origin.z()}},
+          {"voxels", g.voxelCount()}};
+}
+
+}  // namespace
+
+std::string deformationReportJson(const DeformationReport& r) {
+  json root;
+  root["input"] = r.input;
+  root["output"] = r.output;
+  root["pose"] = r.pose;
+  root["engine"] = r.engine;
+  root["source_grid"] = toJson(r.source);
+  root["posed_grid"] = toJson(r.posed);
+  root["working_grid"] = {{"downsample_factor", r.workingFactor}, {"voxels", r.workingVoxels}};
+  root["max_memory_bytes"] = r.maxMemoryBytes;
+  root["samples"] = r.samples;
+
+  json stages = json::array();
+  double wall = 0, cpu = 0;
+  for (const StageTime& t : r.stages) {
+    stages.push_back({{"stage", t.name}, {"seconds", t.seconds}, {"cpu_seconds", t.cpuSeconds}});
+    wall += t.seconds;
+    cpu += t.cpuSeconds;
+  }
+  root["stages"] = stages;
+  root["total_seconds"] = wall;
+  root["total_cpu_seconds"] = cpu;
+
+  root["cage"] = {{"automatic", r.automaticCage},
+                  {"vertices", r.cageVertices},
+                  {"faces", r.cageFaces},
+                  {"meshed_vertices_before_qem", r.cage.meshedVertices},
+                  {"eroded_voxels", r.cage.erodedVoxels},
+                  {"valid", r.cage.check.validCage()},
+                  {"genus", r.cage.check.genus},
+                  {"self_intersections", r.cage.check.selfIntersections},
+                  {"volume_mm3", r.cage.check.volume}};
+  json selections = json::array();
+  for (const auto& [name, vertices] : r.selections) selections.push_back({{"name", name}, {"cage_vertices", vertices}});
+  root["selections"] = selections;
+  root["envelope"] = {{"vertices", r.envelopeVertices}, {"faces", r.envelopeFaces}, {"vertices_outside_cage", r.envelopeOutside}};
+  json cuts = json::array();
+  for (const CutReport& c : r.cuts)
+    cuts.push_back({{"cut_faces", c.cutFaces}, {"duplicated_vertices", c.duplicatedVertices}, {"opened_rim_faces", c.openedRimFaces}, {"contact_vertices", c.contactVertices}});
+  root["transfer_mesh"] = {{"vertices", r.tmVertices},
+                           {"tets", r.tmTets},
+                           {"vertices_inside_cage", r.tmInside},
+                           {"vertices_outside_cage", r.tmOutside},
+                           {"uncovered_foreground_voxels", r.uncoveredVoxels},
+                           {"tets_inverted_by_deformation", r.tmInverted},
+                           {"inverted_rest_volume_fraction", r.tmInvertedVolumeFraction},
+                           {"cuts", cuts}};
+  root["outliers"] = {{"transfer_mesh_vertices_outside_cage", r.tmOutside},
+                      {"foreground_voxels_outside_cage", r.foregroundOutsideCage},
+                      {"edge_length_distortion",
+                       {{"outside", toJson(r.outlierDistortion.outside)},
+                        {"inside_nearby", toJson(r.outlierDistortion.insideNearby)},
+                        {"inside", toJson(r.outlierDistortion.inside)}}}};
+
+  json steps = json::array();
+  for (std::size_t k = 0; k < r.refinement.steps.size(); ++k) {
+    const RefinementStep& s = r.refinement.steps[k];
+    steps.push_back({{"iteration", k},
+                     {"vertices", s.vertices},
+                     {"tets", s.tets},
+                     {"mean_error", s.meanError},
+                     {"max_error", s.maxError},
+                     {"update_strength", s.strength},
+                     {"seconds", s.seconds}});
+  }
+  root["refinement"] = {{"iterations", steps}, {"stop", r.refinement.stopReason}};
+  root["distortion"] = {{"volume_mm3", r.distortion.volume},
+                        {"angle_deg", toJson(r.distortion.angle)},
+                        {"stretch", toJson(r.distortion.stretch)}};
+
+  json labels = json::array();
+  json small = json::array();
+  double largest = 0;
+  json largestLabel = nullptr;
+  for (const LabelChange& c : r.labels) {
+    json j = {{"label", c.label}, {"voxels_before", c.before}, {"voxels_after", c.after}, {"volume_change_pct", c.volumeChangePercent}};
+    if (!c.name.empty()) j["name"] = c.name;
+    if (c.unnamed) j["unnamed"] = true;
+    if (c.deformedVolumeVoxels >= 0) j["deformed_volume_voxels"] = c.deformedVolumeVoxels;
+    if (r.withMasses) {
+      j["mass_before_g"] = c.massBeforeGrams;
+      j["mass_after_g"] = c.massAfterGrams;
+      j["mass_change_pct"] = c.volumeChangePercent;
+    }
+    labels.push_back(std::move(j));
+    if (c.before < kSmallOrganVoxels) {
+      small.push_back({{"label", c.label}, {"name", c.name}, {"voxels_before", c.before}, {"change_pct", c.volumeChangePercent}});
+    } else if (std::abs(c.volumeChangePercent) > std::abs(largest) || largestLabel.is_null()) {
+      largest = c.volumeChangePercent;
+      largestLabel = {{"label", c.label}, {"name", c.name}, {"change_pct", c.volumeChangePercent}};
+    }
+  }
+  root["labels"] = labels;
+  root["small_labels"] = {{"threshold_voxels", kSmallOrganVoxels}, {"labels", small}};
+  root["largest_change_above_threshold"] = largestLabel;
+  json whole = {{"voxels_before", r.wholeBody.before},
+                {"voxels_after", r.wholeBody.after},
+                {"volume_change_pct", r.wholeBody.volumeChangePercent}};
+  if (r.withMasses) {
+    whole["mass_before_g"] = r.wholeBody.massBeforeGrams;
+    whole["mass_after_g"] = r.wholeBody.massAfterGrams;
+    whole["mass_change_pct"] = r.wholeBody.massChangePercent;
+  }
+  root["whole_body"] = whole;
+  root["body_projection"] = {
+      {"frame", "world, RAS+ (x to the subject's right, y anterior, z superior); front: along y onto the x-z plane, side: "
+                "along x onto the y-z plane, top: along z onto the x-y plane; height: extent along z"},
+      {"rest", toJson(r.restProjection)},
+      {"posed", toJson(r.posedProjection)}};
+  root["provenance"] = json::parse(provenanceJson(r.provenance));
+  if (!r.bones.empty()) {
+    json bones = json::array();
+    for (const BoneRigidity& b : r.bones)
+      bones.push_back({{"part", skeleton::partName(skeleton::Part(b.key / kBoneKeyStride))},
+                       {"bone", skeleton::boneName(skeleton::Bone(b.key % kBoneKeyStride))},
+                       {"voxels", b.voxels},
+                       {"tm_tets", b.tets},
+                       {"tm_vertices", b.vertices},
+                       {"rigid_vertices", r.rigidGroups > 0 ? b.rigidVertices : 0},
+                       {"tm_edges", b.edges},
+                       {"max_strain", b.maxStrain},
+                       {"volume_rest_ml", b.restVolumeMm3 * 1e-3},
+                       {"volume_posed_ml", b.posedVolumeMm3 * 1e-3},
+                       {"volume_change_percent", b.volumeChangePercent()}});
+    root["bones"] = {{"held_rigid", r.rigidGroups > 0},
+                     {"rigid_groups", r.rigidGroups},
+                     {"rigid_vertices", r.rigidVertices},
+                     {"free_joint_vertices", r.sharedBoneVertices},
+                     {"uncovered_bone_voxels", r.uncoveredBoneVoxels},
+                     {"per_bone", bones}};
+  }
+  if (const auto& c = r.collisions) {
+    json pairs = json::array();
+    for (const CollisionPair& p : c->pairs)
+      pairs.push_back({{"parts", {skeleton::partName(skeleton::Part(p.partA)), skeleton::partName(skeleton::Part(p.partB))}},
+                       {"voxels", p.voxels},
+                       {"volume_ml", double(p.voxels) * c->lattice.voxelVolume() * 1e-3}});
+    root["collisions"] = {{"lattice", toJson(c->lattice)},
+                          {"body_voxels", c->bodyVoxels},
+                          {"voxels", c->voxels},
+                          {"volume_ml", c->volumeMm3() * 1e-3},
+                          {"body_fraction", c->bodyFraction()},
+                          {"pairs", pairs}};
+  }
+  root["warnings"] = deformationWarnings(r);
+  if (const auto& c = r.volumeCorrection)
+    root["volume_correction"] = {{"targets", c->toRestVolumes ? "rest" : "deformed"},
+                                 {"boundary_voxels", c->candidates},
+                                 {"relabelled_voxels", c->relabelled},
+                                 {"still_boundary_voxels_kept", c->still},
+                                 {"sweeps", c->sweeps},
+                                 {"deviation_before_voxels", c->deviationBefore},
+                                 {"deviation_after_voxels", c->deviationAfter},
+                                 {"worst_label_pct_before", c->worstPercentBefore},
+                                 {"worst_label_pct_after", c->worstPercentAfter}};
+  return root.dump(2) + "\n";
+}
+
+}  // namespace vox
