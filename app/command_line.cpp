@@ -1,5 +1,6 @@
 #include "app/command_line.h"
 
+#include "geometry/ascii_text.h"
 #include "geometry/error.h"
 #include "geometry/atomic_file.h"
 #include "geometry/io/grid_io.h"
@@ -84,18 +85,8 @@ void writeJson(const std::string& path, const nlohmann::json& json) {
   writeFileAtomic(path, text);
 }
 
-namespace {
-
-std::string formatBound(double v) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%g", v);
-  return text;
-}
-
-}  // namespace
-
 CLI::Validator numberIn(double lo, double hi, const std::string& unit, bool openLow) {
-  const std::string range = (openLow ? "(" : "[") + formatBound(lo) + ", " + formatBound(hi) + "]" + (unit.empty() ? "" : " " + unit);
+  const std::string range = (openLow ? "(" : "[") + formatNumber("%g", lo) + ", " + formatNumber("%g", hi) + "]" + (unit.empty() ? "" : " " + unit);
   return CLI::Validator(
       [=](std::string& text) -> std::string {
         double v = 0.0;

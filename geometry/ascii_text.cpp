@@ -1,5 +1,7 @@
 #include "geometry/ascii_text.h"
 
+#include <cstdio>
+
 namespace vox {
 
 std::string toLowerAscii(std::string_view s) {
@@ -18,6 +20,12 @@ std::string lowerExtension(std::string_view path) {
   const auto dot = path.find_last_of('.');
   if (dot == std::string_view::npos || (slash != std::string_view::npos && dot < slash)) return "";
   return toLowerAscii(path.substr(dot));
+}
+
+std::string formatNumber(const char* format, double value) {
+  char text[64];
+  std::snprintf(text, sizeof text, format, value);
+  return text;
 }
 
 }  // namespace vox

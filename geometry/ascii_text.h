@@ -1,6 +1,6 @@
 #pragma once
 // ASCII case folding and file-name suffix tests, shared by the format
-// dispatchers, header parsers and name lookups.
+// dispatchers, header parsers and name lookups; numbers as printf writes them.
 
 #include <string>
 #include <string_view>
@@ -13,5 +13,7 @@ std::string toLowerAscii(std::string_view s);
 bool endsWithIgnoringCase(std::string_view s, std::string_view suffix);
 // The last extension of a path in lower case, dot included (".vtu"); "" when none.
 std::string lowerExtension(std::string_view path);
+// One number through a printf conversion for a double ("%g", "%.4g").
+std::string formatNumber(const char* format, double value);
 
 }  // namespace vox

@@ -1,5 +1,6 @@
 #include "geometry/raster/posed_extent.h"
 
+#include "geometry/ascii_text.h"
 #include "geometry/error.h"
 #include "geometry/raster/lattice_tets.h"
 
@@ -9,16 +10,6 @@
 #include <string>
 
 namespace vox {
-
-namespace {
-
-std::string voxelsText(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.4g", v);
-  return buf;
-}
-
-}  // namespace
 
 PosedExtent posedExtent(const GridGeometry& source, const std::vector<Eigen::Vector3d>& deformed) {
   if (deformed.empty()) throw InputError("deformed positions", "no vertices");
@@ -35,7 +26,7 @@ PosedExtent posedExtent(const GridGeometry& source, const std::vector<Eigen::Vec
   const double limit = double(kMaxGridVoxels);
   for (int a = 0; a < 3; ++a)
     if (!(std::abs(lo[a]) <= limit && std::abs(hi[a]) <= limit))
-      throw InputError("deformed positions", "a vertex is posed " + voxelsText(std::max(std::abs(lo[a]), std::abs(hi[a]))) +
+      throw InputError("deformed positions", "a vertex is posed " + formatNumber("%.4g", std::max(std::abs(lo[a]), std::abs(hi[a]))) +
                                                  " voxels from the source grid along axis " + std::to_string(a) +
                                                  " (more than the largest supported grid, " + std::to_string(kMaxGridVoxels) + ")");
   PosedExtent e;

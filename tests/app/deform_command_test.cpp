@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -181,6 +182,33 @@ TEST(DeformCommand, PreserveVolumesAtRestKeepsEachLabelsVoxels) {
                                              test::quote(s.dir + "/x.nii.gz") + " --preserve-volumes=mass"));
   EXPECT_EQ(bad.exitCode, 2) << bad.err;
   EXPECT_FALSE(std::filesystem::exists(s.dir + "/x.nii.gz"));
+}
+
+// A cage of one 300,000-vertex polygon (the OBJ reader fans it from its
+// first vertex): refused as not closed. The manifold check once cleared a map
+// as large as the fan's centre valence at every vertex, quadratic in the
+// polygon's size (minutes for this file); under a 10 CPU-second limit the
+// command is killed unless the check is linear.
+TEST(DeformCommand, AHugePolygonCageIsRefusedInLinearTime) {
+  VOX_REQUIRE_VOXMORPH();
+  const Stick s = stick();
+  std::string obj;
+  const int n = 300000;
+  obj.reserve(std::size_t(n) * 24);
+  for (int i = 0; i < n; ++i) {
+    const double a = 2.0 * 3.141592653589793 * i / n;
+    obj += "v " + std::to_string(50.0 * std::cos(a)) + " " + std::to_string(50.0 * std::sin(a)) + " 0\n";
+  }
+  obj += "f";
+  for (int i = 1; i <= n; ++i) obj += " " + std::to_string(i);
+  obj += "\n";
+  const std::string cage = writeFile(s.dir + "/polygon.obj", obj);
+  const std::string identity = writeFile(s.dir + "/identity.json", kIdentityPose);
+  const std::string out = s.dir + "/posed.nii.gz";
+  expectOneLineError(test::runCommand("ulimit -t 10; " + voxmorph("deform " + test::quote(s.grid) + " -o " + test::quote(out) + " --pose " +
+                                                                   test::quote(identity) + " --cage " + test::quote(cage))),
+                     "not closed");
+  EXPECT_FALSE(std::filesystem::exists(out));
 }
 
 TEST(DeformCommand, BadInputIsAOneLineErrorWithoutOutput) {

@@ -64,21 +64,26 @@ SurfaceCheck checkSurfaceTopology(const TriMesh& s) {
   std::vector<std::vector<std::int32_t>> facesAt(s.vertexCount());
   for (std::size_t f = 0; f < s.faceCount(); ++f)
     for (const std::int32_t v : s.triangles[f]) facesAt[v].push_back(std::int32_t(f));
-  std::unordered_map<std::int32_t, std::int32_t> firstAcross;  // other vertex of an edge at v -> local face
+  // firstAcross[w]: the local face of v's fan that first reached w across an
+  // edge (v, w), -1 where none; reset after each vertex through the faces
+  // around it, so the whole pass costs the sum of the valences (linear in
+  // the faces, whatever one vertex's valence).
+  std::vector<std::int32_t> firstAcross(s.vertexCount(), -1);
   for (std::size_t v = 0; v < s.vertexCount(); ++v) {
     const auto& around = facesAt[v];
     if (around.size() < 2) continue;
     DisjointSets fan(around.size());
-    firstAcross.clear();
     for (std::size_t i = 0; i < around.size(); ++i)
       for (const std::int32_t w : s.triangles[around[i]]) {
         if (w == std::int32_t(v)) continue;
-        const auto [it, inserted] = firstAcross.try_emplace(w, std::int32_t(i));
-        if (!inserted) fan.unite(std::int32_t(i), it->second);
+        if (firstAcross[w] < 0) firstAcross[w] = std::int32_t(i);
+        else fan.unite(std::int32_t(i), firstAcross[w]);
       }
     std::size_t fans = 0;
     for (std::size_t i = 0; i < around.size(); ++i) fans += fan.find(std::int32_t(i)) == std::int32_t(i);
     if (fans > 1) ++c.nonManifoldVertices;
+    for (const std::int32_t f : around)
+      for (const std::int32_t w : s.triangles[f]) firstAcross[w] = -1;
   }
 
   // Components and their genus: chi = V - E + F = 2 - 2 g per closed component.

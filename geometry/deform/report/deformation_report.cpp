@@ -3,8 +3,6 @@
 #include "geometry/skeleton/body_parts.h"
 #include "geometry/skeleton/bones.h"
 
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -13,8 +11,6 @@
 namespace vox {
 
 namespace {
-
-using nlohmann::json;
 
 double percentChange(double before, double after) { return before > 0 ? 100.0 * (after - before) / before : 0.0; }
 
@@ -31,8 +27,6 @@ EdgeDistortion summarize(std::vector<double>& values) {
   d.max = values.back();
   return d;
 }
-
-json toJson(const EdgeDistortion& d) { return {{"edges", d.edges}, {"mean", d.mean}, {"median", d.median}, {"p95", d.p95}, {"max", d.max}}; }
 
 std::string fixed(double v, int digits) {
   char buf[64];

@@ -15,6 +15,8 @@ namespace {
 
 using nlohmann::json;
 
+json toJson(const EdgeDistortion& d) { return {{"edges", d.edges}, {"mean", d.mean}, {"median", d.median}, {"p95", d.p95}, {"max", d.max}}; }
+
 json toJson(const DistortionHistogram& h) {
   return {{"lo", h.lo},     {"hi", h.hi},   {"bins", h.fractions}, {"below", h.below},
           {"above", h.above}, {"mean", h.mean}, {"min", h.min},   {"max", h.max}, {"rms_deviation", h.rmsDeviation}};
