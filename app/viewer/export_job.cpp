@@ -1,5 +1,4 @@
 #include "app/viewer/export_job.h"
-#include "gpu/raster_engines.h"
 
 #include "app/command_line.h"
 #include "geometry/atomic_file.h"
@@ -7,6 +6,7 @@
 #include "geometry/deform/report/deformation_report.h"
 #include "geometry/error.h"
 #include "geometry/progress.h"
+#include "gpu/raster_engines.h"
 
 #include <cstdio>
 #include <filesystem>
