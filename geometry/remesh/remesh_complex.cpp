@@ -387,7 +387,9 @@ void RemeshComplex::edgeRing(std::int32_t a, std::int32_t b, std::int32_t t, Edg
   for (std::int32_t v : q0)
     if (v != a && v != b) (p < 0 ? p : r) = v;
   std::int32_t cur = t;
-  for (int guard = 0; guard < 4096; ++guard) {
+  // No edge has more tets than the complex: a walk that has not closed by
+  // then never will (a corrupt complex), and must not spin.
+  for (std::int32_t step = 0; step < tetSlots(); ++step) {
     out.tets.push_back(cur);
     out.ring.push_back(p);
     // Step across the face opposite p; it holds a, b and r.
@@ -401,7 +403,8 @@ void RemeshComplex::edgeRing(std::int32_t a, std::int32_t b, std::int32_t t, Edg
     p = r;
     r = s;
   }
-  throw RuntimeFailure("remesh: the tets around an edge do not close up (corrupt complex)");
+  throw RuntimeFailure("remesh: the tets around edge (" + std::to_string(a) + ", " + std::to_string(b) +
+                       ") do not close up (corrupt complex)");
 }
 
 std::int32_t RemeshComplex::addVertex(const Eigen::Vector3d& p) {
