@@ -51,7 +51,7 @@ TEST_P(RemeshBadTopology, CommandRefusesInOneLineAndWritesNothing) {
   const std::string out = test::tempDir() + "/out.mesh";
   // `timeout` bounds the run: the remesher used to spin on these (exit 124).
   const auto run = test::runCommand("timeout 20 " + test::quote(test::voxmorphBinary()) + " remesh " + test::quote(path) +
-                                    " -l 4 -o " + test::quote(out));
+                                    " -l 4 -q -o " + test::quote(out));
   EXPECT_EQ(run.exitCode, 1) << run.err;
   EXPECT_EQ(std::count(run.err.begin(), run.err.end(), '\n'), 1) << run.err;
   EXPECT_NE(run.err.find(path + ": "), std::string::npos) << run.err;
