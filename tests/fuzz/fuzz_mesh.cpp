@@ -2,8 +2,10 @@
 // from the bytes: the first three give the dimensions (1 to 8 voxels each),
 // the fourth the target length (1 to 4 voxels), the rest the labels (0 to 3,
 // missing ones 0). The grid is cut into tets (the adaptive voxel
-// tetrahedralization) and remeshed for one round on one thread, and every
-// label's topology and junction must come out as in the grid. An InputError
+// tetrahedralization) and remeshed for one round on one thread (no
+// flip-smooth cycles, no polish: they walk as a round does, and each costs
+// as much), and every label's topology and junction must come out as in the
+// grid. An InputError
 // (a grid without a labelled voxel) is the expected refusal; anything else
 // thrown, a topology change, a hang or a sanitizer report is a finding.
 
@@ -32,7 +34,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     vox::remesh::RemeshOptions options;
     options.targetLength = length;
     options.iterations = 1;
-    options.flipSmoothCycles = 1;
+    options.flipSmoothCycles = 0;
+    options.polishAngle = 0.0;
     options.threads = 1;
     const vox::TetMesh out = vox::remesh::remeshTetMesh(initial, options, nullptr, false, "grid");
     const auto differences = vox::remesh::compareTopology(vox::remesh::computeGridTopology(grid), vox::remesh::computeMeshTopology(out));

@@ -1,9 +1,10 @@
 // libFuzzer harness: the remesher on arbitrary bytes read as a Medit .mesh
 // file. A mesh that the reader and the remesher's input checks (the local
-// embedding, the edge cycles) accept is remeshed for one round at about its
-// mean edge length on one thread: every walk of the operations then runs on
-// it. An InputError is the expected refusal; an internal error
-// (RuntimeFailure), a hang or a sanitizer report is a finding.
+// embedding, the edge cycles) accept is remeshed for one round (no
+// flip-smooth cycles, no polish) at about its mean edge length on one
+// thread: every walk of the operations then runs on it. An InputError is
+// the expected refusal; an internal error (RuntimeFailure), a hang or a
+// sanitizer report is a finding.
 
 #include "geometry/io/mesh_io.h"
 #include "geometry/remesh/meshing_estimate.h"
@@ -35,7 +36,8 @@ void remeshFile(const std::string& path) {
   vox::remesh::RemeshOptions options;
   options.targetLength = length;
   options.iterations = 1;
-  options.flipSmoothCycles = 1;
+  options.flipSmoothCycles = 0;
+  options.polishAngle = 0.0;
   options.threads = 1;
   vox::remesh::remeshTetMesh(mesh, options, nullptr, false, path);
 }
