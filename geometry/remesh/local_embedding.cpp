@@ -124,7 +124,7 @@ bool insideCone(const std::vector<Eigen::Vector3d>& positions, const Tet& q, std
 
 void checkLocalEmbedding(const std::vector<Eigen::Vector3d>& positions, const std::vector<Tet>& tets,
                          const std::vector<std::array<std::int32_t, 4>>& neighbors, const std::string& source) {
-  // Why these three checks suffice locally. With every tet positive, two tets
+  // Why these checks suffice locally. With every tet positive, two tets
   // sharing a face lie on opposite sides of it exactly when the face has
   // opposite orientations in them (1, combinatorial: no rounding). Then
   // around an edge whose tets close up through their faces the dihedral
@@ -134,9 +134,11 @@ void checkLocalEmbedding(const std::vector<Eigen::Vector3d>& positions, const st
   // the next by a turn (a sphere), far beyond rounding. Where the tets do not
   // close up (the boundary, parts touching along an edge or at a point) the
   // angles of tets that do not overlap add up to less than a turn (a sphere);
-  // more means that some direction is covered twice. A tet whose vertex was
-  // changed to overlap its neighbours adds its angle to a star that was
-  // already full at one of its edges or vertices.
+  // more means that some direction is covered twice. Less does not mean the
+  // opposite there: the last check (below) looks at the open facets around
+  // each vertex. Each check is a pass over the tets or over each vertex's
+  // star (sorted locally), so the whole is linear in the mesh for bounded
+  // stars.
   const std::size_t nt = tets.size(), nv = positions.size();
   for (std::size_t t = 0; t < nt; ++t)
     for (int k = 0; k < 4; ++k) {

@@ -25,7 +25,10 @@ namespace vox::remesh {
 //   2. the dihedral angles of the tets around an edge add up to more than
 //      one turn (2 pi);
 //   3. the solid angles of the tets around a vertex add up to more than the
-//      whole sphere (4 pi).
+//      whole sphere (4 pi);
+//   4. around a vertex on open facets (faces of one tet), two of those facets
+//      cross as seen from the vertex, or another tet covers the direction
+//      just beyond one of them (the middle of its edge opposite the vertex).
 // Parts touching along an edge or at a point, cavities and open boundaries
 // pass: their tets cover less than a turn (a sphere) and never overlap.
 // Linear in the size of the mesh (each vertex's tets sorted locally).
