@@ -30,7 +30,7 @@ void addMeshCommand(CLI::App& app) {
         remesh::adaptiveOptionsForTarget(grid.geometry(), o->remesh.targetLength);
     const TetMesh initial = remesh::tetrahedralizeVoxelsAdaptive(grid, decomposition);
     const double setupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    runRemesh(*o, initial, remesh::computeGridTopology(grid), setupSeconds, provenance, &grid.geometry());
+    runRemesh(*o, initial, [&] { return remesh::computeGridTopology(grid); }, setupSeconds, provenance, &grid.geometry());
   });
 }
 

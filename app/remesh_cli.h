@@ -15,6 +15,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <iostream>
 #include <string>
 
@@ -106,10 +107,12 @@ inline void checkRemeshEstimate(const RemeshCliOptions& o, const remesh::Meshing
 
 // Remeshes `initial` (whose domain tets and topology the report compares
 // against), writes the output mesh, prints the report and writes its JSON.
+// `initialTopology` is computed once the remesher has accepted `initial`:
+// its input checks name the file and the tet at fault, the topology's do not.
 // `toWorld`: the grid whose frame `initial` is in (mesh), written in its
 // world frame (world_frame.h); none for remesh, whose input is in world.
 // `provenance` goes into the report.
-inline void runRemesh(RemeshCliOptions& o, const TetMesh& initial, const remesh::MeshTopology& initialTopology,
+inline void runRemesh(RemeshCliOptions& o, const TetMesh& initial, const std::function<remesh::MeshTopology()>& initialTopology,
                       double setupSeconds, const Provenance& provenance, const GridGeometry* toWorld = nullptr) {
   o.remesh.projectOnInterfaces = o.surface != "none";
   o.remesh.hermite = o.surface == "hpss";
@@ -128,7 +131,7 @@ inline void runRemesh(RemeshCliOptions& o, const TetMesh& initial, const remesh:
   reportOptions.threads = o.remesh.threads;
   reportOptions.named = !o.organs.empty();
   remesh::RemeshReport report =
-      remesh::buildRemeshReport(initial, initialTopology, output, o.remesh.targetLength, stats, reportOptions);
+      remesh::buildRemeshReport(initial, initialTopology(), output, o.remesh.targetLength, stats, reportOptions);
   report.setupSeconds = setupSeconds;
   report.provenance = provenance;
   if (o.report == "-") {

@@ -31,7 +31,7 @@ void addRemeshCommand(CLI::App& app) {
     const Provenance provenance = commandProvenance({{"mesh", o->input}});
     checkRemeshEstimate(*o, remesh::estimateMeshing(input, o->remesh.targetLength));
     const double setupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    runRemesh(*o, input, remesh::computeMeshTopology(input), setupSeconds, provenance);
+    runRemesh(*o, input, [&] { return remesh::computeMeshTopology(input); }, setupSeconds, provenance);
   });
 }
 

@@ -6,6 +6,11 @@
 
 namespace vox::remesh {
 
+std::string describeTet(std::size_t t, const Tet& q) {
+  return "tet " + std::to_string(t) + " (vertices " + std::to_string(q[0]) + ", " + std::to_string(q[1]) + ", " +
+         std::to_string(q[2]) + ", " + std::to_string(q[3]) + ")";
+}
+
 std::vector<std::array<std::int32_t, 4>> tetFaceAdjacency(const std::vector<Tet>& tets, std::int32_t vertexCount,
                                                            const std::string& source) {
   const std::size_t nt = tets.size();
@@ -45,8 +50,14 @@ std::vector<std::array<std::int32_t, 4>> tetFaceAdjacency(const std::vector<Tet>
     for (Entry* p = b; p < e;) {
       Entry* q = p + 1;
       while (q < e && q->key == p->key) ++q;
-      if (q - p > 2)
-        throw InputError(source, "a face of tet " + std::to_string(p->face / 4) + " is shared by more than two tets");
+      if (q - p > 2) {
+        const std::size_t t = std::size_t(q[-1].face / 4);
+        const std::uint64_t key = p->key;
+        throw InputError(source, describeTet(t, tets[t]) + " shares face (" + std::to_string(v) + ", " +
+                                     std::to_string(key >> 32) + ", " + std::to_string(key & 0xffffffffu) + ") with tet " +
+                                     std::to_string(p[0].face / 4) + " and tet " + std::to_string(p[1].face / 4) +
+                                     ": a face shared by more than two tets");
+      }
       if (q - p == 2) {
         adjacency[std::size_t(p[0].face / 4)][std::size_t(p[0].face % 4)] = p[1].face;
         adjacency[std::size_t(p[1].face / 4)][std::size_t(p[1].face % 4)] = p[0].face;

@@ -54,6 +54,25 @@ MeshingEstimate estimateMeshing(const TetMesh& mesh, double targetLength) {
   }
   if (e.domainVolumeMm3 > 0.0) e.extentMm = (hi - lo).maxCoeff();
   finish(e, targetLength);
+  // The volume does not bound the work on needles: an edge of length L is
+  // split at least ceil(L / e_max) - 1 times, each split adding a tet for
+  // every tet around it, so the splits of the input's edges alone add at
+  // least the sum over its tets and their edges of that count (a tet 10^16 mm
+  // long and 1 mm wide has almost no volume and asks for 10^11 tets at l = 10^5).
+  const double emax = 4.0 / 3.0 * targetLength;
+  double added = 0.0;
+  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
+    if (mesh.labels[t] <= 0) continue;
+    const Tet& q = mesh.tets[t];
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j)
+        added += std::max(0.0, std::ceil((mesh.positions[std::size_t(q[i])] - mesh.positions[std::size_t(q[j])]).norm() / emax) - 1.0);
+  }
+  const double cap = double(std::numeric_limits<std::int64_t>::max() / 1024);
+  if (added > double(e.tets)) {
+    e.tets = std::int64_t(std::min(cap, added));
+    e.bytes = std::int64_t(std::min(cap, added * kRemeshBytesPerTet));
+  }
   return e;
 }
 

@@ -27,6 +27,8 @@ constexpr double kTetsPerCubicLength = 12.0;
 constexpr double kRemeshBytesPerTet = 700.0;
 
 MeshingEstimate estimateMeshing(const LabelGrid& grid, double targetLength);
+// For a mesh, also at least the tets that splitting its edges down to
+// e_max = 4/3 l adds (needles have little volume but ask for many splits).
 MeshingEstimate estimateMeshing(const TetMesh& mesh, double targetLength);
 
 // "about 346,000 tets and 210 MB".

@@ -1,6 +1,7 @@
 #include "geometry/remesh/remesh_complex.h"
 
 #include "geometry/error.h"
+#include "geometry/remesh/local_embedding.h"
 #include "geometry/remesh/tet_shape.h"
 
 #include <Eigen/Geometry>
@@ -40,6 +41,7 @@ RemeshComplex::RemeshComplex(const TetMesh& mesh, const std::string& source) {
 
   labels_ = mesh.labels;
   neighbors_ = tetFaceAdjacency(tets_, std::int32_t(positions_.size()), source);
+  checkLocalEmbedding(positions_, tets_, neighbors_, source);
   // Edges met by more than two open facets: parts of the input touch along
   // them. Their end points are pinned, so the contact stays as it is.
   std::vector<std::pair<std::int32_t, std::int32_t>> openEdges;
@@ -95,15 +97,76 @@ RemeshComplex::RemeshComplex(const TetMesh& mesh, const std::string& source) {
     if (vertexTet_[std::size_t(v)] < 0 && v != dummy_) freeVertices_.push_back(v);
   std::reverse(freeVertices_.begin(), freeVertices_.end());
 
-  // The operations find a vertex's tets by walking through its faces: that
-  // walk must reach all of them.
+  // The operations find a vertex's tets by walking through its faces, and an
+  // edge's tets by walking around it: the first walk must reach all of them,
+  // and the second must close up after all of them (one cycle, as the
+  // faces of the extended complex are each in two tets). Edges to the dummy
+  // vertex at a pinned vertex may close up in several cycles (its open facets
+  // form several fans); no operation walks around them.
   std::vector<std::int32_t> star;
+  std::vector<std::pair<std::int32_t, std::int32_t>> edgeTets;  // (other end point, tet)
   for (std::int32_t v = 0; v < std::int32_t(positions_.size()); ++v) {
     if (v == dummy_ || vertexTet_[std::size_t(v)] < 0) continue;
     incidentTets(v, star);
     if (std::int32_t(star.size()) != incidence[std::size_t(v)])
       throw InputError(source, "vertex " + std::to_string(v) + " is non-manifold (its tets are not connected through faces)");
+    edgeTets.clear();
+    for (std::int32_t t : star)
+      for (std::int32_t w : tets_[std::size_t(t)])
+        if (w > v && !(w == dummy_ && isPinned(v))) edgeTets.push_back({w, t});
+    std::sort(edgeTets.begin(), edgeTets.end());
+    for (std::size_t i = 0; i < edgeTets.size();) {
+      std::size_t j = i + 1;
+      while (j < edgeTets.size() && edgeTets[j].first == edgeTets[i].first) ++j;
+      const std::int32_t missed = tetOffEdgeCycle(v, edgeTets[i].first, edgeTets[i].second, j - i, star);
+      if (missed >= 0) {
+        // Named by the input tet: a dummy tet by the domain tet it closes.
+        const std::int32_t t = std::size_t(missed) < domainTets ? missed : neighbors_[std::size_t(missed)][3] >> 2;
+        auto original = [&](std::int32_t x) { return pinchOf(x) >= 0 ? pinchOf(x) : x; };
+        Tet q = tets_[std::size_t(t)];
+        for (std::int32_t& x : q) x = original(x);
+        throw InputError(source, describeTet(std::size_t(t), q) + " is not reached by the walk around edge (" +
+                                     std::to_string(original(v)) + ", " +
+                                     (edgeTets[i].first == dummy_ ? std::string("outside") : std::to_string(original(edgeTets[i].first))) +
+                                     "): the tets around that edge form more than one cycle");
+      }
+      i = j;
+    }
   }
+}
+
+std::int32_t RemeshComplex::tetOffEdgeCycle(std::int32_t a, std::int32_t b, std::int32_t t, std::size_t count,
+                                            const std::vector<std::int32_t>& starOfA) const {
+  // The walk of edgeRing, stopped after `count` steps.
+  std::int32_t p = -1, r = -1;
+  for (std::int32_t v : tets_[std::size_t(t)])
+    if (v != a && v != b) (p < 0 ? p : r) = v;
+  std::vector<std::int32_t> cycle;
+  std::int32_t cur = t;
+  bool closed = false;
+  while (cycle.size() < count) {
+    cycle.push_back(cur);
+    const std::int32_t next = neighbor(cur, localIndex(cur, p));
+    if (next == t) {
+      closed = true;
+      break;
+    }
+    std::int32_t s = -1;
+    for (std::int32_t v : tets_[std::size_t(next)])
+      if (v != a && v != b && v != r) s = v;
+    if (s < 0 || localIndex(next, a) < 0 || localIndex(next, b) < 0) break;
+    cur = next;
+    p = r;
+    r = s;
+  }
+  if (closed && cycle.size() == count) return -1;
+  // The smallest tet of the edge that the walk missed, or where it stopped.
+  std::sort(cycle.begin(), cycle.end());
+  std::int32_t missed = -1;
+  for (std::int32_t q : starOfA)
+    if (localIndex(q, b) >= 0 && !std::binary_search(cycle.begin(), cycle.end(), q) && (missed < 0 || q < missed))
+      missed = q;
+  return missed >= 0 ? missed : cur;
 }
 
 void RemeshComplex::splitPinchedVertices() {
@@ -387,7 +450,9 @@ void RemeshComplex::edgeRing(std::int32_t a, std::int32_t b, std::int32_t t, Edg
   for (std::int32_t v : q0)
     if (v != a && v != b) (p < 0 ? p : r) = v;
   std::int32_t cur = t;
-  for (int guard = 0; guard < 4096; ++guard) {
+  // No edge has more tets than the complex: a walk that has not closed by
+  // then never will (a corrupt complex), and must not spin.
+  for (std::int32_t step = 0; step < tetSlots(); ++step) {
     out.tets.push_back(cur);
     out.ring.push_back(p);
     // Step across the face opposite p; it holds a, b and r.
@@ -401,7 +466,8 @@ void RemeshComplex::edgeRing(std::int32_t a, std::int32_t b, std::int32_t t, Edg
     p = r;
     r = s;
   }
-  throw RuntimeFailure("remesh: the tets around an edge do not close up (corrupt complex)");
+  throw RuntimeFailure("remesh: the tets around edge (" + std::to_string(a) + ", " + std::to_string(b) +
+                       ") do not close up (corrupt complex)");
 }
 
 std::int32_t RemeshComplex::addVertex(const Eigen::Vector3d& p) {

@@ -75,7 +75,9 @@ public:
   // by angle, as the outside turns. Such vertices, and those where the open
   // facets form several fans, are pinned. Throws InputError(source, ...) for
   // zero-volume tets, negative labels, faces shared by more than two tets,
-  // or tets that overlap around an edge.
+  // tets that overlap around a face, an edge or a vertex
+  // (checkLocalEmbedding), and edges whose tets form more than one cycle:
+  // what the walks of the operations assume.
   explicit RemeshComplex(const TetMesh& mesh, const std::string& source = "mesh");
 
   // Live tets with label > 0 (and, with keepImaginary, the geometric tets of
@@ -190,6 +192,11 @@ private:
   bool hasPinches_ = false;
 
   void splitPinchedVertices();
+  // -1 when the walk around edge (a, b) from tet t closes up after exactly
+  // `count` tets (all those of the edge); otherwise a tet of the edge that
+  // the walk did not reach (or the tet where it stopped). `starOfA`: a's tets.
+  std::int32_t tetOffEdgeCycle(std::int32_t a, std::int32_t b, std::int32_t t, std::size_t count,
+                               const std::vector<std::int32_t>& starOfA) const;
   void glueCone(std::size_t domainTets, const std::string& source);
 
   mutable StarWalker walker_;

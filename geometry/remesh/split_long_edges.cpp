@@ -1,5 +1,6 @@
 #include "geometry/remesh/split_long_edges.h"
 
+#include "geometry/error.h"
 #include "geometry/remesh/mesh_edges.h"
 
 #include <algorithm>
@@ -97,6 +98,12 @@ std::size_t splitLongEdges(RemeshComplex& complex, const EdgeLengthBounds& bound
     }
     const std::int32_t m = splitEdge(complex, e.a, e.b, t);
     ++splits;
+    // The split replaced every tet of the ring; a tet still holding both end
+    // points was off the ring (its tets formed more than one cycle, which the
+    // complex's checks refuse): the edge would be split again and again.
+    if (complex.findEdgeTet(e.a, e.b) >= 0)
+      throw RuntimeFailure("remesh: edge (" + std::to_string(e.a) + ", " + std::to_string(e.b) +
+                           ") is still there after its split: its tets form more than one cycle (corrupt complex)");
     // The halves and the new edges at m may still be too long.
     complex.incidentTets(m, star);
     const Eigen::Vector3d pm = complex.position(m);

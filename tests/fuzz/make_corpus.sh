@@ -8,7 +8,7 @@ cd "$(dirname "$0")"
 bin=$(realpath "${1:-../../build/release/voxmorph}")
 out=corpus
 rm -rf "$out"
-mkdir -p "$out"/{nifti,metaimage,nrrd,inr,medit,meshb,vtu,gmsh,obj,off,ply,pose,organs}
+mkdir -p "$out"/{nifti,metaimage,nrrd,inr,medit,meshb,vtu,gmsh,obj,off,ply,pose,organs,remesh,mesh}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 
@@ -36,6 +36,26 @@ printf 'NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 2 2\nspacings: 1 1 1\nendi
 
 "$bin" mesh "$tmp/s.nii.gz" -l 6 -o "$out/medit/spheres.mesh" -q >/dev/null
 "$bin" mesh "$tmp/s.nii.gz" -l 6 -o "$out/meshb/spheres.meshb" -q >/dev/null
+# Meshes that are not an embedding (issue 40): seeds of the Medit reader and
+# the remesher, and the cases of tests/geometry/remesh/remesh_bad_topology_test.cpp.
+"$bin" synth spheres --size 12 -o "$tmp/s12.nii.gz" >/dev/null
+"$bin" mesh "$tmp/s12.nii.gz" -l 6 -o "$out/remesh/spheres12.mesh" -q >/dev/null
+cp "$out/medit/spheres.mesh" "$out/remesh/spheres.mesh"
+/usr/bin/python3 make_bad_topology.py "$out/remesh/spheres12.mesh" "$out/medit" "$out/remesh"
+# Tiny grids for the mesh path: dimensions - 1, target length - 1, labels (x fastest).
+/usr/bin/python3 - "$out/mesh" <<'PY'
+import sys
+out = sys.argv[1]
+def grid(name, nx, ny, nz, length, label):
+    cells = [label(i, j, k) for k in range(nz) for j in range(ny) for i in range(nx)]
+    open(out + "/" + name, "wb").write(bytes([nx - 1, ny - 1, nz - 1, length - 1] + cells))
+grid("one_voxel", 1, 1, 1, 1, lambda i, j, k: 1)
+grid("two_labels", 4, 3, 2, 1, lambda i, j, k: 1 if i < 2 else 2)
+grid("nested", 6, 6, 6, 2, lambda i, j, k: 2 if 2 <= i <= 3 and 2 <= j <= 3 and 2 <= k <= 3 else (1 if 1 <= min(i, j, k) and max(i, j, k) <= 4 else 0))
+grid("corner_contact", 4, 4, 4, 1, lambda i, j, k: 1 if max(i, j, k) < 2 else (3 if min(i, j, k) >= 2 else 0))
+grid("edge_contact", 4, 4, 2, 1, lambda i, j, k: 1 if i < 2 and j < 2 else (2 if i >= 2 and j >= 2 else 0))
+grid("three_junction", 5, 5, 3, 2, lambda i, j, k: [1, 2, 3][(i >= 2) + (j >= 3)] if k < 2 else 0)
+PY
 "$bin" mesh "$tmp/s.nii.gz" -l 6 -o "$out/vtu/spheres.vtu" -q >/dev/null
 "$bin" mesh "$tmp/s.nii.gz" -l 6 -o "$out/gmsh/spheres.msh" -q >/dev/null
 /usr/bin/python3 - "$out" <<'PY'
