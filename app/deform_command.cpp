@@ -154,6 +154,16 @@ void addDeformCommand(CLI::App& app) {
                 "With body parts (a joint pose, --parts): hold each part's bones rigid (its forward-kinematics motion, else the rigid fit) "
                 "and turn the cage near each turned joint with the moving part (joint_options zone 'child' unless the pose sets it); "
                 "the tissue between bones turning against each other may fold (docs/POSES.md)");
+  cmd->add_option("--max-body-change", o->run.maxBodyChangePercent,
+                  "Refuse (write nothing) when the whole body's volume changes by more than this, %")
+      ->capture_default_str()
+      ->check(numberIn(0, 1000, "%"));
+  cmd->add_option("--max-bone-change", o->run.maxBoneChangePercent,
+                  "Refuse (write nothing) when a bone's volume changes by more than this, % (with an organ table that names the bones)")
+      ->capture_default_str()
+      ->check(numberIn(0, 1000, "%"));
+  cmd->add_flag("--force", o->run.force,
+                "Write a result beyond --max-body-change or --max-bone-change anyway (a warning, and \"forced\": true in the report)");
   cmd->add_flag("--allow-growth", o->run.allowGrowth,
                 "Accept a posed grid of more than 8 times the source's voxels (a pose that moves parts far from the body)");
   cmd->add_flag("--cpu", o->cpu, "Rasterize and interpolate fields with the CPU reference instead of the GPU");

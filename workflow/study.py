@@ -40,6 +40,9 @@ DEFORM_OPTIONS = {
     "--refine-iterations": True,
     "--max-tets": True,
     "--allow-growth": False,
+    "--max-body-change": True,
+    "--max-bone-change": True,
+    "--force": False,
     "--cpu": False,
     "--flag": True,
 }

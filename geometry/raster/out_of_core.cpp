@@ -191,7 +191,7 @@ void MeasuringRasterizer::rasterizeSlab(std::int64_t z0, std::int64_t z1, Label*
   }
 }
 
-PosedGridMeasures writePosedGrid(SlabRasterizer& engine, GridSliceWriter& sink) {
+PosedGridMeasures writePosedGrid(SlabRasterizer& engine, GridSliceWriter& sink, bool commit) {
   MeasuringRasterizer measuring(engine);
   const GridGeometry& g = measuring.outputGeometry();
   const std::int64_t nz = g.dims[2], step = std::min(nz, measuring.slabSlices());
@@ -203,7 +203,7 @@ PosedGridMeasures writePosedGrid(SlabRasterizer& engine, GridSliceWriter& sink) 
     sink.writeSlices(slab.data(), z1 - z0);
     progress.advance(double(z1 - z0));
   }
-  sink.commit();
+  if (commit) sink.commit();
   progress.finish();
   return {measuring.counts(), measuring.projection()};
 }

@@ -107,9 +107,10 @@ struct PosedGridMeasures {
   BodyProjection projection;
 };
 
-// Writes G' from `engine` to `sink` slab by slab and commits it (a grid file
-// appears complete or not at all); returns G''s per-label voxel counts and
-// body projection.
-PosedGridMeasures writePosedGrid(SlabRasterizer& engine, GridSliceWriter& sink);
+// Writes G' from `engine` to `sink` slab by slab and, with `commit`, commits
+// it (a grid file appears complete or not at all; without, the caller
+// commits once it has judged the measures); returns G''s per-label voxel
+// counts and body projection.
+PosedGridMeasures writePosedGrid(SlabRasterizer& engine, GridSliceWriter& sink, bool commit = true);
 
 }  // namespace vox

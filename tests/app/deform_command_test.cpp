@@ -85,7 +85,7 @@ TEST(DeformCommand, PosesTheArmAndWritesTheReport) {
   const std::string out = s.dir + "/posed.mha", report = s.dir + "/report.json", cage = s.dir + "/cage.obj";
   const auto r = test::runCommand(voxmorph("deform " + test::quote(s.grid) + " --pose " + test::quote(pose) + " --organs " +
                                            test::quote(s.organs) + " -o " + test::quote(out) + " --report " + test::quote(report) +
-                                           " --samples 3 --posed-cage " + test::quote(cage)));
+                                           " --samples 3 --posed-cage " + test::quote(cage) + " --force"));
   ASSERT_EQ(r.exitCode, 0) << r.err;
   EXPECT_NE(r.out.find("whole body"), std::string::npos) << r.out;
   EXPECT_TRUE(std::filesystem::exists(cage));
@@ -122,13 +122,16 @@ struct PosedArm {
   nlohmann::json report;
   LabelGrid posed;
 };
+// (--force: the coarse stick figure's humerus changes its volume beyond
+// --max-bone-change under this pose; the tests are about the volume
+// correction.)
 PosedArm posedArm(const Stick& s, const std::string& preserveOption) {
   PosedArm a;
   const std::string pose = writeFile(s.dir + "/arm.json", kArmPose);
   const std::string out = s.dir + "/posed.nii.gz", report = s.dir + "/report.json";
   a.run = test::runCommand(voxmorph("deform " + test::quote(s.grid) + " --pose " + test::quote(pose) + " --organs " +
                                     test::quote(s.organs) + " -o " + test::quote(out) + " --report " + test::quote(report) +
-                                    " " + preserveOption + " --cpu -q"));
+                                    " " + preserveOption + " --cpu --force -q"));
   if (a.run.exitCode != 0) return a;
   a.report = nlohmann::json::parse(std::ifstream(report));
   a.posed = readGrid(out);
@@ -265,7 +268,9 @@ TEST(DeformCommand, PoseFarOffIsAOneLineErrorNamingTheSelection) {
   expectOneLineError(refused, "grow.json: selection 'top' (translation (400, 400, 0) mm) makes a posed grid of ");
   EXPECT_NE(refused.err.find("--allow-growth"), std::string::npos) << refused.err;
   EXPECT_FALSE(std::filesystem::exists(out));
-  const auto allowed = test::runCommand(voxmorph(base + test::quote(pose) + " --allow-growth"));
+  // (--force as well: stretching the figure's top 400 mm away changes its
+  // volume far beyond --max-body-change.)
+  const auto allowed = test::runCommand(voxmorph(base + test::quote(pose) + " --allow-growth --force"));
   ASSERT_EQ(allowed.exitCode, 0) << allowed.err;
   EXPECT_GT(readGrid(out).voxelCount(), 8 * readGrid(s.grid).voxelCount());
 }

@@ -142,7 +142,7 @@ TEST(NewUser, DeformPrintsTheOrganTableWritesItsCsvAndPlots) {
   std::ofstream(dir + "/arm.json") << kArmPose;
   const auto r = voxmorph("deform " + test::quote(stick) + " --organs " + test::quote(dir + "/no_heart.dat") + " --pose " +
                           test::quote(dir + "/arm.json") + " -o " + test::quote(dir + "/posed.nii.gz") + " --report " +
-                          test::quote(dir + "/r.json") + " --plots " + test::quote(dir + "/plots.png") + " --flag 1");
+                          test::quote(dir + "/r.json") + " --plots " + test::quote(dir + "/plots.png") + " --flag 1 --force");
   ASSERT_EQ(r.exitCode, 0) << r.err;
   // The printed table: a row per label with its name, masses and flag.
   EXPECT_NE(r.out.find("label  organ"), std::string::npos) << r.out;

@@ -94,7 +94,9 @@ TEST(PartsCommand, JointPoseDeformsAndRenders) {
   const std::string out = f.dir + "/posed.nii.gz", report = f.dir + "/report.json", mask = f.dir + "/collisions.nii.gz";
   const auto r = test::runCommand(voxmorph("deform " + test::quote(f.grid) + " --organs " + test::quote(f.organs) + " --pose " + test::quote(pose) +
                                            " -o " + test::quote(out) + " --report " + test::quote(report) + " --collision-mask " +
-                                           test::quote(mask) + " --rigid-bones --cpu -q"));
+                                           test::quote(mask) + " --rigid-bones --cpu --force -q"));
+  // (--force: on this coarse figure the rigid humerus's tets change its
+  // volume beyond --max-bone-change; the test is about what is reported.)
   ASSERT_EQ(r.exitCode, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(std::ifstream(report));
   // Collisions and bone measures are reported for a joint pose; the mask
@@ -117,6 +119,36 @@ TEST(PartsCommand, JointPoseDeformsAndRenders) {
                                                   test::quote(pose) + " -o " + test::quote(image) + " --size 80x60 --cpu -q"));
   EXPECT_EQ(rendered.exitCode, 0) << rendered.err;
   EXPECT_TRUE(std::filesystem::exists(image));
+}
+
+// A result beyond the bounds on bone and body change is refused with one
+// line naming the fault and nothing written; --force writes it, warns, and
+// the report says "forced".
+TEST(PartsCommand, BoneOrBodyChangeBeyondTheBoundsIsRefusedUnlessForced) {
+  VOX_REQUIRE_VOXMORPH();
+  const Figure f = figure(test::tempDir(), "skeleton", 96);
+  const std::string pose = writeFile(f.dir + "/pose.json", R"({"joints": {"right_shoulder": {"abduction": 30}, "right_elbow": {"flexion": 40}}})");
+  const std::string out = f.dir + "/posed.nii.gz", report = f.dir + "/report.json", cage = f.dir + "/posed.obj";
+  const std::string base = "deform " + test::quote(f.grid) + " --organs " + test::quote(f.organs) + " --pose " + test::quote(pose) +
+                           " -o " + test::quote(out) + " --report " + test::quote(report) + " --posed-cage " + test::quote(cage) + " --cpu -q";
+  // Every bone within 1 %: refused before the rasterization, naming the bone
+  // that changes most.
+  expectOneLineError(test::runCommand(voxmorph(base + " --max-bone-change 1")), "humerus by ");
+  // The bones allowed, the whole body within 0.01 %: refused once G' is
+  // measured, before it or the posed cage is committed.
+  expectOneLineError(test::runCommand(voxmorph(base + " --max-bone-change 100 --max-body-change 0.01")),
+                     "the pose changes the whole body's volume by ");
+  EXPECT_EQ(test::listFiles(f.dir), "pose.json\nskeleton.dat\nskeleton.nii.gz\n");
+  const auto forced = test::runCommand(voxmorph(base + " --max-bone-change 1 --force"));
+  ASSERT_EQ(forced.exitCode, 0) << forced.err;
+  EXPECT_NE(forced.err.find("written because of --force"), std::string::npos) << forced.err;
+  EXPECT_TRUE(nlohmann::json::parse(std::ifstream(report))["forced"].get<bool>());
+  EXPECT_TRUE(std::filesystem::exists(out));
+  EXPECT_TRUE(std::filesystem::exists(cage));
+  // Within the bounds: written, not forced.
+  const auto within = test::runCommand(voxmorph(base + " --max-bone-change 100 --max-body-change 100"));
+  ASSERT_EQ(within.exitCode, 0) << within.err;
+  EXPECT_FALSE(nlohmann::json::parse(std::ifstream(report))["forced"].get<bool>());
 }
 
 TEST(PartsCommand, BadInput) {

@@ -80,7 +80,7 @@ TEST(ReportProvenance, DeformRecordsItsInputsAndTheBodysSilhouettes) {
      "transform": {"rotation": {"axis": [0, 1, 0], "angle_deg": 30, "center": [12, 14, 80]}}}],
     "separations": [{"groups": ["right_arm", "trunk"]}]})";
   const std::string args = "deform " + test::quote(grid) + " --organs " + test::quote(organs) + " --pose " + test::quote(pose) + " -o " +
-                           test::quote(dir + "/posed.nii.gz") + " --report " + test::quote(dir + "/r.json") + " -q";
+                           test::quote(dir + "/posed.nii.gz") + " --report " + test::quote(dir + "/r.json") + " --force -q";
   const auto r = test::runCommand(voxmorph(args));
   ASSERT_EQ(r.exitCode, 0) << r.err;
   const nlohmann::json report = readJson(dir + "/r.json");

@@ -21,7 +21,7 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
   printf 'phantom\tgrid\torgans\tpose\toptions\toutput\n'
   for ph in tall:tall.nii.gz short:short.mha; do
     for pose in stick_right_arm_out_30 stick_head_turned_30; do
-      printf '%s\t%s\t%s.dat\t%s\t--preserve-volumes\tout/%s/%s\n' "${ph%%:*}" "${ph#*:}" "${ph%%:*}" \
+      printf '%s\t%s\t%s.dat\t%s\t--preserve-volumes --force\tout/%s/%s\n' "${ph%%:*}" "${ph#*:}" "${ph%%:*}" \
         "$src/tests/workflow/data/$pose.json" "${ph%%:*}" "$pose"
     done
   done

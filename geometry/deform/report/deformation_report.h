@@ -115,6 +115,9 @@ struct DeformationReport {
   BodyProjection restProjection, posedProjection;
   Provenance provenance;
   bool withMasses = false;
+  // A result beyond the run's bounds on bone and body change, written because
+  // of --force (deform_run.h).
+  bool forced = false;
   // --preserve-volumes: the label-volume correction of G' (label_volumes.h).
   std::optional<LabelVolumeCorrection> volumeCorrection;
 };

@@ -140,6 +140,7 @@ std::string deformationReportJson(const DeformationReport& r) {
     whole["mass_change_pct"] = r.wholeBody.massChangePercent;
   }
   root["whole_body"] = whole;
+  root["forced"] = r.forced;
   root["body_projection"] = {
       {"frame", "world, RAS+ (x to the subject's right, y anterior, z superior); front: along y onto the x-z plane, side: "
                 "along x onto the y-z plane, top: along z onto the x-y plane; height: extent along z"},

@@ -1,20 +1,24 @@
 #include "geometry/deform/run/deform_run.h"
 
-#include "geometry/deform/solve/label_volumes.h"
-#include "geometry/raster/out_of_core.h"
-#include "geometry/deform/pipeline.h"
-#include "geometry/deform/pose/posed_extent.h"
-#include "geometry/raster/out_of_core.h"
-#include "geometry/raster/rasterize.h"
-#include "geometry/error.h"
+#include "geometry/ascii_text.h"
 #include "geometry/atomic_file.h"
+#include "geometry/deform/pipeline.h"
+#include "geometry/deform/pose/joint_pose.h"
+#include "geometry/deform/pose/posed_extent.h"
+#include "geometry/deform/solve/label_volumes.h"
+#include "geometry/deform/solve/rigid_bones.h"
+#include "geometry/error.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/io/mesh_io.h"
 #include "geometry/label_stats.h"
-#include "geometry/deform/pose/joint_pose.h"
+#include "geometry/raster/out_of_core.h"
+#include "geometry/raster/rasterize.h"
+#include "geometry/skeleton/body_parts.h"
+#include "geometry/skeleton/bones.h"
 #include "geometry/world_frame.h"
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <memory>
 #include <optional>
@@ -79,6 +83,26 @@ private:
 
 void warn(const DeformGridRequest& o, const std::string& message) {
   if (o.warn) o.warn(message);
+}
+
+// The bone whose volume the pose changes most, when by more than
+// `maxPercent` (report.bones: the volume through the transfer mesh).
+std::optional<std::string> boneChangeFault(const DeformationReport& report, double maxPercent) {
+  const BoneRigidity* worst = nullptr;
+  for (const BoneRigidity& b : report.bones)
+    if (!worst || std::abs(b.volumeChangePercent()) > std::abs(worst->volumeChangePercent())) worst = &b;
+  if (!worst || !(std::abs(worst->volumeChangePercent()) > maxPercent)) return std::nullopt;
+  return "the pose changes the volume of the " + std::string(skeleton::partName(skeleton::Part(worst->key / kBoneKeyStride))) + " " +
+         skeleton::boneName(skeleton::Bone(worst->key % kBoneKeyStride)) + " by " + formatNumber("%+.1f", worst->volumeChangePercent()) +
+         " % (more than --max-bone-change " + formatNumber("%g", maxPercent) + " %)";
+}
+
+// A physically wrong result: refused (nothing written) unless forced, then
+// written with a warning and "forced" in the report.
+void refuseOrForce(const DeformGridRequest& o, DeformationReport& report, const std::string& fault) {
+  if (!o.force) throw InputError(o.poseSource, fault + "; nothing written (--force writes it)");
+  report.forced = true;
+  warn(o, fault + "; written because of --force");
 }
 
 // The pipeline's options on the working grid: a pose with joints (or
@@ -186,7 +210,10 @@ DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines)
   report.refinement = pipeline->refine({.maxIterations = o.refineIterations, .maxTets = o.maxTets}, engines.interpolation());
   describePipeline(report, *pipeline);
   report.rigidBonesRequested = o.rigidBones;
+  // A bone the pose crushes or swells is refused before anything is written.
+  if (const std::optional<std::string> fault = boneChangeFault(report, o.maxBoneChangePercent)) refuseOrForce(o, report, *fault);
   std::optional<StageTime> collisionTime;
+  LabelGrid collisionMask;
   if (const std::optional<LabelGrid>& parts = pipeline->bodyParts()) {
     StageTimer collisionTimer("collisions");
     GridGeometry lattice = deformedGridGeometry(source.geometry(), pipeline->deformedTransferMesh());
@@ -196,24 +223,23 @@ DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines)
     }
     Collisions collisions = findCollisions(pipeline->transferMesh(), pipeline->deformedTransferMesh(), *parts, lattice,
                                            !o.collisionMask.empty());
-    if (!o.collisionMask.empty()) {
-      writeGrid(o.collisionMask, collisions.mask);
-      collisions.mask = {};
-    }
+    if (!o.collisionMask.empty()) collisionMask = std::move(collisions.mask);
+    collisions.mask = {};
     report.collisions = std::move(collisions);
     collisionTime = collisionTimer.stop();
   }
+  // The extra outputs are written with G', once the whole body is measured.
+  std::optional<TriMesh> posedCage;
   if (!o.posedCage.empty()) {
-    TriMesh posed = pipeline->cage();
-    posed.positions = pipeline->deformedCage();
-    surfaceGridToWorld(posed, source.geometry());
-    writeSurface(o.posedCage, posed);
+    posedCage = pipeline->cage();
+    posedCage->positions = pipeline->deformedCage();
+    surfaceGridToWorld(*posedCage, source.geometry());
   }
+  std::optional<TetMesh> posedMesh;
   if (!o.posedMesh.empty()) {
-    TetMesh posed = pipeline->transferMesh();
-    posed.positions = pipeline->deformedTransferMesh();
-    tetMeshGridToWorld(posed, source.geometry());
-    writeTetMesh(o.posedMesh, posed);
+    posedMesh = pipeline->transferMesh();
+    posedMesh->positions = pipeline->deformedTransferMesh();
+    tetMeshGridToWorld(*posedMesh, source.geometry());
   }
   for (const StageTime& t : pipeline->stats().stages) report.stages.push_back(t);
   if (collisionTime) report.stages.push_back(*collisionTime);
@@ -235,6 +261,7 @@ DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines)
   const std::unique_ptr<SlabRasterizer> engine = makeRasterizer(engines, raster, rest, deformed, o.samples, rasterBudget);
   const Label maxLabel = source.grid ? source.grid->maxLabel() : source.outOfCore->maxLabel();
   PosedGridMeasures after;
+  std::unique_ptr<GridSliceWriter> output;  // G', committed once the whole body is measured
   std::vector<double> deformedVolumes;
   if (o.preserveVolumes) {
     LabelGrid posed = rasterizeAllSlabs(*engine);
@@ -248,11 +275,13 @@ DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines)
     report.stages.push_back(correctionTimer.stop());
     StageTimer writeTimer("write");
     HeldGrid held(std::move(posed));
-    after = writePosedGrid(held, *createGridSlices(o.output, held.outputGeometry(), maxLabel));
+    output = createGridSlices(o.output, held.outputGeometry(), maxLabel);
+    after = writePosedGrid(held, *output, false);
     report.posed = held.outputGeometry();
     report.stages.push_back(writeTimer.stop());
   } else {
-    after = writePosedGrid(*engine, *createGridSlices(o.output, engine->outputGeometry(), maxLabel));
+    output = createGridSlices(o.output, engine->outputGeometry(), maxLabel);
+    after = writePosedGrid(*engine, *output, false);
     report.posed = engine->outputGeometry();
     report.stages.push_back(rasterTimer.stop());
   }
@@ -265,6 +294,14 @@ DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines)
   for (LabelChange& c : report.labels)
     if (c.label < deformedVolumes.size()) c.deformedVolumeVoxels = deformedVolumes[c.label];
   report.wholeBody = wholeBodyChange(report.labels);
+  if (std::abs(report.wholeBody.volumeChangePercent) > o.maxBodyChangePercent)
+    refuseOrForce(o, report,
+                  "the pose changes the whole body's volume by " + formatNumber("%+.2f", report.wholeBody.volumeChangePercent) +
+                      " % (more than --max-body-change " + formatNumber("%g", o.maxBodyChangePercent) + " %)");
+  if (!o.collisionMask.empty()) writeGrid(o.collisionMask, collisionMask);
+  if (posedCage) writeSurface(o.posedCage, *posedCage);
+  if (posedMesh) writeTetMesh(o.posedMesh, *posedMesh);
+  output->commit();
   return report;
 }
 

@@ -54,6 +54,15 @@ struct DeformGridRequest {
   enum class VolumeTarget { Deformed, Rest } volumeTarget = VolumeTarget::Deformed;
   bool rigidBones = false;   // with body parts: bones held rigid (rigid_bones.h)
   bool allowGrowth = false;  // accept a posed grid of more than 8x the source's voxels (posed_extent.h)
+  // Physically wrong results are refused with nothing written: a bone whose
+  // volume (through the transfer mesh, report.bones) changes by more than
+  // maxBoneChangePercent, checked before the rasterization, or a whole body
+  // (G''s foreground) by more than maxBodyChangePercent, checked before G'
+  // and the extra outputs are committed. `force` writes them anyway, with a
+  // warning and "forced" in the report.
+  double maxBodyChangePercent = 2.0;
+  double maxBoneChangePercent = 10.0;
+  bool force = false;
   std::int64_t maxTets = RefinementOptions{}.maxTets;
   int refineIterations = RefinementOptions{}.maxIterations;
   std::string posedCage, posedMesh;  // optional extra outputs, written in the world frame
