@@ -8,7 +8,6 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-#include <unordered_map>
 
 namespace vox {
 
@@ -222,13 +221,15 @@ CutReport cutTransferMesh(TetMesh& mesh, std::int32_t groupA, std::int32_t group
 
   const std::vector<Tet> original = mesh.tets;
   std::vector<std::int32_t> fanOf;
-  std::unordered_map<std::int32_t, std::int32_t> local;
+  // local[t]: t's index among v's groupB tets, -1 elsewhere; reset through
+  // those tets after each vertex (a map cleared per vertex would cost its
+  // bucket count, the largest valence seen, every time).
+  std::vector<std::int32_t> local(nt, -1);
   const auto originalVertices = std::int32_t(vertexOnCut.size());
   for (std::int32_t v = 0; v < originalVertices; ++v) {
     if (!vertexOnCut[v]) continue;
     // Fans of groupB tets around v: joined through groupB-groupB faces
     // containing v (the faces opposite the tets' other vertices).
-    local.clear();
     std::vector<std::int32_t> btets;
     for (const std::int32_t t : around.of(v))
       if (mesh.labels[t] == groupB) {
@@ -255,10 +256,10 @@ CutReport cutTransferMesh(TetMesh& mesh, std::int32_t groupA, std::int32_t group
           const std::int32_t n = neighbors[t][k];
           if (n < 0) continue;
           if (mesh.labels[n] == groupB) {
-            const auto it = local.find(n);
-            if (it != local.end() && fanOf[it->second] < 0) {
-              fanOf[it->second] = std::int32_t(seed);
-              stack.push_back(it->second);
+            const std::int32_t ln = local[std::size_t(n)];
+            if (ln >= 0 && fanOf[std::size_t(ln)] < 0) {
+              fanOf[std::size_t(ln)] = std::int32_t(seed);
+              stack.push_back(ln);
             }
           } else if (mesh.labels[n] == groupA && tetHasCutFace[t]) {
             const Tri f = tetFace(original[t], k);
@@ -277,6 +278,7 @@ CutReport cutTransferMesh(TetMesh& mesh, std::int32_t groupA, std::int32_t group
         for (std::int32_t& x : mesh.tets[btets[b]])
           if (x == v) x = copy;
     }
+    for (const std::int32_t t : btets) local[std::size_t(t)] = -1;
   }
 
   std::sort(report.splitVertices.begin(), report.splitVertices.end());
