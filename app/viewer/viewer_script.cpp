@@ -99,7 +99,7 @@ ViewerScript readViewerScript(const std::string& path) {
   json root;
   try {
     root = json::parse(text.str());
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {
     r.fail(std::string("invalid JSON: ") + e.what());
   }
   if (!root.is_object() || !root.contains("steps") || !root["steps"].is_array()) r.fail("needs an object with a 'steps' array");

@@ -8,7 +8,7 @@ cd "$(dirname "$0")"
 bin=$(realpath "${1:-../../build/release/voxmorph}")
 out=corpus
 rm -rf "$out"
-mkdir -p "$out"/{nifti,metaimage,nrrd,inr,medit,meshb,vtu,gmsh,obj,off,ply,pose,organs,remesh,mesh}
+mkdir -p "$out"/{nifti,metaimage,nrrd,inr,medit,meshb,vtu,gmsh,obj,off,ply,pose,organs,remesh,mesh,parts,viewer_script}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 
@@ -81,4 +81,11 @@ printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvt 0 0\nf 1/1 3/1 2/1\nf 1//1 2//1 4
 printf 'OFF\n4 4 6\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n' > "$out/off/tet.off"
 cp ../../assets/poses/*.json "$out/pose/"
 printf '{"selections": [{"name": "all", "sphere": {"center": [0, 0, 0], "radius": 5}, "transform": {"rotation": {"axis": [0, 0, 1], "angle_deg": 10, "center": [0, 0, 0]}, "translation": [1, 2, 3]}}]}' > "$out/pose/sphere.json"
+# Body-part grids of the skeleton figure fuzz_parts checks against (size 24),
+# and of a smaller figure (other dims).
+"$bin" synth skeleton --size 24 -o "$tmp/sk24.nii" --organs "$tmp/sk24.dat" >/dev/null
+"$bin" parts "$tmp/sk24.nii" --organs "$tmp/sk24.dat" -o "$out/parts/skeleton24_parts.nii" -q
+"$bin" synth skeleton --size 20 -o "$tmp/sk20.nii" --organs "$tmp/sk20.dat" >/dev/null
+"$bin" parts "$tmp/sk20.nii" --organs "$tmp/sk20.dat" -o "$out/parts/other_dims.nii" -q
+cp ../app/data/viewer_session.json "$out/viewer_script/session.json"
 find "$out" -type f | sort | xargs wc -c | tail -1
