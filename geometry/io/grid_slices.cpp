@@ -1,6 +1,7 @@
 // Streaming access by whole z-slices: each format's reader and writer are
 // slice-based already (grid_stream.h); this picks one by extension.
 
+#include "geometry/ascii_text.h"
 #include "geometry/io/grid_stream.h"
 
 namespace vox {
@@ -15,10 +16,7 @@ std::unique_ptr<GridSliceReader> openGridSlices(const std::string& path) {
   return openNiftiSlices(path);
 }
 
-bool gridSlicesSeekable(const std::string& path) {
-  const std::string suffix = ".nii";
-  return path.size() >= suffix.size() && path.compare(path.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
+bool gridSlicesSeekable(const std::string& path) { return endsWithIgnoringCase(path, ".nii"); }
 
 std::unique_ptr<GridSliceWriter> createGridSlices(const std::string& path, const GridGeometry& geometry, Label maxLabel) {
   switch (gridFormatFromPath(path)) {

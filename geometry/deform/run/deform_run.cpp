@@ -1,7 +1,6 @@
 #include "geometry/deform/run/deform_run.h"
 
 #include "geometry/ascii_text.h"
-#include "geometry/atomic_file.h"
 #include "geometry/deform/pipeline.h"
 #include "geometry/deform/pose/joint_pose.h"
 #include "geometry/deform/pose/posed_extent.h"
@@ -228,18 +227,13 @@ DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines)
     report.collisions = std::move(collisions);
     collisionTime = collisionTimer.stop();
   }
-  // The extra outputs are written with G', once the whole body is measured.
+  // The extra outputs are written with G', once the whole body is measured
+  // (the posed mesh from `rest` and `deformed` below).
   std::optional<TriMesh> posedCage;
   if (!o.posedCage.empty()) {
     posedCage = pipeline->cage();
     posedCage->positions = pipeline->deformedCage();
     surfaceGridToWorld(*posedCage, source.geometry());
-  }
-  std::optional<TetMesh> posedMesh;
-  if (!o.posedMesh.empty()) {
-    posedMesh = pipeline->transferMesh();
-    posedMesh->positions = pipeline->deformedTransferMesh();
-    tetMeshGridToWorld(*posedMesh, source.geometry());
   }
   for (const StageTime& t : pipeline->stats().stages) report.stages.push_back(t);
   if (collisionTime) report.stages.push_back(*collisionTime);
@@ -253,7 +247,7 @@ DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines)
   StageTimer rasterTimer("rasterization");
   std::int64_t rasterBudget = 0;
   if (source.outOfCore) {
-    const std::int64_t resident = source.outOfCore->downsampled().voxelCount() * std::int64_t(sizeof(Label)) +
+    const std::int64_t resident = (source.outOfCore->downsampled().voxelCount() + collisionMask.voxelCount()) * std::int64_t(sizeof(Label)) +
                                   std::int64_t(rest.vertexCount()) * 48 + std::int64_t(rest.tetCount()) * 32;
     rasterBudget = std::max<std::int64_t>(std::int64_t(64) << 20, report.maxMemoryBytes - resident - kRasterOverheadBytes);
   }
@@ -300,7 +294,12 @@ DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines)
                       " % (more than --max-body-change " + formatNumber("%g", o.maxBodyChangePercent) + " %)");
   if (!o.collisionMask.empty()) writeGrid(o.collisionMask, collisionMask);
   if (posedCage) writeSurface(o.posedCage, *posedCage);
-  if (posedMesh) writeTetMesh(o.posedMesh, *posedMesh);
+  if (!o.posedMesh.empty()) {
+    TetMesh posed = rest;
+    posed.positions = deformed;
+    tetMeshGridToWorld(posed, source.geometry());
+    writeTetMesh(o.posedMesh, posed);
+  }
   output->commit();
   return report;
 }
