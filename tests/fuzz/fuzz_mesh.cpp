@@ -14,6 +14,7 @@
 #include "geometry/remesh/adaptive_voxel_tetrahedralization.h"
 #include "geometry/remesh/mesh_topology.h"
 #include "geometry/remesh/remesh.h"
+#include "tests/fuzz/remesh_round.h"
 
 #include <cstdio>
 #include <cstdlib>
@@ -31,12 +32,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         grid.at(i, j, k) = vox::Label(next < size ? data[next] % 4 : 0);
   try {
     const vox::TetMesh initial = vox::remesh::tetrahedralizeVoxelsAdaptive(grid, vox::remesh::adaptiveOptionsForTarget(g, length));
-    vox::remesh::RemeshOptions options;
-    options.targetLength = length;
-    options.iterations = 1;
-    options.flipSmoothCycles = 0;
-    options.polishAngle = 0.0;
-    options.threads = 1;
+    const vox::remesh::RemeshOptions options = vox::fuzz::oneRemeshRound(length);
     const vox::TetMesh out = vox::remesh::remeshTetMesh(initial, options, nullptr, false, "grid");
     const auto differences = vox::remesh::compareTopology(vox::remesh::computeGridTopology(grid), vox::remesh::computeMeshTopology(out));
     if (!differences.empty()) {

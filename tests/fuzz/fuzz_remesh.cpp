@@ -9,6 +9,7 @@
 #include "geometry/io/mesh_io.h"
 #include "geometry/remesh/meshing_estimate.h"
 #include "geometry/remesh/remesh.h"
+#include "tests/fuzz/remesh_round.h"
 #include "geometry/remesh/remesh_complex.h"
 #include "tests/fuzz/fuzz_input.h"
 
@@ -46,12 +47,7 @@ void remeshFile(const std::string& path) {
   // (corpus/remesh/slow_needle*.mesh): left out until the estimate sees them.
   if (longest > 1e3 * shortest) return;
   if (vox::remesh::estimateMeshing(mesh, length).tets > kMaxOutputTets) return;
-  vox::remesh::RemeshOptions options;
-  options.targetLength = length;
-  options.iterations = 1;
-  options.flipSmoothCycles = 0;
-  options.polishAngle = 0.0;
-  options.threads = 1;
+  const vox::remesh::RemeshOptions options = vox::fuzz::oneRemeshRound(length);
   vox::remesh::remeshTetMesh(mesh, options, nullptr, false, path);
 }
 
