@@ -1,5 +1,7 @@
 #include "geometry/distance_transform.h"
 
+#include "geometry/cancellation.h"
+
 #include <cmath>
 #include <limits>
 
@@ -105,7 +107,8 @@ DistanceTransform euclideanDistanceTransform(const GridGeometry& geometry, const
     const std::int64_t len = dims[axis];
     const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
     LinePass pass(len);
-    for (std::int64_t u = 0; u < dims[a2]; ++u)
+    for (std::int64_t u = 0; u < dims[a2]; ++u) {
+      throwIfCancelled();
       for (std::int64_t t = 0; t < dims[a1]; ++t) {
         const std::int64_t base = t * stride[a1] + u * stride[a2];
         for (std::int64_t p = 0; p < len; ++p) {
@@ -118,6 +121,7 @@ DistanceTransform euclideanDistanceTransform(const GridGeometry& geometry, const
           if (withNearest) nearest[base + p * stride[axis]] = pass.featureOut[p];
         }
       }
+    }
   }
 
   DistanceTransform result;

@@ -1,5 +1,7 @@
 #include "geometry/parallel.h"
 
+#include "geometry/cancellation.h"
+
 #include <algorithm>
 #include <atomic>
 #include <condition_variable>
@@ -132,7 +134,11 @@ void parallelFor(std::int64_t count, int threads, const std::function<void(std::
   runParts(
       n,
       [&](int) {
-        for (std::int64_t i = next++; i < count && !failed; i = next++) fn(i);
+        // Each item is a point where cancelled work stops (cancellation.h).
+        for (std::int64_t i = next++; i < count && !failed; i = next++) {
+          throwIfCancelled();
+          fn(i);
+        }
       },
       failed);
 }
@@ -146,7 +152,12 @@ void parallelRanges(std::int64_t n, int threads, const std::function<void(std::i
   const int k = int(std::max<std::int64_t>(1, std::min<std::int64_t>(threads, useful)));
   std::atomic<bool> failed{false};
   runParts(
-      k, [&](int i) { body(n * i / k, n * (i + 1) / k); }, failed);
+      k,
+      [&](int i) {
+        throwIfCancelled();
+        body(n * i / k, n * (i + 1) / k);
+      },
+      failed);
 }
 
 }  // namespace vox

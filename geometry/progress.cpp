@@ -1,5 +1,7 @@
 #include "geometry/progress.h"
 
+#include "geometry/cancellation.h"
+
 #include <mutex>
 
 namespace vox {
@@ -14,7 +16,17 @@ void setProgressSink(ProgressSink sink) {
   gSink = std::move(sink);
 }
 
+std::atomic<bool>& cancellationRequested() {
+  static std::atomic<bool> requested{false};
+  return requested;
+}
+
+void throwIfCancelled() {
+  if (cancellationRequested().load(std::memory_order_relaxed)) throw OperationCancelled();
+}
+
 void reportProgress(std::string_view stage, double fraction) {
+  throwIfCancelled();
   std::lock_guard lock(gMutex);
   if (gSink) gSink(stage, fraction);
 }

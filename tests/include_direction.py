@@ -29,6 +29,7 @@ LAYERS = [
     ("shaders/", "shaders"),
     ("gpu/", "gpu"),
     ("app/", "app"),
+    ("python/", "python"),
     ("tests/", "tests"),
 ]
 
@@ -49,10 +50,11 @@ ALLOWED = {
     "shaders": {"interface"},
     "gpu": {"core", "raster", "render", "interface", "shaders"},
     "app": {"core", "io", "raster", "render", "remesh", "skeleton", "deform", "run", "gpu", "interface", "shaders"},
+    "python": {"core", "io", "raster", "render", "remesh", "skeleton", "deform", "run", "gpu", "interface", "shaders"},
     "tests": {layer for _, layer in LAYERS},
 }
 
-SCANNED = ("geometry", "gpu", "shaders", "app")
+SCANNED = ("geometry", "gpu", "shaders", "app", "python")
 SUFFIXES = (".h", ".cpp", ".comp", ".glsl")
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"')
 

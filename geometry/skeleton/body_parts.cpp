@@ -1,5 +1,6 @@
 #include "geometry/skeleton/body_parts.h"
 
+#include "geometry/cancellation.h"
 #include "geometry/distance_transform.h"
 #include "geometry/error.h"
 #include "geometry/progress.h"
@@ -123,7 +124,7 @@ public:
       const std::int64_t v = std::int64_t(top & 0xffffffffu);
       const float d = std::bit_cast<float>(std::uint32_t(top >> 32));
       if (d > distance_[std::size_t(v)]) continue;
-      ++settled;
+      if ((++settled & 0xffff) == 0) throwIfCancelled();
       if (!passes(v)) continue;
       const Index3 c = g_.ijk(v);
       const std::uint8_t owner = owner_[std::size_t(v)] & kPartMask;

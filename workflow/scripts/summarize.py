@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The summary of a posture study, from each row's report.json.
+"""The summary of a posture study, from each row's report.json and grids.
 
 summary.py STUDY.tsv SUMMARY.csv ORGANS.csv
 
@@ -8,6 +8,10 @@ COLUMNS, then one column per organ "mass_g:<label>:<organ>" with the organ's
 mass in the posed grid (with an organ table; "voxels:<label>" with its voxel
 count without one), empty where a phantom lacks the label.
 ORGANS.csv is long: one row per study row and organ (LONG_COLUMNS).
+The organs' voxels and masses are measured on the source and posed grids
+through the voxmorph Python module (on PYTHONPATH: build/<preset>/python,
+which the Snakefile sets); the whole-body, mesh, distortion and provenance
+columns come from the report.
 Both are written to a temporary file and renamed into place.
 """
 
@@ -18,6 +22,7 @@ import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 from study import read_study  # noqa: E402
+import voxmorph  # noqa: E402
 
 # (column, description); the description goes to docs/STUDIES.md.
 COLUMNS = [
@@ -82,7 +87,17 @@ def pose_name(path):
         return ""
 
 
-def summarize(row, report):
+def organ_figures(grid, organs):
+    """Per label > 0 of a grid file: (name, voxels, mass in g), the name "" and the mass 0
+    for a label the organ table lacks, the mass None without a table."""
+    stats = voxmorph.Grid.read(grid).statistics(organs or None)
+    names = stats.get("name", [None] * len(stats["label"]))
+    masses = stats.get("mass_g", [None] * len(stats["label"]))
+    return {label: (name or "", voxels, (mass or 0.0) if organs else None)
+            for label, name, voxels, mass in zip(stats["label"], names, stats["voxels"], masses) if label > 0}
+
+
+def summarize(row, report, rest_organs, posed_organs):
     whole = report["whole_body"]
     tm = report["transfer_mesh"]
     steps = report["refinement"]["iterations"]
@@ -132,16 +147,19 @@ def summarize(row, report):
         out[f"{view}_area_mm2"] = after
         out[f"{view}_area_change_pct"] = change(before, after)
     organs, long_rows = {}, []
-    for label in report["labels"]:
-        name = label.get("name", "")
-        masses = "mass_after_g" in label
-        key = f"mass_g:{label['label']}:{name}" if masses else f"voxels:{label['label']}"
-        organs[key] = label["mass_after_g"] if masses else label["voxels_after"]
+    nobody = ("", 0, 0.0 if row.organs else None)
+    for label in sorted(rest_organs.keys() | posed_organs.keys()):
+        name, voxels_before, mass_before = rest_organs.get(label, nobody)
+        name, voxels_after, mass_after = posed_organs.get(label, (name, 0, nobody[2]))
+        masses = mass_before is not None
+        key = f"mass_g:{label}:{name}" if masses else f"voxels:{label}"
+        organs[key] = mass_after if masses else voxels_after
         long_rows.append({
-            "phantom": out["phantom"], "pose": out["pose"], "label": label["label"], "organ": name,
-            "voxels_before": label["voxels_before"], "voxels_after": label["voxels_after"],
-            "volume_change_pct": label["volume_change_pct"], "mass_before_g": label.get("mass_before_g", ""),
-            "mass_after_g": label.get("mass_after_g", ""), "mass_change_pct": label.get("mass_change_pct", ""),
+            "phantom": out["phantom"], "pose": out["pose"], "label": label, "organ": name,
+            "voxels_before": voxels_before, "voxels_after": voxels_after,
+            "volume_change_pct": change(voxels_before, voxels_after) or 0.0,
+            "mass_before_g": mass_before if masses else "", "mass_after_g": mass_after if masses else "",
+            "mass_change_pct": (change(voxels_before, voxels_after) or 0.0) if masses else "",
         })
     return out, organs, long_rows
 
@@ -162,11 +180,15 @@ def organ_key(key):
 
 def main(study, wide_path, long_path):
     rows = read_study(study, check_files=False)
-    wide, organ_columns, long_rows = [], {}, []
+    wide, organ_columns, long_rows, sources = [], {}, [], {}
     for row in rows:
         with open(os.path.join(row.output, "report.json")) as f:
             report = json.load(f)
-        out, organs, organ_rows = summarize(row, report)
+        source = (row.grid, row.organs)
+        if source not in sources:
+            sources[source] = organ_figures(row.grid, row.organs)
+        after = organ_figures(os.path.join(row.output, "posed.nii.gz"), row.organs)
+        out, organs, organ_rows = summarize(row, report, sources[source], after)
         organ_columns.update(dict.fromkeys(organs))
         wide.append({**out, **organs})
         long_rows += organ_rows

@@ -3,6 +3,7 @@
 // surface meshes (envelope, cage) and the volume mesh (transfer mesh).
 #include "geometry/deform/cage/restricted_delaunay.h"
 
+#include "geometry/cancellation.h"
 #include "geometry/error.h"
 #include "geometry/progress.h"
 
@@ -137,6 +138,11 @@ int vertexIndex(std::unordered_map<VertexHandle, int>& index, std::vector<Eigen:
   return it->second;
 }
 
+// The refinement polls the cancellation flag between steps (cancellation.h).
+CGAL::parameters::internal::Mesh_3_options stopWhenCancelled() {
+  return CGAL::parameters::mesh_3_options(CGAL::parameters::pointer_to_stop_atomic_boolean = &cancellationRequested());
+}
+
 }  // namespace
 
 TriMesh restrictedDelaunaySurface(const SampledDomain& sampled, const SurfaceCriteria& criteria) {
@@ -148,7 +154,8 @@ TriMesh restrictedDelaunaySurface(const SampledDomain& sampled, const SurfaceCri
   C3t3 c3t3;
   seedEveryPiece(c3t3, domain, *sampled.labels, true, 4.0 * criteria.facetSizeMm);
   CGAL::refine_mesh_3(c3t3, domain, meshCriteria, CGAL::parameters::no_perturb(), CGAL::parameters::no_exude(),
-                      CGAL::parameters::manifold(), CGAL::parameters::no_reset_c3t3());
+                      CGAL::parameters::manifold(), CGAL::parameters::no_reset_c3t3(), stopWhenCancelled());
+  throwIfCancelled();  // a cancelled refinement stops early, leaving a partial surface
 
   TriMesh surface;
   std::unordered_map<VertexHandle, int> index;
@@ -210,7 +217,9 @@ TetMesh restrictedDelaunayVolume(const SampledDomain& sampled, const VolumeCrite
   const auto exude = criteria.exude
                          ? CGAL::parameters::exude(CGAL::parameters::time_limit = 0.0, CGAL::parameters::sliver_bound = 10.0)
                          : CGAL::parameters::no_exude();
-  CGAL::refine_mesh_3(c3t3, domain, meshCriteria, CGAL::parameters::no_perturb(), exude, CGAL::parameters::no_reset_c3t3());
+  CGAL::refine_mesh_3(c3t3, domain, meshCriteria, CGAL::parameters::no_perturb(), exude, CGAL::parameters::no_reset_c3t3(),
+                      stopWhenCancelled());
+  throwIfCancelled();
 
   TetMesh mesh;
   std::unordered_map<VertexHandle, int> index;

@@ -1,0 +1,256 @@
+"""The voxmorph Python module on the AM crop and synthetic grids: arrays in and out
+without copies, round trips through nibabel and meshio, deform byte for byte as the
+CLI, and bad input raising the CLI's one-line messages."""
+
+import json
+import os
+import threading
+
+import meshio
+import nibabel as nib
+import numpy as np
+import pandas as pd
+import pytest
+from PIL import Image
+
+import voxmorph
+from conftest import AM_ORGANS, cli
+
+
+# --- Grid: numpy and nibabel ---------------------------------------------------------
+
+def test_grid_from_numpy_keeps_labels_and_affine(am_crop):
+    data, affine = am_crop
+    g = voxmorph.Grid(data, affine=affine)
+    assert g.shape == data.shape
+    assert g.labels.dtype == np.uint16
+    np.testing.assert_array_equal(g.labels, data)
+    np.testing.assert_allclose(g.affine, affine, atol=1e-9)
+    np.testing.assert_allclose(g.spacing, nib.affines.voxel_sizes(affine), rtol=1e-12)
+
+
+def test_grid_from_spacing_alone_is_axis_aligned():
+    g = voxmorph.Grid(np.ones((4, 5, 6), np.int32), spacing=(2.0, 3.0, 4.0))
+    np.testing.assert_array_equal(g.affine, np.diag([2.0, 3.0, 4.0, 1.0]))
+
+
+def test_grid_round_trips_through_nibabel(am_crop, tmp_path):
+    data, affine = am_crop
+    voxmorph.Grid(data, affine=affine).write(str(tmp_path / "ours.nii.gz"))
+    back = nib.load(tmp_path / "ours.nii.gz")
+    np.testing.assert_array_equal(np.asarray(back.dataobj), data)
+    np.testing.assert_allclose(back.affine, affine, atol=1e-4)
+    nib.save(nib.Nifti1Image(data, affine), tmp_path / "theirs.nii.gz")
+    g = voxmorph.Grid.read(str(tmp_path / "theirs.nii.gz"))
+    np.testing.assert_array_equal(g.labels, data)
+    np.testing.assert_allclose(g.affine, affine, atol=1e-4)
+
+
+def test_labels_are_a_view_of_the_grid_storage(am_crop):
+    data, affine = am_crop
+    g = voxmorph.Grid(data, affine=affine)
+    a, b = g.labels, g.labels
+    assert a.ctypes.data == b.ctypes.data
+    assert np.shares_memory(a, b)
+    assert not np.shares_memory(a, data)
+    assert a.flags.f_contiguous and a.flags.writeable
+    # Writes through the view reach the grid the engines see.
+    a[:] = 0
+    a[1, 2, 3] = 7
+    assert g.statistics()["label"] == [0, 7]
+    # The view keeps the grid alive.
+    del g, b
+    assert a[1, 2, 3] == 7
+
+
+def test_read_and_zeros_fill_the_grid_storage_in_place(figure):
+    g = voxmorph.Grid.read(figure["grid"])
+    assert g.labels.ctypes.data == g.labels.ctypes.data
+    z = voxmorph.Grid.zeros((3, 4, 5), spacing=(1, 2, 3))
+    z.labels[...] = np.arange(60).reshape(3, 4, 5)
+    np.testing.assert_array_equal(z.labels, np.arange(60).reshape(3, 4, 5))
+
+
+def test_statistics_make_a_pandas_table_with_masses(am_crop):
+    data, affine = am_crop
+    g = voxmorph.Grid(data, affine=affine)
+    table = pd.DataFrame(g.statistics(voxmorph.OrganTable(AM_ORGANS)))
+    assert table["voxels"].sum() == data.size
+    counts = np.bincount(data.ravel())
+    for row in table.itertuples():
+        assert row.voxels == counts[row.label]
+    named = table.dropna(subset=["mass_g"])
+    np.testing.assert_allclose(named["mass_g"], named["volume_mm3"] * named["density_g_cm3"] * 1e-3)
+    assert (table[table.label == 0]["name"].isna()).all()
+
+
+def test_organ_table(tmp_path):
+    t = voxmorph.OrganTable(AM_ORGANS)
+    assert len(t) > 100 and 1 in t and 0 not in t
+    first = next(iter(t.names))
+    assert t[first]["name"] == t.names[first] and t[first]["density_g_cm3"] > 0
+    with pytest.raises(KeyError):
+        t[0]
+    bad = tmp_path / "bad.dat"
+    bad.write_text("1 skin 2 -1.0\n")
+    with pytest.raises(ValueError, match=f"^{bad}"):
+        voxmorph.OrganTable(str(bad))
+
+
+# --- deform: the CLI's run --------------------------------------------------------------
+
+def test_deform_is_byte_identical_to_the_cli(figure, tmp_path):
+    # The stick figure's arm changes its body's volume by about 2 %: forced.
+    cli("deform", figure["grid"], "--organs", figure["organs"], "--pose", figure["pose"], "--cpu", "--preserve-volumes", "--force",
+        "-o", str(tmp_path / "cli.nii.gz"), "-q")
+    grid = voxmorph.Grid.read(figure["grid"])
+    with open(figure["pose"]) as f:
+        pose = json.load(f)
+    posed, report = voxmorph.deform(grid, pose, organs=voxmorph.OrganTable(figure["organs"]), preserve_volumes=True, cpu=True,
+                                   force=True)
+    posed.write(str(tmp_path / "python.nii.gz"))
+    assert (tmp_path / "python.nii.gz").read_bytes() == (tmp_path / "cli.nii.gz").read_bytes()
+    # Paths in and out: the CLI's own run.
+    voxmorph.deform(figure["grid"], figure["pose"], organs=figure["organs"], preserve_volumes=True, cpu=True, force=True,
+                    output=str(tmp_path / "paths.nii.gz"))
+    assert (tmp_path / "paths.nii.gz").read_bytes() == (tmp_path / "cli.nii.gz").read_bytes()
+    assert report["input"] == figure["grid"]
+    assert report["whole_body"]["voxels_before"] > 0
+    labels = pd.DataFrame(report["labels"])
+    assert {"label", "voxels_before", "voxels_after"} <= set(labels.columns)
+    assert sorted(os.listdir(tmp_path)) == ["cli.nii.gz", "paths.nii.gz", "python.nii.gz"]
+
+
+def test_deform_refuses_prepared_state(figure):
+    with pytest.raises(ValueError, match="prepared"):
+        voxmorph.deform(voxmorph.Grid.read(figure["grid"]), figure["pose"], organs=figure["organs"], prepared="state.vmp")
+
+
+# --- Posing, parts ------------------------------------------------------------------------
+
+def test_posing_frames_follow_the_joints(figure):
+    grid = voxmorph.Grid.read(figure["grid"])
+    posing = voxmorph.Posing(grid, figure["pose"], organs=figure["organs"])
+    first = posing.frame()
+    points, tets, labels = posing.transfer_mesh
+    assert first["positions"].shape == points.shape and tets.shape[1] == 4 and len(labels) == len(tets)
+    assert first["inverted_tets"] < len(tets) // 100 and first["vertices_outside_cage"] >= 0
+    posing.set_joints({"right_shoulder": {"abduction": 60}})
+    second = posing.frame()
+    assert np.abs(second["positions"] - first["positions"]).max() > 1.0
+    for v in second["label_volumes"].values():
+        assert abs(v["change_percent"]) < 20
+    posed = posing.rasterize(cpu=True)
+    assert posed.labels.max() == grid.labels.max()
+    assert "selections" in posing.pose
+
+
+def test_parts_and_joints(figure):
+    grid = voxmorph.Grid.read(figure["grid"])
+    parts, joints = voxmorph.parts(grid, figure["organs"])
+    assert parts.shape == grid.shape
+    np.testing.assert_array_equal(parts.affine, grid.affine)
+    assert len(joints) == 14 and joints[2]["name"] == "right_shoulder"
+    assert ((parts.labels > 0) == (grid.labels > 0)).all()
+
+
+# --- mesh, remesh, render -------------------------------------------------------------------
+
+def test_mesh_and_remesh_round_trip_through_meshio(am_crop, tmp_path):
+    data, affine = am_crop
+    shifted = affine.copy()
+    shifted[:3, 3] = nib.affines.apply_affine(affine, [48, 24, 0])
+    small = voxmorph.Grid(data[48:80, 24:52, :], affine=shifted)
+    points, tets, labels, report = voxmorph.mesh(small, 4.0, organs=AM_ORGANS, distances=False)
+    assert points.shape[1] == 3 and tets.shape[1] == 4 and len(labels) == len(tets)
+    assert (labels > 0).all() and tets.max() < len(points)
+    assert report["inverted_tets"] == 0 and report["topology"]["preserved"]
+    assert report["tets"]["output"] == len(tets) and report["vertices"] == len(points)
+    meshio.write(tmp_path / "mesh.vtu", meshio.Mesh(points, [("tetra", tets)], cell_data={"label": [labels]}))
+    back = meshio.read(tmp_path / "mesh.vtu")
+    np.testing.assert_allclose(back.points, points)
+    np.testing.assert_array_equal(back.cells_dict["tetra"], tets)
+    # The mesh lies over the grid in the world frame.
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    corners = nib.affines.apply_affine(small.affine, [[0, 0, 0], [31, 27, 9]])
+    spacing = np.array(small.spacing)
+    assert (lo >= corners.min(axis=0) - spacing).all() and (hi <= corners.max(axis=0) + spacing).all()
+    p2, t2, l2, r2 = voxmorph.remesh(points, tets, labels, 5.0, distances=False)
+    assert len(t2) > 0 and set(np.unique(l2)) <= set(np.unique(labels))
+
+
+def test_render_gives_an_rgb_array(figure, tmp_path):
+    grid = voxmorph.Grid.read(figure["grid"])
+    image = voxmorph.render(grid, organs=figure["organs"], camera="azimuth=20,elevation=10", size=(64, 48), cpu=True)
+    assert image.shape == (48, 64, 3) and image.dtype == np.uint8
+    assert image.reshape(-1, 3).std(axis=0).max() > 0
+    Image.fromarray(image).save(tmp_path / "figure.png")
+    posed = voxmorph.render(grid, pose=figure["pose"], organs=figure["organs"], size=(64, 48), cuts=["x>0mm"], cpu=True)
+    assert posed.shape == (48, 64, 3)
+
+
+# --- the GIL, help ----------------------------------------------------------------------------
+
+def test_long_calls_release_the_gil(figure):
+    grid = voxmorph.Grid.read(figure["grid"])
+    ticks = 0
+    worker = threading.Thread(target=lambda: voxmorph.Posing(grid, figure["pose"], organs=figure["organs"]))
+    worker.start()
+    while worker.is_alive():
+        ticks += 1
+    worker.join()
+    assert ticks > 10000
+
+
+def test_help_explains_every_argument():
+    doc = voxmorph.deform.__doc__
+    for argument in ("grid", "pose", "organs", "preserve_volumes", "prepared", "output", "cpu", "samples", "rigid_bones", "force",
+                     "max_body_change", "max_bone_change", "allow_growth", "max_memory"):
+        assert f"{argument}:" in doc or f"{argument}," in doc, argument
+    for name in ("Grid", "OrganTable", "Posing", "mesh", "remesh", "render", "parts"):
+        assert getattr(voxmorph, name).__doc__
+
+
+def test_stubs_lie_beside_the_module():
+    stub = os.path.join(os.path.dirname(voxmorph.__file__), "voxmorph.pyi")
+    text = open(stub).read()
+    for name in ("class Grid", "class OrganTable", "class Posing", "def deform", "def mesh", "def remesh", "def render", "def parts"):
+        assert name in text
+
+
+# --- bad input -----------------------------------------------------------------------------------
+
+def test_a_missing_file_is_an_oserror_naming_it(tmp_path):
+    missing = str(tmp_path / "missing.nii.gz")
+    with pytest.raises(FileNotFoundError, match=f"^{missing}: "):
+        voxmorph.Grid.read(missing)
+    with pytest.raises(OSError, match="nothing.dat"):
+        voxmorph.OrganTable(str(tmp_path / "nothing.dat"))
+
+
+def test_a_corrupt_grid_is_a_valueerror_naming_it(tmp_path):
+    bad = tmp_path / "bad.nii"
+    bad.write_bytes(b"\x5c\x01\x00\x00" + b"\x00" * 100)
+    with pytest.raises(ValueError, match=f"^{bad}: "):
+        voxmorph.Grid.read(str(bad))
+
+
+def test_bad_arrays_are_valueerrors():
+    with pytest.raises(ValueError, match="labels: a float64 array"):
+        voxmorph.Grid(np.zeros((2, 2, 2)))
+    with pytest.raises(ValueError, match=r"^labels: values span -1..-1; labels must lie in 0..65535$"):
+        voxmorph.Grid(-np.ones((2, 2, 2), np.int32))
+    with pytest.raises(ValueError, match="3-D array"):
+        voxmorph.Grid(np.zeros((2, 2), np.uint8))
+    with pytest.raises(ValueError, match="affine: .*not orthogonal"):
+        voxmorph.Grid(np.zeros((2, 2, 2), np.uint8), affine=[[1, 1, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]])
+    with pytest.raises(ValueError, match="tets: tet 0 refers to vertex 9"):
+        voxmorph.remesh(np.zeros((4, 3)), [[0, 1, 2, 9]], [1], 1.0)
+
+
+def test_a_bad_pose_is_a_valueerror_with_the_cli_message(figure):
+    grid = voxmorph.Grid.read(figure["grid"])
+    with pytest.raises(ValueError, match=r"^pose: joint 'right_elbow' flexion 170 is outside its range \[0, 150\] degrees$"):
+        voxmorph.deform(grid, {"joints": {"right_elbow": {"flexion": 170}}}, organs=figure["organs"], cpu=True)
+    with pytest.raises(ValueError, match=r"^pose: a pose with joints or body parts needs the grid's organ table \(--organs\) to find the bones$"):
+        voxmorph.Posing(grid, {"joints": {"right_shoulder": {"abduction": 30}}})
