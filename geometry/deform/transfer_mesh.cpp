@@ -1,5 +1,6 @@
 #include "geometry/deform/transfer_mesh.h"
 
+#include "geometry/cancellation.h"
 #include "geometry/distance_transform.h"
 #include "geometry/deform/cage/restricted_delaunay.h"
 #include "geometry/error.h"
@@ -65,7 +66,9 @@ private:
 std::vector<std::int64_t> uncoveredVoxels(const TetMesh& mesh, const LabelGrid& grid) {
   const GridGeometry& g = grid.geometry();
   std::vector<std::uint8_t> covered(std::size_t(g.voxelCount()), 0);
+  std::size_t visited = 0;
   for (const Tet& t : mesh.tets) {
+    if ((++visited & 0xfff) == 0) throwIfCancelled();
     const Eigen::Vector3d& a = mesh.positions[t[0]];
     Eigen::Matrix3d m;
     m << mesh.positions[t[1]] - a, mesh.positions[t[2]] - a, mesh.positions[t[3]] - a;
