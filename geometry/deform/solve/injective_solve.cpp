@@ -92,15 +92,67 @@ std::size_t rangeIndex(std::int64_t begin, std::int64_t ranges, std::int64_t n) 
   return std::size_t((begin * ranges + n - 1) / n);
 }
 
+struct TetSum {
+  double sum = 0.0;
+  double least = kInfinity;  // the smallest det J_t
+};
+
+// term(t, det) over every tet, on the parallel loop: the sum of the terms,
+// added range by range in order (the same for a given thread count), and
+// the smallest det J_t that the terms report.
+template <class Term>
+TetSum sumOverTets(std::int64_t tetCount, int threads, const Term& term) {
+  const std::int64_t ranges = std::max<std::int64_t>(1, std::min<std::int64_t>(threads, (tetCount + 4095) / 4096));
+  std::vector<TetSum> partial(static_cast<std::size_t>(ranges));
+  parallelRanges(tetCount, threads, [&](std::int64_t begin, std::int64_t end) {
+    TetSum part;
+    for (std::int64_t t = begin; t < end; ++t) {
+      double det = 0.0;
+      part.sum += term(std::size_t(t), det);
+      part.least = std::min(part.least, det);
+    }
+    partial[rangeIndex(begin, ranges, tetCount)] = part;
+  });
+  TetSum out;
+  for (const TetSum& part : partial) {
+    out.sum += part.sum;
+    out.least = std::min(out.least, part.least);
+  }
+  return out;
+}
+
+// ||J||^2 + ||J^-1||^2 + lambda (det J - 1)^2, with J^-1's rows the cross
+// products of J's columns over det J; +infinity unless det J > 0.
+double tetDistortion(const Eigen::Matrix3d& j, double lambda, double& det) {
+  const Eigen::Vector3d r0 = j.col(1).cross(j.col(2)), r1 = j.col(2).cross(j.col(0)), r2 = j.col(0).cross(j.col(1));
+  det = j.col(0).dot(r0);
+  if (!(det > 0.0)) return kInfinity;
+  return j.squaredNorm() + (r0.squaredNorm() + r1.squaredNorm() + r2.squaredNorm()) / (det * det) +
+         lambda * (det - 1.0) * (det - 1.0);
+}
+
+// The rotation R maximizing tr(R^T A), from the warm start `q` (Mueller et
+// al. 2016, "A robust method to extract the rotational part of
+// deformations"): each iteration turns q about the axis and by the angle
+// that the torque of A's columns on R's columns asks for. A few iterations
+// from the previous frame's rotation suffice.
+Eigen::Matrix3d extractRotation(const Eigen::Matrix3d& a, Eigen::Quaterniond& q) {
+  constexpr int kIterations = 12;
+  for (int i = 0; i < kIterations; ++i) {
+    const Eigen::Matrix3d r = q.toRotationMatrix();
+    const Eigen::Vector3d torque = r.col(0).cross(a.col(0)) + r.col(1).cross(a.col(1)) + r.col(2).cross(a.col(2));
+    const double scale = std::abs(r.col(0).dot(a.col(0)) + r.col(1).dot(a.col(1)) + r.col(2).dot(a.col(2))) + 1e-9;
+    const Eigen::Vector3d omega = torque / scale;
+    const double angle = omega.norm();
+    if (angle < 1e-9) break;
+    q = (Eigen::Quaterniond(Eigen::AngleAxisd(angle, omega / angle)) * q).normalized();
+  }
+  return q.toRotationMatrix();
+}
+
 std::string vertexName(std::int32_t v) { return "vertex " + std::to_string(v); }
 
 }  // namespace
-
-struct InjectiveSolver::TetFrame {
-  Eigen::Matrix3d metric;                 // W^T W
-  std::array<Eigen::Vector3d, 4> volume;  // c_a = cof(J) g_a, the gradient of det J
-  std::array<Eigen::Vector3d, 4> rhs;     // the tet's share of the global step's right-hand side
-};
 
 void InjectiveSolver::precompute(std::span<const Eigen::Vector3d> rest, std::span<const Tet> tets,
                                  std::span<const std::int32_t> constrained,
@@ -113,6 +165,8 @@ void InjectiveSolver::precompute(std::span<const Eigen::Vector3d> rest, std::spa
     throw InputError(source, "flipShrink must lie in (0, 1)");
   if (!(options.volumeWeight >= 0.0) || !std::isfinite(options.volumeWeight))
     throw InputError(source, "volumeWeight must be finite and non-negative");
+  if (!(options.targetPenalty > 0.0) || !std::isfinite(options.targetPenalty))
+    throw InputError(source, "targetPenalty must be finite and positive");
   for (std::int64_t v = 0; v < n; ++v)
     if (!rest[std::size_t(v)].allFinite()) throw InputError(source, vertexName(std::int32_t(v)) + " has a non-finite coordinate");
   if (tets.empty()) throw InputError(source, "no tets");
@@ -188,6 +242,13 @@ void InjectiveSolver::precompute(std::span<const Eigen::Vector3d> rest, std::spa
     softCoefficient_[k] = softWeights[k] * share / (meanEdge * meanEdge);
   }
 
+  penaltyCoefficient_.resize(constrained_.size());
+  for (std::size_t k = 0; k < constrained_.size(); ++k) {
+    double share = 0.0;
+    for (const std::int32_t t : vertexTets_.of(constrained_[k])) share += 0.25 * tetWeight_[std::size_t(t)];
+    penaltyCoefficient_[k] = options.targetPenalty * share / (meanEdge * meanEdge);
+  }
+
   // Unknowns: the vertices of tets that are neither constrained; vertices in
   // no tet stay where they are. Every part of the mesh needs an anchor.
   freeIndex_.assign(std::size_t(n), -1);
@@ -208,9 +269,17 @@ void InjectiveSolver::precompute(std::span<const Eigen::Vector3d> rest, std::spa
     freeVertices_.push_back(std::int32_t(v));
   }
 
+  freeSoftCoefficient_.assign(freeVertices_.size(), 0.0);
+  freeSoftSlot_.assign(freeVertices_.size(), -1);
+  for (std::size_t k = 0; k < softVertices_.size(); ++k)
+    if (const std::int32_t f = freeIndex_[std::size_t(softVertices_[k])]; f >= 0) {
+      freeSoftCoefficient_[std::size_t(f)] = softCoefficient_[k];
+      freeSoftSlot_[std::size_t(f)] = std::int32_t(k);
+    }
+
   buildPattern();
   restFactorized_ = false;
-  current_ = rest_;
+  resetToRest();
 }
 
 void InjectiveSolver::buildPattern() {
@@ -286,40 +355,22 @@ void InjectiveSolver::checkTargets(std::span<const Eigen::Vector3d> constrainedT
 InjectiveSolver::Evaluation InjectiveSolver::evaluate(std::span<const Eigen::Vector3d> positions,
                                                       std::span<const Eigen::Vector3d> softTargets) const {
   const double lambda = options_.volumeWeight;
-  const auto tetCount = std::int64_t(tets_.size());
-  const int threads = workerThreads(options_.threads);
-  const std::int64_t ranges = std::max<std::int64_t>(1, std::min<std::int64_t>(threads, (tetCount + 4095) / 4096));
-  std::vector<double> energy(std::size_t(ranges), 0.0), minVolume(std::size_t(ranges), kInfinity);
-  parallelRanges(tetCount, threads, [&](std::int64_t begin, std::int64_t end) {
-    const auto range = rangeIndex(begin, ranges, tetCount);
-    double sum = 0.0, least = kInfinity;
-    for (std::int64_t t = begin; t < end; ++t) {
-      const Eigen::Matrix3d j = edgeMatrix(positions, tets_[std::size_t(t)]) * restEdgeInv_[std::size_t(t)];
-      const double det = j.determinant();
-      least = std::min(least, det);
-      if (!(det > 0.0)) {
-        sum = kInfinity;
-        continue;
-      }
-      const double dirichlet = j.squaredNorm() + j.inverse().squaredNorm();
-      sum += tetWeight_[std::size_t(t)] * (dirichlet + lambda * (det - 1.0) * (det - 1.0));
-    }
-    energy[range] = sum;
-    minVolume[range] = least;
+  const TetSum tets = sumOverTets(std::int64_t(tets_.size()), workerThreads(options_.threads), [&](std::size_t t, double& det) {
+    return tetWeight_[t] * tetDistortion(edgeMatrix(positions, tets_[t]) * restEdgeInv_[t], lambda, det);
   });
-  Evaluation out;
-  out.minRelativeVolume = kInfinity;
-  for (std::size_t r = 0; r < energy.size(); ++r) {
-    out.energy += energy[r];
-    out.minRelativeVolume = std::min(out.minRelativeVolume, minVolume[r]);
-  }
+  return {tets.sum + softEnergy(positions, softTargets), tets.least};
+}
+
+double InjectiveSolver::softEnergy(std::span<const Eigen::Vector3d> positions,
+                                   std::span<const Eigen::Vector3d> softTargets) const {
+  double sum = 0.0;
   for (std::size_t k = 0; k < softVertices_.size(); ++k) {
     const std::int32_t v = softVertices_[k];
     if (constrainedSlot_[std::size_t(v)] >= 0) continue;
     const Eigen::Vector3d& target = softTargets.empty() ? rest_[std::size_t(v)] : softTargets[k];
-    out.energy += softCoefficient_[k] * (positions[std::size_t(v)] - target).squaredNorm();
+    sum += softCoefficient_[k] * (positions[std::size_t(v)] - target).squaredNorm();
   }
-  return out;
+  return sum;
 }
 
 double InjectiveSolver::energy(std::span<const Eigen::Vector3d> positions,
@@ -340,6 +391,11 @@ std::vector<double> InjectiveSolver::relativeVolumes(std::span<const Eigen::Vect
   return out;
 }
 
+void InjectiveSolver::resetToRest() {
+  current_ = rest_;
+  restRotation_.assign(tets_.size(), Eigen::Quaterniond::Identity());
+}
+
 void InjectiveSolver::setPositions(std::span<const Eigen::Vector3d> positions) {
   if (positions.size() != rest_.size())
     throw InputError(source_, std::to_string(positions.size()) + " positions for " + std::to_string(rest_.size()) + " vertices");
@@ -350,63 +406,56 @@ void InjectiveSolver::setPositions(std::span<const Eigen::Vector3d> positions) {
   current_.assign(positions.begin(), positions.end());
 }
 
-Eigen::VectorXd InjectiveSolver::slimGlobalStep(std::span<const Eigen::Vector3d> constrainedTargets,
-                                                std::span<const Eigen::Vector3d> softTargets) {
+InjectiveSolver::Evaluation InjectiveSolver::slimLocalStep(std::span<const Eigen::Vector3d> constrainedTargets,
+                                                           std::span<const Eigen::Vector3d> softTargets) {
+  // Per tet: the rotation, the SLIM metric and the linearized volume term,
+  // folded into the tet's share of the right-hand side; and E's term.
+  const double lambda = options_.volumeWeight;
+  frames_.resize(tets_.size());
+  const TetSum sum = sumOverTets(std::int64_t(tets_.size()), workerThreads(options_.threads), [&](std::size_t t, double& det) {
+    const Tet& tet = tets_[t];
+    const Eigen::Matrix3d j = edgeMatrix(current_, tet) * restEdgeInv_[t];
+    const double distortion = tetDistortion(j, lambda, det);
+    if (!std::isfinite(distortion)) return kInfinity;
+    const Gradients g = barycentricGradients(restEdgeInv_[t]);
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(j, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix3d u = svd.matrixU(), v = svd.matrixV();
+    if (u.determinant() < 0.0) {  // det J > 0: U and V are both reflections; flip one axis of each
+      u.col(2) = -u.col(2);
+      v.col(2) = -v.col(2);
+    }
+    const Eigen::Vector3d s = svd.singularValues();
+    const Eigen::Vector3d w2(slimWeight(s[0]), slimWeight(s[1]), slimWeight(s[2]));
+    TetFrame& frame = frames_[t];
+    frame.metric = u * w2.asDiagonal() * u.transpose();
+    const Eigen::Matrix3d rotation = u * v.transpose();
+    const Eigen::Matrix3d cofactor = det * j.inverse().transpose();
+    double linear = 0.0;  // c . x0
+    for (int a = 0; a < 4; ++a) {
+      frame.volume[std::size_t(a)] = cofactor * g[std::size_t(a)];
+      linear += frame.volume[std::size_t(a)].dot(current_[std::size_t(tet[std::size_t(a)])]);
+    }
+    const double volumeRhs = lambda * (linear - (det - 1.0));
+    for (int a = 0; a < 4; ++a) {
+      Eigen::Vector3d r = frame.metric * (rotation * g[std::size_t(a)]) + frame.volume[std::size_t(a)] * volumeRhs;
+      if (freeIndex_[std::size_t(tet[std::size_t(a)])] >= 0)
+        for (int b = 0; b < 4; ++b) {
+          const std::int32_t slot = constrainedSlot_[std::size_t(tet[std::size_t(b)])];
+          if (slot < 0) continue;
+          const Eigen::Vector3d& x = constrainedTargets[std::size_t(slot)];
+          r -= g[std::size_t(a)].dot(g[std::size_t(b)]) * (frame.metric * x) +
+               lambda * frame.volume[std::size_t(a)] * frame.volume[std::size_t(b)].dot(x);
+        }
+      frame.rhs[std::size_t(a)] = tetWeight_[t] * r;
+    }
+    return tetWeight_[t] * distortion;
+  });
+  return {sum.sum + softEnergy(current_, softTargets), sum.least};
+}
+
+Eigen::VectorXd InjectiveSolver::slimGlobalStep(std::span<const Eigen::Vector3d> softTargets) {
   const double lambda = options_.volumeWeight;
   const int threads = workerThreads(options_.threads);
-  std::vector<TetFrame> frames(tets_.size());
-  // Local step: per tet the rotation, the SLIM metric and the linearized
-  // volume term, folded into the tet's share of the right-hand side.
-  parallelRanges(std::int64_t(tets_.size()), threads, [&](std::int64_t begin, std::int64_t end) {
-    for (std::int64_t ti = begin; ti < end; ++ti) {
-      const auto t = std::size_t(ti);
-      const Tet& tet = tets_[t];
-      const Gradients g = barycentricGradients(restEdgeInv_[t]);
-      const Eigen::Matrix3d j = edgeMatrix(current_, tet) * restEdgeInv_[t];
-      const Eigen::JacobiSVD<Eigen::Matrix3d> svd(j, Eigen::ComputeFullU | Eigen::ComputeFullV);
-      Eigen::Matrix3d u = svd.matrixU(), v = svd.matrixV();
-      if (u.determinant() < 0.0) {  // det J > 0: U and V are both reflections; flip one axis of each
-        u.col(2) = -u.col(2);
-        v.col(2) = -v.col(2);
-      }
-      const Eigen::Vector3d s = svd.singularValues();
-      const Eigen::Vector3d w2(slimWeight(s[0]), slimWeight(s[1]), slimWeight(s[2]));
-      TetFrame& frame = frames[t];
-      frame.metric = u * w2.asDiagonal() * u.transpose();
-      const Eigen::Matrix3d rotation = u * v.transpose();
-      const double det = j.determinant();
-      const Eigen::Matrix3d cofactor = det * j.inverse().transpose();
-      double linear = 0.0;  // c . x0
-      for (int a = 0; a < 4; ++a) {
-        frame.volume[std::size_t(a)] = cofactor * g[std::size_t(a)];
-        linear += frame.volume[std::size_t(a)].dot(current_[std::size_t(tet[std::size_t(a)])]);
-      }
-      const double weight = tetWeight_[t];
-      const double volumeRhs = lambda * (linear - (det - 1.0));
-      for (int a = 0; a < 4; ++a) {
-        Eigen::Vector3d r = frame.metric * (rotation * g[std::size_t(a)]) + frame.volume[std::size_t(a)] * volumeRhs;
-        if (freeIndex_[std::size_t(tet[std::size_t(a)])] >= 0)
-          for (int b = 0; b < 4; ++b) {
-            const std::int32_t slot = constrainedSlot_[std::size_t(tet[std::size_t(b)])];
-            if (slot < 0) continue;
-            const Eigen::Vector3d& x = constrainedTargets[std::size_t(slot)];
-            r -= g[std::size_t(a)].dot(g[std::size_t(b)]) * (frame.metric * x) +
-                 lambda * frame.volume[std::size_t(a)] * frame.volume[std::size_t(b)].dot(x);
-          }
-        frame.rhs[std::size_t(a)] = weight * r;
-      }
-    }
-  });
-
-  // Global step: the blocks of the matrix...
-  std::vector<double> softOf(freeVertices_.size(), 0.0);
-  std::vector<const Eigen::Vector3d*> softTargetOf(freeVertices_.size(), nullptr);
-  for (std::size_t k = 0; k < softVertices_.size(); ++k) {
-    const std::int32_t f = freeIndex_[std::size_t(softVertices_[k])];
-    if (f < 0) continue;
-    softOf[std::size_t(f)] = softCoefficient_[k];
-    softTargetOf[std::size_t(f)] = softTargets.empty() ? &rest_[std::size_t(softVertices_[k])] : &softTargets[k];
-  }
   double* values = slimMatrix_.valuePtr();
   parallelRanges(std::int64_t(blocks_.size()), threads, [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t k = begin; k < end; ++k) {
@@ -414,40 +463,72 @@ Eigen::VectorXd InjectiveSolver::slimGlobalStep(std::span<const Eigen::Vector3d>
       Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
       for (std::int64_t i = blockTermStart_[std::size_t(k)]; i < blockTermStart_[std::size_t(k) + 1]; ++i) {
         const BlockTerm& term = blockTerms_[std::size_t(i)];
-        const TetFrame& frame = frames[std::size_t(term.tet)];
+        const TetFrame& frame = frames_[std::size_t(term.tet)];
         const Gradients g = barycentricGradients(restEdgeInv_[std::size_t(term.tet)]);
         sum += tetWeight_[std::size_t(term.tet)] *
                (g[term.a].dot(g[term.b]) * frame.metric + lambda * frame.volume[term.a] * frame.volume[term.b].transpose());
       }
-      if (block.fa == block.fb) sum.diagonal().array() += softOf[std::size_t(block.fa)];
+      if (block.fa == block.fb) sum.diagonal().array() += freeSoftCoefficient_[std::size_t(block.fa)];
       for (int e = 0; e < 9; ++e)
         if (block.value[std::size_t(e)] >= 0) values[block.value[std::size_t(e)]] = sum(e / 3, e % 3);
     }
   });
-  // ... and the right-hand side gathered per free vertex.
-  Eigen::MatrixXd rhs(3 * Eigen::Index(freeVertices_.size()), 1);
-  parallelRanges(std::int64_t(freeVertices_.size()), threads, [&](std::int64_t begin, std::int64_t end) {
+  const std::vector<Eigen::Vector3d> rhs = gatherRightHandSide(softTargets);
+  Eigen::MatrixXd b(3 * Eigen::Index(rhs.size()), 1);
+  for (std::size_t f = 0; f < rhs.size(); ++f) b.block<3, 1>(3 * Eigen::Index(f), 0) = rhs[f];
+  slimSolver_.factorize(slimMatrix_);
+  return slimSolver_.solve(b).col(0);
+}
+
+std::vector<Eigen::Vector3d> InjectiveSolver::gatherRightHandSide(std::span<const Eigen::Vector3d> softTargets) const {
+  std::vector<Eigen::Vector3d> out(freeVertices_.size());
+  parallelRanges(std::int64_t(freeVertices_.size()), workerThreads(options_.threads), [&](std::int64_t begin, std::int64_t end) {
     for (std::int64_t f = begin; f < end; ++f) {
       const std::int32_t v = freeVertices_[std::size_t(f)];
       Eigen::Vector3d r = Eigen::Vector3d::Zero();
       for (const std::int32_t t : vertexTets_.of(v)) {
         const Tet& tet = tets_[std::size_t(t)];
-        const auto a = std::size_t(std::find(tet.begin(), tet.end(), v) - tet.begin());
-        r += frames[std::size_t(t)].rhs[a];
+        r += frames_[std::size_t(t)].rhs[std::size_t(std::find(tet.begin(), tet.end(), v) - tet.begin())];
       }
-      if (softTargetOf[std::size_t(f)]) r += softOf[std::size_t(f)] * *softTargetOf[std::size_t(f)];
-      rhs.block<3, 1>(3 * f, 0) = r;
+      if (const std::int32_t k = freeSoftSlot_[std::size_t(f)]; k >= 0)
+        r += freeSoftCoefficient_[std::size_t(f)] * (softTargets.empty() ? rest_[std::size_t(v)] : softTargets[std::size_t(k)]);
+      out[std::size_t(f)] = r;
     }
   });
-  slimSolver_.factorize(slimMatrix_);
-  return slimSolver_.solve(rhs).col(0);
+  return out;
 }
 
-Eigen::VectorXd InjectiveSolver::restSystemStep(std::span<const Eigen::Vector3d> constrainedTargets,
-                                                std::span<const Eigen::Vector3d> softTargets) {
-  // The SLIM system at rest (J = I: W^T W = 4 I, no volume term) is the same
-  // for the three coordinates: one #free by #free matrix, factorized once.
-  constexpr double kRestMetric = 4.0;
+// The SLIM system at rest (J = I: W^T W = 4 I; the volume term left to the
+// line search) is the same for the three coordinates.
+constexpr double kRestMetric = 4.0;
+
+InjectiveSolver::Evaluation InjectiveSolver::restLocalStep(std::span<const Eigen::Vector3d> constrainedTargets,
+                                                           std::span<const Eigen::Vector3d> softTargets) {
+  const double lambda = options_.volumeWeight;
+  frames_.resize(tets_.size());
+  const TetSum sum = sumOverTets(std::int64_t(tets_.size()), workerThreads(options_.threads), [&](std::size_t t, double& det) {
+    const Tet& tet = tets_[t];
+    const Eigen::Matrix3d j = edgeMatrix(current_, tet) * restEdgeInv_[t];
+    const double distortion = tetDistortion(j, lambda, det);
+    if (!std::isfinite(distortion)) return kInfinity;
+    const Gradients g = barycentricGradients(restEdgeInv_[t]);
+    const Eigen::Matrix3d rotation = extractRotation(j, restRotation_[t]);
+    const double weight = kRestMetric * tetWeight_[t];
+    for (int a = 0; a < 4; ++a) {
+      Eigen::Vector3d r = rotation * g[std::size_t(a)];
+      if (freeIndex_[std::size_t(tet[std::size_t(a)])] >= 0)
+        for (int b = 0; b < 4; ++b) {
+          const std::int32_t slot = constrainedSlot_[std::size_t(tet[std::size_t(b)])];
+          if (slot >= 0) r -= g[std::size_t(a)].dot(g[std::size_t(b)]) * constrainedTargets[std::size_t(slot)];
+        }
+      frames_[t].rhs[std::size_t(a)] = weight * r;
+    }
+    return tetWeight_[t] * distortion;
+  });
+  return {sum.sum + softEnergy(current_, softTargets), sum.least};
+}
+
+Eigen::VectorXd InjectiveSolver::restGlobalStep(std::span<const Eigen::Vector3d> softTargets) {
   if (!restFactorized_) {
     std::vector<Eigen::Triplet<double>> entries;
     entries.reserve(blocks_.size());
@@ -458,59 +539,18 @@ Eigen::VectorXd InjectiveSolver::restSystemStep(std::span<const Eigen::Vector3d>
         const Gradients g = barycentricGradients(restEdgeInv_[std::size_t(term.tet)]);
         sum += tetWeight_[std::size_t(term.tet)] * kRestMetric * g[term.a].dot(g[term.b]);
       }
+      if (blocks_[k].fa == blocks_[k].fb) sum += freeSoftCoefficient_[std::size_t(blocks_[k].fa)];
       entries.emplace_back(blocks_[k].fa, blocks_[k].fb, sum);
-    }
-    for (std::size_t k = 0; k < softVertices_.size(); ++k) {
-      const std::int32_t f = freeIndex_[std::size_t(softVertices_[k])];
-      if (f >= 0) entries.emplace_back(f, f, softCoefficient_[k]);
     }
     Eigen::SparseMatrix<double> matrix(Eigen::Index(freeVertices_.size()), Eigen::Index(freeVertices_.size()));
     matrix.setFromTriplets(entries.begin(), entries.end());
     restSolver_.factorize(matrix);
     restFactorized_ = true;
   }
-  const int threads = workerThreads(options_.threads);
-  std::vector<std::array<Eigen::Vector3d, 4>> tetRhs(tets_.size());
-  parallelRanges(std::int64_t(tets_.size()), threads, [&](std::int64_t begin, std::int64_t end) {
-    for (std::int64_t ti = begin; ti < end; ++ti) {
-      const auto t = std::size_t(ti);
-      const Tet& tet = tets_[t];
-      const Gradients g = barycentricGradients(restEdgeInv_[t]);
-      const Eigen::Matrix3d rotation = polarRotation(edgeMatrix(current_, tet) * restEdgeInv_[t]);
-      const double weight = kRestMetric * tetWeight_[t];
-      for (int a = 0; a < 4; ++a) {
-        Eigen::Vector3d r = rotation * g[std::size_t(a)];
-        if (freeIndex_[std::size_t(tet[std::size_t(a)])] >= 0)
-          for (int b = 0; b < 4; ++b) {
-            const std::int32_t slot = constrainedSlot_[std::size_t(tet[std::size_t(b)])];
-            if (slot >= 0) r -= g[std::size_t(a)].dot(g[std::size_t(b)]) * constrainedTargets[std::size_t(slot)];
-          }
-        tetRhs[t][std::size_t(a)] = weight * r;
-      }
-    }
-  });
-  std::vector<double> softOf(freeVertices_.size(), 0.0);
-  std::vector<const Eigen::Vector3d*> softTargetOf(freeVertices_.size(), nullptr);
-  for (std::size_t k = 0; k < softVertices_.size(); ++k) {
-    const std::int32_t f = freeIndex_[std::size_t(softVertices_[k])];
-    if (f < 0) continue;
-    softOf[std::size_t(f)] = softCoefficient_[k];
-    softTargetOf[std::size_t(f)] = softTargets.empty() ? &rest_[std::size_t(softVertices_[k])] : &softTargets[k];
-  }
-  Eigen::MatrixXd rhs(Eigen::Index(freeVertices_.size()), 3);
-  parallelRanges(std::int64_t(freeVertices_.size()), threads, [&](std::int64_t begin, std::int64_t end) {
-    for (std::int64_t f = begin; f < end; ++f) {
-      const std::int32_t v = freeVertices_[std::size_t(f)];
-      Eigen::Vector3d r = Eigen::Vector3d::Zero();
-      for (const std::int32_t t : vertexTets_.of(v)) {
-        const Tet& tet = tets_[std::size_t(t)];
-        r += tetRhs[std::size_t(t)][std::size_t(std::find(tet.begin(), tet.end(), v) - tet.begin())];
-      }
-      if (softTargetOf[std::size_t(f)]) r += softOf[std::size_t(f)] * *softTargetOf[std::size_t(f)];
-      rhs.row(f) = r.transpose();
-    }
-  });
-  const Eigen::MatrixXd solution = restSolver_.solve(rhs);
+  const std::vector<Eigen::Vector3d> rhs = gatherRightHandSide(softTargets);
+  Eigen::MatrixXd b(Eigen::Index(rhs.size()), 3);
+  for (std::size_t f = 0; f < rhs.size(); ++f) b.row(Eigen::Index(f)) = rhs[f].transpose();
+  const Eigen::MatrixXd solution = restSolver_.solve(b);
   Eigen::VectorXd out(3 * solution.rows());
   for (Eigen::Index f = 0; f < solution.rows(); ++f) out.segment<3>(3 * f) = solution.row(f).transpose();
   return out;
@@ -553,14 +593,22 @@ bool InjectiveSolver::atTargets(std::span<const Eigen::Vector3d> constrainedTarg
   return true;
 }
 
+double InjectiveSolver::targetPenalty(std::span<const Eigen::Vector3d> positions,
+                                      std::span<const Eigen::Vector3d> constrainedTargets) const {
+  double sum = 0.0;
+  for (std::size_t k = 0; k < constrained_.size(); ++k)
+    sum += penaltyCoefficient_[k] * (positions[std::size_t(constrained_[k])] - constrainedTargets[k]).squaredNorm();
+  return sum;
+}
+
 bool InjectiveSolver::lineSearch(std::span<const Eigen::Vector3d> direction,
                                  std::span<const Eigen::Vector3d> constrainedTargets,
-                                 std::span<const Eigen::Vector3d> softTargets, double currentEnergy,
+                                 std::span<const Eigen::Vector3d> softTargets, double currentMerit,
                                  InjectiveStepReport& report, double& acceptedEnergy) {
-  // While the constrained vertices are still on their way, E of the moved
-  // targets is not comparable with E before: any inversion-free step is
-  // taken. At the targets, E must decrease.
-  const bool chasingTargets = !atTargets(constrainedTargets);
+  // The merit is E plus the penalty on the constrained vertices' distance to
+  // their targets: at the targets, E itself must decrease; on the way, a
+  // step that brings the bones closer may raise E, by less than it gains,
+  // so a tet's barrier energy bounds how far it can be squeezed.
   double alpha = injectiveStepBound(direction);
   std::vector<Eigen::Vector3d> trial(current_.size());
   for (int halving = 0; halving < kMaxHalvings; ++halving, alpha *= 0.5) {
@@ -569,7 +617,7 @@ bool InjectiveSolver::lineSearch(std::span<const Eigen::Vector3d> direction,
       for (std::size_t k = 0; k < constrained_.size(); ++k) trial[std::size_t(constrained_[k])] = constrainedTargets[k];
     const Evaluation e = evaluate(trial, softTargets);
     if (!(e.minRelativeVolume > 0.0) || !std::isfinite(e.energy)) continue;
-    if (!chasingTargets && !(e.energy < currentEnergy)) continue;
+    if (!(e.energy + targetPenalty(trial, constrainedTargets) < currentMerit)) continue;
     current_.swap(trial);
     acceptedEnergy = e.energy;
     report.minRelativeVolume = std::min(report.minRelativeVolume, e.minRelativeVolume);
@@ -582,19 +630,23 @@ InjectiveStepReport InjectiveSolver::iterate(std::span<const Eigen::Vector3d> co
                                              std::span<const Eigen::Vector3d> softTargets, int iterations, bool slim) {
   checkTargets(constrainedTargets, softTargets);
   InjectiveStepReport report;
-  const Evaluation start = evaluate(current_, softTargets);
-  if (!(start.minRelativeVolume > 0.0))
-    throw InputError(source_, "the starting positions invert a tet (smallest relative volume " +
-                                  std::to_string(start.minRelativeVolume) + ")");
-  report.minRelativeVolume = start.minRelativeVolume;
-  double energy = start.energy;
+  double energy = 0.0;
   for (int iteration = 0; iteration < iterations; ++iteration) {
     const bool startedAtTargets = atTargets(constrainedTargets);
-    const Eigen::VectorXd solution =
-        slim ? slimGlobalStep(constrainedTargets, softTargets) : restSystemStep(constrainedTargets, softTargets);
+    // The local step evaluates E at the current positions on the way.
+    const Evaluation here = slim ? slimLocalStep(constrainedTargets, softTargets) : restLocalStep(constrainedTargets, softTargets);
+    if (iteration == 0) {
+      if (!(here.minRelativeVolume > 0.0))
+        throw InputError(source_, "the starting positions invert a tet (smallest relative volume " +
+                                      std::to_string(here.minRelativeVolume) + ")");
+      report.minRelativeVolume = here.minRelativeVolume;
+      report.energy = energy = here.energy;
+    }
+    const Eigen::VectorXd solution = slim ? slimGlobalStep(softTargets) : restGlobalStep(softTargets);
     const std::vector<Eigen::Vector3d> direction = directionTo(solution, constrainedTargets);
     double next = energy;
-    if (!lineSearch(direction, constrainedTargets, softTargets, energy, report, next)) {
+    const double merit = energy + targetPenalty(current_, constrainedTargets);
+    if (!lineSearch(direction, constrainedTargets, softTargets, merit, report, next)) {
       // No decrease along the direction at the targets: stationary as far as
       // the line search can tell.
       report.converged = startedAtTargets;

@@ -63,6 +63,10 @@ struct InjectiveSolveOptions {
   // the volume stays within a percent where bending alone would shrink it.
   double volumeWeight = 30.0;
   double flipShrink = 0.8;       // fraction of the largest inversion-free step tried first
+  // mu of the line search's merit while the constrained vertices are on
+  // their way to their targets (see lineSearch): the larger, the more
+  // distortion a step may add to bring them closer.
+  double targetPenalty = 100.0;
   int frameIterations = 2;       // frame(): iterations per frame
   int threads = 0;               // the parallel loop's threads (0: every CPU)
 };
@@ -111,7 +115,7 @@ public:
   // Replaces the current positions (#V); throws InputError(source, ...) when
   // a tet is not positively oriented in them.
   void setPositions(std::span<const Eigen::Vector3d> positions);
-  void resetToRest() { current_ = rest_; }
+  void resetToRest();
 
   // E of `positions` (#V) with the given targets (as solveStep); +infinity
   // when a tet is not positively oriented.
@@ -131,29 +135,41 @@ private:
     double energy = 0.0;
     double minRelativeVolume = 0.0;
   };
-  struct TetFrame;  // per-tet data of the local step
+  // Per tet, what the local step hands the global step.
+  struct TetFrame {
+    Eigen::Matrix3d metric = Eigen::Matrix3d::Identity();  // W^T W (SLIM)
+    std::array<Eigen::Vector3d, 4> volume{};                // c_a = cof(J) g_a, the gradient of det J (SLIM)
+    std::array<Eigen::Vector3d, 4> rhs{};                   // the tet's share of the right-hand side
+  };
   Evaluation evaluate(std::span<const Eigen::Vector3d> positions, std::span<const Eigen::Vector3d> softTargets) const;
+  double softEnergy(std::span<const Eigen::Vector3d> positions, std::span<const Eigen::Vector3d> softTargets) const;
   void checkTargets(std::span<const Eigen::Vector3d> constrainedTargets, std::span<const Eigen::Vector3d> softTargets) const;
-  // The full #V direction to the global step's solution `freeSolution` (3 by
-  // #free columns in one vector, vertex-major) with the constrained vertices
-  // going to their targets.
+  // Local steps: fill frames_ from current_ and return E there.
+  Evaluation slimLocalStep(std::span<const Eigen::Vector3d> constrainedTargets, std::span<const Eigen::Vector3d> softTargets);
+  Evaluation restLocalStep(std::span<const Eigen::Vector3d> constrainedTargets, std::span<const Eigen::Vector3d> softTargets);
+  // Global steps: the free vertices' positions (3 #free, vertex-major).
+  Eigen::VectorXd slimGlobalStep(std::span<const Eigen::Vector3d> softTargets);
+  Eigen::VectorXd restGlobalStep(std::span<const Eigen::Vector3d> softTargets);
+  // Per free vertex, the sum of its tets' frames_ rhs and its soft pull.
+  std::vector<Eigen::Vector3d> gatherRightHandSide(std::span<const Eigen::Vector3d> softTargets) const;
+  // The full #V direction to the global step's solution `freeSolution` with
+  // the constrained vertices going to their targets.
   std::vector<Eigen::Vector3d> directionTo(const Eigen::VectorXd& freeSolution,
                                            std::span<const Eigen::Vector3d> constrainedTargets) const;
   // The largest step in [0, 1] along `direction` before a tet's signed volume
   // reaches zero, times flipShrink (1 when no tet would).
   double injectiveStepBound(std::span<const Eigen::Vector3d> direction) const;
-  // One line search and update of current_; returns false when no step was
-  // taken (no energy decrease at the targets).
+  // mu sum_k (m_k / |Omega|) ||x_k - target_k||^2 / h^2 over the
+  // constrained vertices: 0 at the targets.
+  double targetPenalty(std::span<const Eigen::Vector3d> positions, std::span<const Eigen::Vector3d> constrainedTargets) const;
+  // One line search and update of current_, on the merit E + targetPenalty;
+  // returns false when no step lowered it.
   bool lineSearch(std::span<const Eigen::Vector3d> direction, std::span<const Eigen::Vector3d> constrainedTargets,
-                  std::span<const Eigen::Vector3d> softTargets, double currentEnergy, InjectiveStepReport& report,
+                  std::span<const Eigen::Vector3d> softTargets, double currentMerit, InjectiveStepReport& report,
                   double& acceptedEnergy);
   bool atTargets(std::span<const Eigen::Vector3d> constrainedTargets) const;
   InjectiveStepReport iterate(std::span<const Eigen::Vector3d> constrainedTargets,
                               std::span<const Eigen::Vector3d> softTargets, int iterations, bool slim);
-  Eigen::VectorXd slimGlobalStep(std::span<const Eigen::Vector3d> constrainedTargets,
-                                 std::span<const Eigen::Vector3d> softTargets);
-  Eigen::VectorXd restSystemStep(std::span<const Eigen::Vector3d> constrainedTargets,
-                                 std::span<const Eigen::Vector3d> softTargets);
   void buildPattern();
 
   InjectiveSolveOptions options_;
@@ -168,6 +184,9 @@ private:
   std::vector<std::int32_t> freeVertices_;
   std::vector<std::int32_t> softVertices_;
   std::vector<double> softCoefficient_;        // #S: w_k m_k / (|Omega| h^2)
+  std::vector<double> penaltyCoefficient_;     // #constrained: mu m_k / (|Omega| h^2)
+  std::vector<double> freeSoftCoefficient_;    // #free: its soft coefficient, or 0
+  std::vector<std::int32_t> freeSoftSlot_;     // #free: index into softVertices_, or -1
   VertexTets vertexTets_;
 
   // The SLIM system's lower triangle: one 3 x 3 block per pair of free
@@ -191,6 +210,8 @@ private:
   SparseCholesky restSolver_;
   bool restFactorized_ = false;
 
+  std::vector<TetFrame> frames_;                  // #T, the local step's output
+  std::vector<Eigen::Quaterniond> restRotation_;  // #T, frame(): each tet's rotation, the next warm start
   std::vector<Eigen::Vector3d> current_;
 };
 
