@@ -204,6 +204,64 @@ void projectSlidingVertices(const ArticulatedMesh& mesh, std::span<const Eigen::
   }
 }
 
+namespace {
+
+// Splits every edge between vertices that two different parts place (soft
+// tissue tets spanning the thin gap between two bones): its midpoint, a
+// free vertex, goes into every tet around it, so that no tet has all its
+// vertices prescribed by parts that move against each other.
+void splitBridgingEdges(ArticulatedMesh& out) {
+  TetMesh& m = out.mesh;
+  const auto bridging = [&](std::int32_t a, std::int32_t b) {
+    return out.role[std::size_t(a)] == VertexRole::Rigid && out.role[std::size_t(b)] == VertexRole::Rigid &&
+           out.vertexPart[std::size_t(a)] != out.vertexPart[std::size_t(b)];
+  };
+  std::vector<std::pair<std::int32_t, std::int32_t>> edges;
+  for (const Tet& t : m.tets)
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j)
+        if (bridging(t[std::size_t(i)], t[std::size_t(j)]))
+          edges.emplace_back(std::min(t[std::size_t(i)], t[std::size_t(j)]), std::max(t[std::size_t(i)], t[std::size_t(j)]));
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  if (edges.empty()) return;
+  std::vector<std::vector<std::int32_t>> around(m.vertexCount());
+  for (std::size_t t = 0; t < m.tetCount(); ++t)
+    for (const std::int32_t v : m.tets[t]) around[std::size_t(v)].push_back(std::int32_t(t));
+  for (const auto& [a, b] : edges) {
+    std::vector<std::int32_t> shared;
+    for (const std::int32_t t : around[std::size_t(a)])
+      if (std::find(m.tets[std::size_t(t)].begin(), m.tets[std::size_t(t)].end(), b) != m.tets[std::size_t(t)].end()) shared.push_back(t);
+    if (shared.empty()) continue;
+    const auto mid = std::int32_t(m.positions.size());
+    m.positions.push_back(0.5 * (m.positions[std::size_t(a)] + m.positions[std::size_t(b)]));
+    out.role.push_back(VertexRole::Free);
+    out.vertexPart.push_back(Part::None);
+    out.vertexBody.push_back(-1);
+    around.emplace_back();
+    for (const std::int32_t t : shared) {
+      // t keeps a (b -> mid); its copy keeps b (a -> mid).
+      Tet copy = m.tets[std::size_t(t)];
+      for (std::int32_t& x : m.tets[std::size_t(t)])
+        if (x == b) x = mid;
+      for (std::int32_t& x : copy)
+        if (x == a) x = mid;
+      const auto c = std::int32_t(m.tets.size());
+      m.tets.push_back(copy);
+      m.labels.push_back(m.labels[std::size_t(t)]);
+      auto& ofB = around[std::size_t(b)];
+      std::replace(ofB.begin(), ofB.end(), t, c);
+      around[std::size_t(mid)].push_back(t);
+      around[std::size_t(mid)].push_back(c);
+      for (const std::int32_t x : copy)
+        if (x != mid && x != b) around[std::size_t(x)].push_back(c);
+    }
+    ++out.splitEdges;
+  }
+}
+
+}  // namespace
+
 ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& organs, const skeleton::Skeleton& skeleton,
                                      const ArticulatedMeshOptions& options) {
   const auto start = std::chrono::steady_clock::now();
@@ -381,6 +439,7 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
         out.role[std::size_t(v)] = VertexRole::Sliding;
         out.vertexBody[std::size_t(v)] = std::int8_t(b);
       }
+  splitBridgingEdges(out);
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }

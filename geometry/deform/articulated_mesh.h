@@ -35,8 +35,10 @@
 //    voxel that maps back into a bone copies that bone). A vertex on the
 //    outer side of a cut that is not Rigid is Sliding: it stays on the body's
 //    surface. A vertex where bones of two parts meet without a cut (wrist,
-//    ankle, neck) is Free and counted. Free vertices are the soft tissue,
-//    placed by the injective solve.
+//    ankle, neck) is Free and counted. An edge between vertices of two parts
+//    is split at its midpoint (a Free vertex), so no tet is held whole by
+//    two parts that move against each other. Free vertices are the soft
+//    tissue, placed by the injective solve.
 
 #include "geometry/deform/transfer_mesh.h"
 #include "geometry/label_grid.h"
@@ -109,6 +111,9 @@ struct ArticulatedMesh {
   // Positions on the cuts (every copy of a vertex together) put onto their
   // body's surface, and those left where that would degenerate a tet.
   std::size_t snappedVertices = 0, unsnappedVertices = 0;
+  // Edges between vertices of two parts (tissue spanning the gap between
+  // two bones in one tet) split at their midpoints, free vertices.
+  std::size_t splitEdges = 0;
   double seconds = 0.0;
 };
 

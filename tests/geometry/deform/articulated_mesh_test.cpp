@@ -1,5 +1,7 @@
 #include "geometry/deform/articulated_mesh.h"
 
+#include "geometry/deform/articulated_pose.h"
+#include "geometry/deform/pose/joint_pose.h"
 #include "geometry/synth.h"
 
 #include <gtest/gtest.h>
@@ -108,9 +110,6 @@ TEST(ArticulatedMesh, TheBodiesSurfaceIsCutOutsideTheAttachmentAndItsVerticesLie
   }
   EXPECT_LE(offSurface, m.unsnappedVertices);
   EXPECT_LT(double(m.unsnappedVertices), 0.05 * double(m.snappedVertices));
-  std::printf("articulated mesh of the figure: %zu tets, %zu vertices, %zu bodies, %zu snapped, %zu unsnapped, %zu conflicts, %.2f s\n",
-              m.mesh.tetCount(), m.mesh.vertexCount(), m.bodies.size(), m.snappedVertices, m.unsnappedVertices, m.conflictVertices,
-              m.seconds);
 }
 
 // The joint turned with the body's owner moved rigidly, the other side
@@ -145,6 +144,45 @@ TEST(ArticulatedMesh, TurningTheOwnerMovesTheBodyRigidlyAndApartFromTheOtherSide
   for (std::size_t v = 0; v < m.role.size(); ++v)
     if (m.role[v] == VertexRole::Sliding && m.bodies[std::size_t(m.vertexBody[v])].joint == JointId::RightShoulder)
       EXPECT_NEAR((posed[v] - shoulder->centre).norm(), shoulder->radius, 1e-9);
+}
+
+}  // namespace
+}  // namespace vox
+
+namespace vox {
+namespace {
+
+skeleton::PartMotions figureMotions(const skeleton::Skeleton& s, const std::vector<PoseJoint>& angles) {
+  return skeleton::partMotions(skeleton::posedJoints(s, angles, "pose"), angles);
+}
+
+PoseJoint jointAngles(JointId id, double flexion, double abduction = 0.0) {
+  PoseJoint j;
+  j.name = skeleton::jointKind(id).name;
+  j.degrees = {flexion, abduction, 0.0};
+  return j;
+}
+
+// A stride (one hip flexed, the other extended, that knee bent): the bones
+// move with their parts exactly, and no tet inverts on the way.
+TEST(ArticulatedPose, AStrideKeepsBonesRigidAndEveryTetPositive) {
+  const Figure& f = figure();
+  const std::vector<PoseJoint> angles = {jointAngles(JointId::RightHip, 30.0), jointAngles(JointId::LeftHip, -20.0),
+                                         jointAngles(JointId::LeftKnee, 45.0)};
+  const skeleton::PartMotions motions = figureMotions(f.skeleton, angles);
+  ArticulatedPoser poser(f.mesh);
+  const ArticulatedPoseReport r = poser.pose(motions);
+  EXPECT_EQ(r.bridgingTets, 0u);
+  ASSERT_EQ(r.stepMinRelativeVolume.size(), std::size_t(r.steps));
+  for (const double v : r.stepMinRelativeVolume) EXPECT_GT(v, 0.05);
+  EXPECT_EQ(r.invertedTets, 0u);
+  EXPECT_GT(r.minRelativeVolume, 0.05);
+  EXPECT_TRUE(r.reachedTargets);
+  EXPECT_LT(r.maxSlidingGapMm, 2.0 * f.grid.geometry().spacing.minCoeff());
+  const std::vector<Eigen::Vector3d>& p = poser.positions();
+  for (std::size_t v = 0; v < p.size(); ++v)
+    if (f.mesh.role[v] == VertexRole::Rigid)
+      EXPECT_LT((p[v] - motions[std::size_t(f.mesh.vertexPart[v])] * f.mesh.mesh.positions[v]).norm(), 1e-6);
 }
 
 }  // namespace
