@@ -58,11 +58,11 @@ PoseEditor::PoseEditor(const LabelGrid& grid, std::optional<OrganTable> organs, 
     skeleton_ = std::make_unique<skeleton::Skeleton>(skeleton::buildSkeleton(grid_, *organs_, {"grid", "organ table", "body parts"}));
     options = skeleton::skeletalPoseOptions(shaping, setupSource, *skeleton_, organs_);
     separations_ = options.pose->separations;
-    compiled_ = *options.pose;
   } else {
     options = poseOptions(shaping, setupSource, organs_);
   }
   // The selections are embedded by update(); a pose without any has none.
+  const Pose compiledSetup = *options.pose;
   options.pose.reset();
   pipeline_ = std::make_unique<DeformationPipeline>(grid_, options);
   tetVoxels_ = tetLabelVoxels(grid_, pipeline_->transferMesh());
@@ -71,12 +71,7 @@ PoseEditor::PoseEditor(const LabelGrid& grid, std::optional<OrganTable> organs, 
   // saves its poses so.
   state_.pose = shaping;
   state_.pose.frame = PoseFrame::Grid;
-  if (skeleton_) {
-    compiledFrom_ = state_.pose;
-    findCompiledMotions();
-  } else {
-    recompile();
-  }
+  setCompiled(compiledSetup);
   if (!compiled_.selections.empty())
     selectHandles(compiled_, pipeline_->builtCage(), setupSource_, pipeline_->cageGroups(), pipeline_->cageBodyParts());
   refreshFigures();
@@ -233,7 +228,6 @@ void PoseEditor::loadPose(const Pose& given, const std::string& source) {
   Pose compiled = compile(given, source);
   if (compiled.separations.size() != separations_.size())
     throw InputError(source, "its limb separations differ from the ones this session was built with; open it with view --pose");
-  compiled.separations = separations_;
   selectHandles(compiled, pipeline_->builtCage(), source, pipeline_->cageGroups(), pipeline_->cageBodyParts());
   push();
   state_.pose = given;
@@ -245,7 +239,7 @@ void PoseEditor::loadPose(const Pose& given, const std::string& source) {
   state_.joint = -1;
   for (std::size_t k = 0; k < given.selections.size(); ++k)
     if (!given.selections[k].fixed) state_.active = int(k);
-  recompile();
+  setCompiled(std::move(compiled));
 }
 
 std::vector<skeleton::Joint> PoseEditor::joints() const {
@@ -332,25 +326,28 @@ bool sameTransform(const PoseTransform& a, const PoseTransform& b) {
 
 void PoseEditor::recompile() {
   const Pose& pose = state_.pose;
-  if (!compiles(pose)) {
-    compiled_ = pose;
-    retargetable_ = false;
-  } else if (retargetable_ && sameCompiledShapes(pose, compiledFrom_)) {
-    // The same turned joints at other angles: only the transforms change.
-    const std::vector<skeleton::Joint> joints = skeleton::posedJoints(*skeleton_, pose.joints, setupSource_);
-    const skeleton::PartMotions motions = skeleton::partMotions(joints, pose.joints);
-    for (std::size_t k = 0; k < compiledMotions_.size(); ++k)
-      if (const auto [part, joint] = compiledMotions_[k]; part >= 0)
-        compiled_.selections[k].transform = skeleton::screwTransform(motions[std::size_t(part)], joints[std::size_t(joint)].centre);
-    std::copy(pose.selections.begin(), pose.selections.end(), compiled_.selections.begin() + std::ptrdiff_t(compiledMotions_.size()));
-  } else {
-    compiled_ = compile(pose, setupSource_);
-    compiled_.separations = separations_;
-    compiledFrom_ = pose;
-    findCompiledMotions();
+  if (!compiles(pose) || !retargetable_ || !sameCompiledShapes(pose, compiledFrom_)) {
+    setCompiled(compile(pose, setupSource_));
+    return;
   }
+  // The same turned joints at other angles: only the transforms change.
+  const std::vector<skeleton::Joint> joints = skeleton::posedJoints(*skeleton_, pose.joints, setupSource_);
+  const skeleton::PartMotions motions = skeleton::partMotions(joints, pose.joints);
+  for (std::size_t k = 0; k < compiledMotions_.size(); ++k)
+    if (const auto [part, joint] = compiledMotions_[k]; part >= 0)
+      compiled_.selections[k].transform = skeleton::screwTransform(motions[std::size_t(part)], joints[std::size_t(joint)].centre);
+  std::copy(pose.selections.begin(), pose.selections.end(), compiled_.selections.begin() + std::ptrdiff_t(compiledMotions_.size()));
   compiled_.arapIterations = pose.arapIterations;
   compiledFrom_ = pose;
+}
+
+void PoseEditor::setCompiled(Pose compiled) {
+  compiled_ = std::move(compiled);
+  compiled_.separations = separations_;
+  compiled_.arapIterations = state_.pose.arapIterations;
+  compiledFrom_ = state_.pose;
+  if (compiles(state_.pose)) findCompiledMotions();
+  else retargetable_ = false;
 }
 
 void PoseEditor::findCompiledMotions() {

@@ -159,6 +159,7 @@ private:
   bool compiles(const Pose& pose) const;
   Pose compile(const Pose& pose, const std::string& source) const;
   void recompile();
+  void setCompiled(Pose compiled);
   void findCompiledMotions();
 
   LabelGrid grid_;
