@@ -134,20 +134,30 @@ double tetDistortion(const Eigen::Matrix3d& j, double lambda, double& det) {
 // The rotation R maximizing tr(R^T A), from the warm start `q` (Mueller et
 // al. 2016, "A robust method to extract the rotational part of
 // deformations"): each iteration turns q about the axis and by the angle
-// that the torque of A's columns on R's columns asks for. A few iterations
-// from the previous frame's rotation suffice.
+// that the torque of A's columns on R's columns asks for. From the previous
+// frame's rotation a few iterations reach what a direction needs (1e-6 rad);
+// a tet that turns faster converges over the next frames.
 Eigen::Matrix3d extractRotation(const Eigen::Matrix3d& a, Eigen::Quaterniond& q) {
-  constexpr int kIterations = 12;
+  constexpr int kIterations = 4;
   for (int i = 0; i < kIterations; ++i) {
     const Eigen::Matrix3d r = q.toRotationMatrix();
     const Eigen::Vector3d torque = r.col(0).cross(a.col(0)) + r.col(1).cross(a.col(1)) + r.col(2).cross(a.col(2));
     const double scale = std::abs(r.col(0).dot(a.col(0)) + r.col(1).dot(a.col(1)) + r.col(2).dot(a.col(2))) + 1e-9;
     const Eigen::Vector3d omega = torque / scale;
     const double angle = omega.norm();
-    if (angle < 1e-9) break;
+    if (angle < 1e-6) break;
     q = (Eigen::Quaterniond(Eigen::AngleAxisd(angle, omega / angle)) * q).normalized();
   }
   return q.toRotationMatrix();
+}
+
+// dE_t/dJ of the distortion term: 2 J - 2 J^-T J^-1 J^-T + 2 lambda
+// (det J - 1) cof(J), for det J > 0.
+Eigen::Matrix3d distortionGradient(const Eigen::Matrix3d& j, double lambda) {
+  const double det = j.determinant();
+  const Eigen::Matrix3d inverseTranspose = j.inverse().transpose();
+  return 2.0 * j - 2.0 * inverseTranspose * inverseTranspose.transpose() * inverseTranspose +
+         2.0 * lambda * (det - 1.0) * det * inverseTranspose;
 }
 
 std::string vertexName(std::int32_t v) { return "vertex " + std::to_string(v); }
@@ -498,12 +508,18 @@ std::vector<Eigen::Vector3d> InjectiveSolver::gatherRightHandSide(std::span<cons
   return out;
 }
 
-// The SLIM system at rest (J = I: W^T W = 4 I; the volume term left to the
-// line search) is the same for the three coordinates.
+// The SLIM system at rest (J = I: W^T W = 4 I, without the volume term) is
+// the same for the three coordinates.
 constexpr double kRestMetric = 4.0;
 
 InjectiveSolver::Evaluation InjectiveSolver::restLocalStep(std::span<const Eigen::Vector3d> constrainedTargets,
-                                                           std::span<const Eigen::Vector3d> softTargets) {
+                                                           std::span<const Eigen::Vector3d> softTargets,
+                                                           RestDirection kind) {
+  // Rotations: ARAP's right-hand side, 4 |t| / |Omega| R_t g_a, for the
+  // positions. Gradient: the rest system stands for half of E's Hessian
+  // (2 x 4 |t| / |Omega| per unit of the tets' Laplacian) and the right-hand
+  // side is minus half of E's gradient, for the step. Both less the coupling
+  // to the constrained vertices (their targets, or their moves).
   const double lambda = options_.volumeWeight;
   frames_.resize(tets_.size());
   const TetSum sum = sumOverTets(std::int64_t(tets_.size()), workerThreads(options_.threads), [&](std::size_t t, double& det) {
@@ -512,23 +528,29 @@ InjectiveSolver::Evaluation InjectiveSolver::restLocalStep(std::span<const Eigen
     const double distortion = tetDistortion(j, lambda, det);
     if (!std::isfinite(distortion)) return kInfinity;
     const Gradients g = barycentricGradients(restEdgeInv_[t]);
-    const Eigen::Matrix3d rotation = extractRotation(j, restRotation_[t]);
     const double weight = kRestMetric * tetWeight_[t];
+    const Eigen::Matrix3d m = kind == RestDirection::Rotations ? Eigen::Matrix3d(weight * extractRotation(j, restRotation_[t]))
+                                                               : Eigen::Matrix3d(-0.5 * tetWeight_[t] * distortionGradient(j, lambda));
     for (int a = 0; a < 4; ++a) {
-      Eigen::Vector3d r = rotation * g[std::size_t(a)];
+      Eigen::Vector3d r = m * g[std::size_t(a)];
       if (freeIndex_[std::size_t(tet[std::size_t(a)])] >= 0)
         for (int b = 0; b < 4; ++b) {
-          const std::int32_t slot = constrainedSlot_[std::size_t(tet[std::size_t(b)])];
-          if (slot >= 0) r -= g[std::size_t(a)].dot(g[std::size_t(b)]) * constrainedTargets[std::size_t(slot)];
+          const std::int32_t v = tet[std::size_t(b)];
+          const std::int32_t slot = constrainedSlot_[std::size_t(v)];
+          if (slot < 0) continue;
+          const Eigen::Vector3d x = kind == RestDirection::Rotations
+                                        ? constrainedTargets[std::size_t(slot)]
+                                        : Eigen::Vector3d(constrainedTargets[std::size_t(slot)] - current_[std::size_t(v)]);
+          r -= weight * g[std::size_t(a)].dot(g[std::size_t(b)]) * x;
         }
-      frames_[t].rhs[std::size_t(a)] = weight * r;
+      frames_[t].rhs[std::size_t(a)] = r;
     }
     return tetWeight_[t] * distortion;
   });
   return {sum.sum + softEnergy(current_, softTargets), sum.least};
 }
 
-Eigen::VectorXd InjectiveSolver::restGlobalStep(std::span<const Eigen::Vector3d> softTargets) {
+Eigen::VectorXd InjectiveSolver::restGlobalStep(std::span<const Eigen::Vector3d> softTargets, RestDirection kind) {
   if (!restFactorized_) {
     std::vector<Eigen::Triplet<double>> entries;
     entries.reserve(blocks_.size());
@@ -547,12 +569,21 @@ Eigen::VectorXd InjectiveSolver::restGlobalStep(std::span<const Eigen::Vector3d>
     restSolver_.factorize(matrix);
     restFactorized_ = true;
   }
-  const std::vector<Eigen::Vector3d> rhs = gatherRightHandSide(softTargets);
+  // The soft pull c_k p_k; for the step, the soft term's share of minus
+  // half the gradient, c_k (p_k - x_k).
+  const bool step = kind == RestDirection::Gradient;
+  std::vector<Eigen::Vector3d> rhs = gatherRightHandSide(softTargets);
+  if (step)
+    for (std::size_t f = 0; f < rhs.size(); ++f)
+      if (freeSoftSlot_[f] >= 0) rhs[f] -= freeSoftCoefficient_[f] * current_[std::size_t(freeVertices_[f])];
   Eigen::MatrixXd b(Eigen::Index(rhs.size()), 3);
   for (std::size_t f = 0; f < rhs.size(); ++f) b.row(Eigen::Index(f)) = rhs[f].transpose();
   const Eigen::MatrixXd solution = restSolver_.solve(b);
   Eigen::VectorXd out(3 * solution.rows());
-  for (Eigen::Index f = 0; f < solution.rows(); ++f) out.segment<3>(3 * f) = solution.row(f).transpose();
+  for (Eigen::Index f = 0; f < solution.rows(); ++f) {
+    out.segment<3>(3 * f) = solution.row(f).transpose();
+    if (step) out.segment<3>(3 * f) += current_[std::size_t(freeVertices_[std::size_t(f)])];
+  }
   return out;
 }
 
@@ -634,7 +665,8 @@ InjectiveStepReport InjectiveSolver::iterate(std::span<const Eigen::Vector3d> co
   for (int iteration = 0; iteration < iterations; ++iteration) {
     const bool startedAtTargets = atTargets(constrainedTargets);
     // The local step evaluates E at the current positions on the way.
-    const Evaluation here = slim ? slimLocalStep(constrainedTargets, softTargets) : restLocalStep(constrainedTargets, softTargets);
+    const Evaluation here = slim ? slimLocalStep(constrainedTargets, softTargets)
+                                 : restLocalStep(constrainedTargets, softTargets, RestDirection::Rotations);
     if (iteration == 0) {
       if (!(here.minRelativeVolume > 0.0))
         throw InputError(source_, "the starting positions invert a tet (smallest relative volume " +
@@ -642,11 +674,18 @@ InjectiveStepReport InjectiveSolver::iterate(std::span<const Eigen::Vector3d> co
       report.minRelativeVolume = here.minRelativeVolume;
       report.energy = energy = here.energy;
     }
-    const Eigen::VectorXd solution = slim ? slimGlobalStep(softTargets) : restGlobalStep(softTargets);
-    const std::vector<Eigen::Vector3d> direction = directionTo(solution, constrainedTargets);
+    const Eigen::VectorXd solution = slim ? slimGlobalStep(softTargets) : restGlobalStep(softTargets, RestDirection::Rotations);
     double next = energy;
     const double merit = energy + targetPenalty(current_, constrainedTargets);
-    if (!lineSearch(direction, constrainedTargets, softTargets, merit, report, next)) {
+    bool moved = lineSearch(directionTo(solution, constrainedTargets), constrainedTargets, softTargets, merit, report, next);
+    if (!moved && !slim) {
+      // ARAP's direction does not see the barrier; the preconditioned
+      // gradient does (a descent direction at the targets).
+      restLocalStep(constrainedTargets, softTargets, RestDirection::Gradient);
+      moved = lineSearch(directionTo(restGlobalStep(softTargets, RestDirection::Gradient), constrainedTargets),
+                         constrainedTargets, softTargets, merit, report, next);
+    }
+    if (!moved) {
       // No decrease along the direction at the targets: stationary as far as
       // the line search can tell.
       report.converged = startedAtTargets;

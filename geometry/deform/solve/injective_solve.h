@@ -26,19 +26,25 @@
 // eliminated (hard constraints), factorized by CHOLMOD (SparseCholesky).
 // Line search: the largest step before any tet's signed volume reaches zero
 // (the smallest positive root of its cubic in the step size; Smith &
-// Schaefer 2015), times flipShrink, then halved until the energy decreases
-// (and until every tet has positive volume: a step is accepted only after
-// that check). The constrained vertices move along the same line search
-// from where they are to their targets, so a step whose targets jump ahead
-// of the free vertices is taken in part, and finished by the next
-// iterations.
+// Schaefer 2015), times flipShrink, then halved until every tet has a
+// positive volume (checked, not assumed) and the merit decreases. The
+// constrained vertices move along the same line from where they are to their
+// targets; the merit is E plus targetPenalty times their mass-weighted
+// squared distance to the targets, so at the targets E never rises, and on
+// the way a step may add distortion only by less than it brings them closer.
 //
 // Interactive mode (frame()): the system of SLIM at rest (J = I: W^T W = 4 I,
-// so the cotangent-like Laplacian of the tets, 4 L, plus the soft targets)
-// is factorized once per constraint set and gives the direction with the
-// per-tet closest rotations on its right-hand side (ARAP's global step); the
-// same injective line search and true energy then decide the step. A fixed
-// number of iterations per frame, warm-started from the previous frame.
+// so the tets' Laplacian L, the same for the three coordinates, plus the
+// soft targets) is factorized once per constraint set. An iteration takes
+// ARAP's global step on it (the tets' closest rotations, extracted
+// warm-started from the previous frame's, on the right-hand side), which
+// follows large turns; where the line search finds no step along it (ARAP
+// does not see the barrier), the system preconditions E's true gradient
+// instead, (2 x 4 L) d = -grad E (the quadratic proxy of Kovalsky et al.
+// 2016 without its acceleration), a descent direction at the targets
+// whatever the distortion. The same injective line search and merit decide
+// the step; a fixed number of iterations per frame, warm-started from the
+// previous frame's positions.
 
 #include "geometry/deform/solve/sparse_cholesky.h"
 #include "geometry/tet_mesh.h"
@@ -90,7 +96,7 @@ public:
   // repeats. softVertices / softWeights: #S ids and weights w_k (> 0) of
   // vertices pulled towards targets (a constrained vertex listed there keeps
   // its prescribed position). Every connected part of the mesh needs a
-  // constrained or a soft vertex. Throws InputError(source, ...) for an index
+  // constrained or a soft vertex; a vertex in no tet stays where it is. Throws InputError(source, ...) for an index
   // out of range or repeated, a non-finite coordinate, a degenerate or
   // inverted rest tet, or a part with nothing to hold it. The current
   // positions start at rest.
@@ -146,10 +152,15 @@ private:
   void checkTargets(std::span<const Eigen::Vector3d> constrainedTargets, std::span<const Eigen::Vector3d> softTargets) const;
   // Local steps: fill frames_ from current_ and return E there.
   Evaluation slimLocalStep(std::span<const Eigen::Vector3d> constrainedTargets, std::span<const Eigen::Vector3d> softTargets);
-  Evaluation restLocalStep(std::span<const Eigen::Vector3d> constrainedTargets, std::span<const Eigen::Vector3d> softTargets);
+  // frame()'s two right-hand sides of the rest system: the tets' closest
+  // rotations (ARAP: the system gives positions), or minus half of E's
+  // gradient (the system gives the step).
+  enum class RestDirection { Rotations, Gradient };
+  Evaluation restLocalStep(std::span<const Eigen::Vector3d> constrainedTargets, std::span<const Eigen::Vector3d> softTargets,
+                           RestDirection kind);
   // Global steps: the free vertices' positions (3 #free, vertex-major).
   Eigen::VectorXd slimGlobalStep(std::span<const Eigen::Vector3d> softTargets);
-  Eigen::VectorXd restGlobalStep(std::span<const Eigen::Vector3d> softTargets);
+  Eigen::VectorXd restGlobalStep(std::span<const Eigen::Vector3d> softTargets, RestDirection kind);
   // Per free vertex, the sum of its tets' frames_ rhs and its soft pull.
   std::vector<Eigen::Vector3d> gatherRightHandSide(std::span<const Eigen::Vector3d> softTargets) const;
   // The full #V direction to the global step's solution `freeSolution` with
@@ -211,7 +222,7 @@ private:
   bool restFactorized_ = false;
 
   std::vector<TetFrame> frames_;                  // #T, the local step's output
-  std::vector<Eigen::Quaterniond> restRotation_;  // #T, frame(): each tet's rotation, the next warm start
+  std::vector<Eigen::Quaterniond> restRotation_;  // #T, frame(): each tet's last rotation, the next warm start
   std::vector<Eigen::Vector3d> current_;
 };
 
