@@ -5,6 +5,7 @@
 #include "geometry/error.h"
 #include "geometry/parallel.h"
 
+#include <Eigen/IterativeLinearSolvers>
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
@@ -159,6 +160,34 @@ Eigen::Matrix3d distortionGradient(const Eigen::Matrix3d& j, double lambda) {
   return 2.0 * j - 2.0 * inverseTranspose * inverseTranspose.transpose() * inverseTranspose +
          2.0 * lambda * (det - 1.0) * det * inverseTranspose;
 }
+
+// The rest system's factor (#free by #free, the same for the three
+// coordinates) as the preconditioner of conjugate gradients on the SLIM
+// system (3 #free, vertex-major), in the shape Eigen's solvers take.
+class RestSystemPreconditioner {
+public:
+  RestSystemPreconditioner() = default;
+  template <class Matrix>
+  RestSystemPreconditioner& analyzePattern(const Matrix&) { return *this; }
+  template <class Matrix>
+  RestSystemPreconditioner& factorize(const Matrix&) { return *this; }
+  template <class Matrix>
+  RestSystemPreconditioner& compute(const Matrix&) { return *this; }
+  Eigen::ComputationInfo info() const { return Eigen::Success; }
+  void bind(const SparseCholesky& factor) { factor_ = &factor; }
+
+  Eigen::VectorXd solve(const Eigen::VectorXd& b) const {
+    using Rows = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+    const Eigen::Index n = b.size() / 3;
+    const Eigen::MatrixXd x = factor_->solve(Eigen::MatrixXd(Eigen::Map<const Rows>(b.data(), n, 3)));
+    Eigen::VectorXd out(b.size());
+    Eigen::Map<Rows>(out.data(), n, 3) = x;
+    return out;
+  }
+
+private:
+  const SparseCholesky* factor_ = nullptr;
+};
 
 std::string vertexName(std::int32_t v) { return "vertex " + std::to_string(v); }
 
@@ -486,8 +515,24 @@ Eigen::VectorXd InjectiveSolver::slimGlobalStep(std::span<const Eigen::Vector3d>
   const std::vector<Eigen::Vector3d> rhs = gatherRightHandSide(softTargets);
   Eigen::MatrixXd b(3 * Eigen::Index(rhs.size()), 1);
   for (std::size_t f = 0; f < rhs.size(); ++f) b.block<3, 1>(3 * Eigen::Index(f), 0) = rhs[f];
-  slimSolver_.factorize(slimMatrix_);
-  return slimSolver_.solve(b).col(0);
+  if (std::int64_t(b.rows()) <= options_.directSolveLimit) {
+    slimSolver_.factorize(slimMatrix_);
+    return slimSolver_.solve(b).col(0);
+  }
+  // Too large to factorize every iteration: conjugate gradients from the
+  // current positions, preconditioned by the rest system's factor (the SLIM
+  // system at rest). An inexact solve still gives a direction the line
+  // search makes safe.
+  factorizeRestSystem();
+  Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower, RestSystemPreconditioner> cg;
+  cg.setMaxIterations(options_.cgIterations);
+  cg.setTolerance(options_.cgTolerance);
+  cg.compute(slimMatrix_);
+  cg.preconditioner().bind(restSolver_);
+  Eigen::VectorXd guess(b.rows());
+  for (std::size_t f = 0; f < freeVertices_.size(); ++f)
+    guess.segment<3>(3 * Eigen::Index(f)) = current_[std::size_t(freeVertices_[f])];
+  return cg.solveWithGuess(b.col(0), guess);
 }
 
 std::vector<Eigen::Vector3d> InjectiveSolver::gatherRightHandSide(std::span<const Eigen::Vector3d> softTargets) const {
@@ -550,7 +595,7 @@ InjectiveSolver::Evaluation InjectiveSolver::restLocalStep(std::span<const Eigen
   return {sum.sum + softEnergy(current_, softTargets), sum.least};
 }
 
-Eigen::VectorXd InjectiveSolver::restGlobalStep(std::span<const Eigen::Vector3d> softTargets, RestDirection kind) {
+void InjectiveSolver::factorizeRestSystem() {
   if (!restFactorized_) {
     std::vector<Eigen::Triplet<double>> entries;
     entries.reserve(blocks_.size());
@@ -569,6 +614,10 @@ Eigen::VectorXd InjectiveSolver::restGlobalStep(std::span<const Eigen::Vector3d>
     restSolver_.factorize(matrix);
     restFactorized_ = true;
   }
+}
+
+Eigen::VectorXd InjectiveSolver::restGlobalStep(std::span<const Eigen::Vector3d> softTargets, RestDirection kind) {
+  factorizeRestSystem();
   // The soft pull c_k p_k; for the step, the soft term's share of minus
   // half the gradient, c_k (p_k - x_k).
   const bool step = kind == RestDirection::Gradient;

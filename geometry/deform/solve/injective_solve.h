@@ -23,7 +23,9 @@
 // the volume term enters linearized (Gauss-Newton: det J + cof(J) : dJ).
 // Global step: the proxy's minimizer, one sparse SPD system in the 3 #free
 // coordinates (the metric W^T W couples them), the constrained vertices
-// eliminated (hard constraints), factorized by CHOLMOD (SparseCholesky).
+// eliminated (hard constraints), factorized by CHOLMOD (SparseCholesky);
+// on large meshes solved instead by conjugate gradients preconditioned by the
+// rest system's factor (below), which is factorized once.
 // Line search: the largest step before any tet's signed volume reaches zero
 // (the smallest positive root of its cubic in the step size; Smith &
 // Schaefer 2015), times flipShrink, then halved until every tet has a
@@ -74,6 +76,13 @@ struct InjectiveSolveOptions {
   // distortion a step may add to bring them closer.
   double targetPenalty = 100.0;
   int frameIterations = 2;       // frame(): iterations per frame
+  // SLIM unknowns (3 #free) up to which CHOLMOD factorizes the SLIM system
+  // every iteration; above, conjugate gradients preconditioned by the rest
+  // system's factor (factorized once) solve it to cgTolerance (relative
+  // residual) or cgIterations.
+  std::int64_t directSolveLimit = 30000;
+  int cgIterations = 60;
+  double cgTolerance = 1e-4;
   int threads = 0;               // the parallel loop's threads (0: every CPU)
 };
 
@@ -161,6 +170,7 @@ private:
   // Global steps: the free vertices' positions (3 #free, vertex-major).
   Eigen::VectorXd slimGlobalStep(std::span<const Eigen::Vector3d> softTargets);
   Eigen::VectorXd restGlobalStep(std::span<const Eigen::Vector3d> softTargets, RestDirection kind);
+  void factorizeRestSystem();
   // Per free vertex, the sum of its tets' frames_ rhs and its soft pull.
   std::vector<Eigen::Vector3d> gatherRightHandSide(std::span<const Eigen::Vector3d> softTargets) const;
   // The full #V direction to the global step's solution `freeSolution` with
