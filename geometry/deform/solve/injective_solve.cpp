@@ -265,6 +265,12 @@ void InjectiveSolver::precompute(std::span<const Eigen::Vector3d> rest, std::spa
     throw InputError(source, std::to_string(softWeights.size()) + " soft weights for " + std::to_string(softVertices.size()) +
                                  " soft vertices");
   vertexTets_ = vertexTets(tets_, std::size_t(n));
+  vertexTetCorner_.resize(vertexTets_.tets.size());
+  for (std::int64_t v = 0; v < n; ++v)
+    for (std::int64_t i = vertexTets_.start[std::size_t(v)]; i < vertexTets_.start[std::size_t(v) + 1]; ++i) {
+      const Tet& tet = tets_[std::size_t(vertexTets_.tets[std::size_t(i)])];
+      vertexTetCorner_[std::size_t(i)] = std::uint8_t(std::find(tet.begin(), tet.end(), std::int32_t(v)) - tet.begin());
+    }
   softVertices_.assign(softVertices.begin(), softVertices.end());
   softCoefficient_.resize(softVertices_.size());
   std::vector<std::uint8_t> isSoft(std::size_t(n), 0);
@@ -450,7 +456,8 @@ InjectiveSolver::Evaluation InjectiveSolver::slimLocalStep(std::span<const Eigen
   // Per tet: the rotation, the SLIM metric and the linearized volume term,
   // folded into the tet's share of the right-hand side; and E's term.
   const double lambda = options_.volumeWeight;
-  frames_.resize(tets_.size());
+  slimFrames_.resize(tets_.size());
+  tetRhs_.resize(tets_.size());
   const TetSum sum = sumOverTets(std::int64_t(tets_.size()), workerThreads(options_.threads), [&](std::size_t t, double& det) {
     const Tet& tet = tets_[t];
     const Eigen::Matrix3d j = edgeMatrix(current_, tet) * restEdgeInv_[t];
@@ -465,7 +472,7 @@ InjectiveSolver::Evaluation InjectiveSolver::slimLocalStep(std::span<const Eigen
     }
     const Eigen::Vector3d s = svd.singularValues();
     const Eigen::Vector3d w2(slimWeight(s[0]), slimWeight(s[1]), slimWeight(s[2]));
-    TetFrame& frame = frames_[t];
+    SlimFrame& frame = slimFrames_[t];
     frame.metric = u * w2.asDiagonal() * u.transpose();
     const Eigen::Matrix3d rotation = u * v.transpose();
     const Eigen::Matrix3d cofactor = det * j.inverse().transpose();
@@ -485,7 +492,7 @@ InjectiveSolver::Evaluation InjectiveSolver::slimLocalStep(std::span<const Eigen
           r -= g[std::size_t(a)].dot(g[std::size_t(b)]) * (frame.metric * x) +
                lambda * frame.volume[std::size_t(a)] * frame.volume[std::size_t(b)].dot(x);
         }
-      frame.rhs[std::size_t(a)] = tetWeight_[t] * r;
+      tetRhs_[t][std::size_t(a)] = tetWeight_[t] * r;
     }
     return tetWeight_[t] * distortion;
   });
@@ -502,7 +509,7 @@ Eigen::VectorXd InjectiveSolver::slimGlobalStep(std::span<const Eigen::Vector3d>
       Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
       for (std::int64_t i = blockTermStart_[std::size_t(k)]; i < blockTermStart_[std::size_t(k) + 1]; ++i) {
         const BlockTerm& term = blockTerms_[std::size_t(i)];
-        const TetFrame& frame = frames_[std::size_t(term.tet)];
+        const SlimFrame& frame = slimFrames_[std::size_t(term.tet)];
         const Gradients g = barycentricGradients(restEdgeInv_[std::size_t(term.tet)]);
         sum += tetWeight_[std::size_t(term.tet)] *
                (g[term.a].dot(g[term.b]) * frame.metric + lambda * frame.volume[term.a] * frame.volume[term.b].transpose());
@@ -541,10 +548,8 @@ std::vector<Eigen::Vector3d> InjectiveSolver::gatherRightHandSide(std::span<cons
     for (std::int64_t f = begin; f < end; ++f) {
       const std::int32_t v = freeVertices_[std::size_t(f)];
       Eigen::Vector3d r = Eigen::Vector3d::Zero();
-      for (const std::int32_t t : vertexTets_.of(v)) {
-        const Tet& tet = tets_[std::size_t(t)];
-        r += frames_[std::size_t(t)].rhs[std::size_t(std::find(tet.begin(), tet.end(), v) - tet.begin())];
-      }
+      for (std::int64_t i = vertexTets_.start[std::size_t(v)]; i < vertexTets_.start[std::size_t(v) + 1]; ++i)
+        r += tetRhs_[std::size_t(vertexTets_.tets[std::size_t(i)])][vertexTetCorner_[std::size_t(i)]];
       if (const std::int32_t k = freeSoftSlot_[std::size_t(f)]; k >= 0)
         r += freeSoftCoefficient_[std::size_t(f)] * (softTargets.empty() ? rest_[std::size_t(v)] : softTargets[std::size_t(k)]);
       out[std::size_t(f)] = r;
@@ -566,7 +571,7 @@ InjectiveSolver::Evaluation InjectiveSolver::restLocalStep(std::span<const Eigen
   // side is minus half of E's gradient, for the step. Both less the coupling
   // to the constrained vertices (their targets, or their moves).
   const double lambda = options_.volumeWeight;
-  frames_.resize(tets_.size());
+  tetRhs_.resize(tets_.size());
   const TetSum sum = sumOverTets(std::int64_t(tets_.size()), workerThreads(options_.threads), [&](std::size_t t, double& det) {
     const Tet& tet = tets_[t];
     const Eigen::Matrix3d j = edgeMatrix(current_, tet) * restEdgeInv_[t];
@@ -588,7 +593,7 @@ InjectiveSolver::Evaluation InjectiveSolver::restLocalStep(std::span<const Eigen
                                         : Eigen::Vector3d(constrainedTargets[std::size_t(slot)] - current_[std::size_t(v)]);
           r -= weight * g[std::size_t(a)].dot(g[std::size_t(b)]) * x;
         }
-      frames_[t].rhs[std::size_t(a)] = r;
+      tetRhs_[t][std::size_t(a)] = r;
     }
     return tetWeight_[t] * distortion;
   });

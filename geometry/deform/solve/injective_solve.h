@@ -150,16 +150,15 @@ private:
     double energy = 0.0;
     double minRelativeVolume = 0.0;
   };
-  // Per tet, what the local step hands the global step.
-  struct TetFrame {
-    Eigen::Matrix3d metric = Eigen::Matrix3d::Identity();  // W^T W (SLIM)
-    std::array<Eigen::Vector3d, 4> volume{};                // c_a = cof(J) g_a, the gradient of det J (SLIM)
-    std::array<Eigen::Vector3d, 4> rhs{};                   // the tet's share of the right-hand side
+  // Per tet, what SLIM's local step hands the assembly of its matrix.
+  struct SlimFrame {
+    Eigen::Matrix3d metric = Eigen::Matrix3d::Identity();  // W^T W
+    std::array<Eigen::Vector3d, 4> volume{};                // c_a = cof(J) g_a, the gradient of det J
   };
   Evaluation evaluate(std::span<const Eigen::Vector3d> positions, std::span<const Eigen::Vector3d> softTargets) const;
   double softEnergy(std::span<const Eigen::Vector3d> positions, std::span<const Eigen::Vector3d> softTargets) const;
   void checkTargets(std::span<const Eigen::Vector3d> constrainedTargets, std::span<const Eigen::Vector3d> softTargets) const;
-  // Local steps: fill frames_ from current_ and return E there.
+  // Local steps: fill tetRhs_ (and slimFrames_) from current_ and return E there.
   Evaluation slimLocalStep(std::span<const Eigen::Vector3d> constrainedTargets, std::span<const Eigen::Vector3d> softTargets);
   // frame()'s two right-hand sides of the rest system: the tets' closest
   // rotations (ARAP: the system gives positions), or minus half of E's
@@ -171,7 +170,7 @@ private:
   Eigen::VectorXd slimGlobalStep(std::span<const Eigen::Vector3d> softTargets);
   Eigen::VectorXd restGlobalStep(std::span<const Eigen::Vector3d> softTargets, RestDirection kind);
   void factorizeRestSystem();
-  // Per free vertex, the sum of its tets' frames_ rhs and its soft pull.
+  // Per free vertex, the sum of its tets' tetRhs_ and its soft pull.
   std::vector<Eigen::Vector3d> gatherRightHandSide(std::span<const Eigen::Vector3d> softTargets) const;
   // The full #V direction to the global step's solution `freeSolution` with
   // the constrained vertices going to their targets.
@@ -209,6 +208,7 @@ private:
   std::vector<double> freeSoftCoefficient_;    // #free: its soft coefficient, or 0
   std::vector<std::int32_t> freeSoftSlot_;     // #free: index into softVertices_, or -1
   VertexTets vertexTets_;
+  std::vector<std::uint8_t> vertexTetCorner_;  // per entry of vertexTets_.tets: the vertex's corner in that tet
 
   // The SLIM system's lower triangle: one 3 x 3 block per pair of free
   // vertices sharing a tet (fa >= fb), its entries' places in the values of
@@ -231,7 +231,8 @@ private:
   SparseCholesky restSolver_;
   bool restFactorized_ = false;
 
-  std::vector<TetFrame> frames_;                  // #T, the local step's output
+  std::vector<SlimFrame> slimFrames_;                  // #T
+  std::vector<std::array<Eigen::Vector3d, 4>> tetRhs_;  // #T: each tet's share of the right-hand side, per corner
   std::vector<Eigen::Quaterniond> restRotation_;  // #T, frame(): each tet's last rotation, the next warm start
   std::vector<Eigen::Vector3d> current_;
 };
