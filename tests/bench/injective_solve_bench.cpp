@@ -148,6 +148,13 @@ void BM_InjectiveSolve(benchmark::State& state) {
   state.counters["min_det_J"] = result.minRelativeVolume;
   state.counters["inverted"] = double(result.invertedTets);
   state.counters["converged"] = result.converged ? 1 : 0;
+  int reached = 0, convergedSteps = 0;
+  for (const InjectiveStepReport& step : result.steps) {
+    reached += step.reachedTargets ? 1 : 0;
+    convergedSteps += step.converged ? 1 : 0;
+  }
+  state.counters["steps_at_targets"] = reached;
+  state.counters["steps_converged"] = convergedSteps;
   state.counters["energy"] = result.energy;
 }
 BENCHMARK(BM_InjectiveSolve)->Arg(90)->Arg(120)->Iterations(1)->Unit(benchmark::kSecond);

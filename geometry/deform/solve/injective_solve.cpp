@@ -21,8 +21,11 @@ constexpr double kInfinity = std::numeric_limits<double>::infinity();
 // A rest tet is degenerate below this volume, relative to the mean edge
 // length cubed (a regular tet has 0.118).
 constexpr double kDegenerateVolume = 1e-9;
-// Line-search halvings before a direction is given up.
-constexpr int kMaxHalvings = 40;
+// Line-search halvings before a direction is given up: in a solve, down to
+// steps of 1e-9 of the first; in a frame, whose time is budgeted, 1/256 (the
+// next frame tries again).
+constexpr int kSolveHalvings = 30;
+constexpr int kFrameHalvings = 8;
 
 using Gradients = std::array<Eigen::Vector3d, 4>;
 
@@ -688,7 +691,7 @@ double InjectiveSolver::targetPenalty(std::span<const Eigen::Vector3d> positions
 
 bool InjectiveSolver::lineSearch(std::span<const Eigen::Vector3d> direction,
                                  std::span<const Eigen::Vector3d> constrainedTargets,
-                                 std::span<const Eigen::Vector3d> softTargets, double currentMerit,
+                                 std::span<const Eigen::Vector3d> softTargets, double currentMerit, int halvings,
                                  InjectiveStepReport& report, double& acceptedEnergy) {
   // The merit is E plus the penalty on the constrained vertices' distance to
   // their targets: at the targets, E itself must decrease; on the way, a
@@ -696,7 +699,7 @@ bool InjectiveSolver::lineSearch(std::span<const Eigen::Vector3d> direction,
   // so a tet's barrier energy bounds how far it can be squeezed.
   double alpha = injectiveStepBound(direction);
   std::vector<Eigen::Vector3d> trial(current_.size());
-  for (int halving = 0; halving < kMaxHalvings; ++halving, alpha *= 0.5) {
+  for (int halving = 0; halving < halvings; ++halving, alpha *= 0.5) {
     for (std::size_t v = 0; v < trial.size(); ++v) trial[v] = current_[v] + alpha * direction[v];
     if (alpha == 1.0)
       for (std::size_t k = 0; k < constrained_.size(); ++k) trial[std::size_t(constrained_[k])] = constrainedTargets[k];
@@ -731,13 +734,15 @@ InjectiveStepReport InjectiveSolver::iterate(std::span<const Eigen::Vector3d> co
     const Eigen::VectorXd solution = slim ? slimGlobalStep(softTargets) : restGlobalStep(softTargets, RestDirection::Rotations);
     double next = energy;
     const double merit = energy + targetPenalty(current_, constrainedTargets);
-    bool moved = lineSearch(directionTo(solution, constrainedTargets), constrainedTargets, softTargets, merit, report, next);
+    const int halvings = slim ? kSolveHalvings : kFrameHalvings;
+    bool moved =
+        lineSearch(directionTo(solution, constrainedTargets), constrainedTargets, softTargets, merit, halvings, report, next);
     if (!moved && !slim) {
       // ARAP's direction does not see the barrier; the preconditioned
       // gradient does (a descent direction at the targets).
       restLocalStep(constrainedTargets, softTargets, RestDirection::Gradient);
       moved = lineSearch(directionTo(restGlobalStep(softTargets, RestDirection::Gradient), constrainedTargets),
-                         constrainedTargets, softTargets, merit, report, next);
+                         constrainedTargets, softTargets, merit, halvings, report, next);
     }
     if (!moved) {
       // No decrease along the direction at the targets: stationary as far as

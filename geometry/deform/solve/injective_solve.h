@@ -182,11 +182,11 @@ private:
   // mu sum_k (m_k / |Omega|) ||x_k - target_k||^2 / h^2 over the
   // constrained vertices: 0 at the targets.
   double targetPenalty(std::span<const Eigen::Vector3d> positions, std::span<const Eigen::Vector3d> constrainedTargets) const;
-  // One line search and update of current_, on the merit E + targetPenalty;
-  // returns false when no step lowered it.
+  // One line search and update of current_, on the merit E + targetPenalty,
+  // with at most `halvings` halvings; returns false when no step lowered it.
   bool lineSearch(std::span<const Eigen::Vector3d> direction, std::span<const Eigen::Vector3d> constrainedTargets,
-                  std::span<const Eigen::Vector3d> softTargets, double currentMerit, InjectiveStepReport& report,
-                  double& acceptedEnergy);
+                  std::span<const Eigen::Vector3d> softTargets, double currentMerit, int halvings,
+                  InjectiveStepReport& report, double& acceptedEnergy);
   bool atTargets(std::span<const Eigen::Vector3d> constrainedTargets) const;
   InjectiveStepReport iterate(std::span<const Eigen::Vector3d> constrainedTargets,
                               std::span<const Eigen::Vector3d> softTargets, int iterations, bool slim);
