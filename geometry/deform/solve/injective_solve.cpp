@@ -744,6 +744,17 @@ InjectiveStepReport InjectiveSolver::iterate(std::span<const Eigen::Vector3d> co
       moved = lineSearch(directionTo(restGlobalStep(softTargets, RestDirection::Gradient), constrainedTargets),
                          constrainedTargets, softTargets, merit, halvings, report, next);
     }
+    if (!moved && !startedAtTargets) {
+      // The bones cannot come closer along this direction without squeezing
+      // a tet by more than they gain: relax the tissue around where they
+      // are (a descent direction of E), then chase again.
+      std::vector<Eigen::Vector3d> held(constrained_.size());
+      for (std::size_t k = 0; k < constrained_.size(); ++k) held[k] = current_[std::size_t(constrained_[k])];
+      const Eigen::VectorXd relaxed = slim ? (slimLocalStep(held, softTargets), slimGlobalStep(softTargets))
+                                           : (restLocalStep(held, softTargets, RestDirection::Gradient),
+                                              restGlobalStep(softTargets, RestDirection::Gradient));
+      moved = lineSearch(directionTo(relaxed, held), held, softTargets, energy, halvings, report, next);
+    }
     if (!moved) {
       // No decrease along the direction at the targets: stationary as far as
       // the line search can tell.
