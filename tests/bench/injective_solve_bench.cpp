@@ -10,7 +10,8 @@
 //  - SlimIteration: one SLIM iteration (local step, assembly, CHOLMOD
 //    factorization of the 3 #free system, solve, line search), the bone
 //    turned 5 degrees from rest.
-//  - Solve: the full SLIM solve from rest to `degrees` (argument) in 8 steps.
+//  - Solve: the full SLIM solve from rest to `degrees` (first argument) in
+//    `steps` steps (second).
 // Counters: milliseconds per frame (mean and fastest), iterations, the
 // smallest det J over every step, inverted tets (0 by construction).
 
@@ -138,7 +139,7 @@ void BM_InjectiveSolve(benchmark::State& state) {
   const Limb& l = limb();
   const double degrees = double(state.range(0));
   InjectiveSolveOptions options;
-  options.steps = 8;
+  options.steps = int(state.range(1));
   const std::vector<Eigen::Isometry3d> motions{Eigen::Isometry3d::Identity(), l.turn(degrees)};
   InjectiveSolveResult result;
   for (auto _ : state)
@@ -157,7 +158,7 @@ void BM_InjectiveSolve(benchmark::State& state) {
   state.counters["steps_converged"] = convergedSteps;
   state.counters["energy"] = result.energy;
 }
-BENCHMARK(BM_InjectiveSolve)->Arg(90)->Arg(120)->Iterations(1)->Unit(benchmark::kSecond);
+BENCHMARK(BM_InjectiveSolve)->Args({90, 8})->Args({120, 8})->Args({120, 16})->Iterations(1)->Unit(benchmark::kSecond);
 
 }  // namespace
 }  // namespace vox
