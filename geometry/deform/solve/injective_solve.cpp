@@ -10,7 +10,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numbers>
 #include <tuple>
 
 namespace vox {
@@ -98,12 +97,12 @@ std::size_t rangeIndex(std::int64_t begin, std::int64_t ranges, std::int64_t n) 
 
 struct TetSum {
   double sum = 0.0;
-  double least = kInfinity;  // the smallest det J_t
+  double least = kInfinity;  // the smallest value reported
 };
 
-// term(t, det) over every tet, on the parallel loop: the sum of the terms,
-// added range by range in order (the same for a given thread count), and
-// the smallest det J_t that the terms report.
+// term(t, value) over every tet, on the parallel loop: the sum of what the
+// terms return, added range by range in order (the same for a given thread
+// count), and the smallest value they report (det J_t, or a step bound).
 template <class Term>
 TetSum sumOverTets(std::int64_t tetCount, int threads, const Term& term) {
   const std::int64_t ranges = std::max<std::int64_t>(1, std::min<std::int64_t>(threads, (tetCount + 4095) / 4096));
@@ -111,9 +110,9 @@ TetSum sumOverTets(std::int64_t tetCount, int threads, const Term& term) {
   parallelRanges(tetCount, threads, [&](std::int64_t begin, std::int64_t end) {
     TetSum part;
     for (std::int64_t t = begin; t < end; ++t) {
-      double det = 0.0;
-      part.sum += term(std::size_t(t), det);
-      part.least = std::min(part.least, det);
+      double value = 0.0;
+      part.sum += term(std::size_t(t), value);
+      part.least = std::min(part.least, value);
     }
     partial[rangeIndex(begin, ranges, tetCount)] = part;
   });
@@ -659,19 +658,11 @@ std::vector<Eigen::Vector3d> InjectiveSolver::directionTo(const Eigen::VectorXd&
 }
 
 double InjectiveSolver::injectiveStepBound(std::span<const Eigen::Vector3d> direction) const {
-  const int threads = workerThreads(options_.threads);
-  const auto tetCount = std::int64_t(tets_.size());
-  const std::int64_t ranges = std::max<std::int64_t>(1, std::min<std::int64_t>(threads, (tetCount + 4095) / 4096));
-  std::vector<double> bound(std::size_t(ranges), kInfinity);
-  parallelRanges(tetCount, threads, [&](std::int64_t begin, std::int64_t end) {
-    double least = kInfinity;
-    for (std::int64_t t = begin; t < end; ++t) {
-      const Tet& tet = tets_[std::size_t(t)];
-      least = std::min(least, firstZeroVolumeStep(edgeMatrix(current_, tet), edgeMatrix(direction, tet)));
-    }
-    bound[rangeIndex(begin, ranges, tetCount)] = least;
-  });
-  const double largest = *std::min_element(bound.begin(), bound.end());
+  const double largest =
+      sumOverTets(std::int64_t(tets_.size()), workerThreads(options_.threads), [&](std::size_t t, double& step) {
+        step = firstZeroVolumeStep(edgeMatrix(current_, tets_[t]), edgeMatrix(direction, tets_[t]));
+        return 0.0;
+      }).least;
   return std::min(1.0, options_.flipShrink * largest);
 }
 
