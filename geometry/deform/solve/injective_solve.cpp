@@ -421,11 +421,12 @@ double InjectiveSolver::softEnergy(std::span<const Eigen::Vector3d> positions,
 }
 
 double InjectiveSolver::energy(std::span<const Eigen::Vector3d> positions,
-                               std::span<const Eigen::Vector3d> constrainedTargets,
                                std::span<const Eigen::Vector3d> softTargets) const {
-  checkTargets(constrainedTargets, softTargets);
   if (positions.size() != rest_.size())
     throw InputError(source_, std::to_string(positions.size()) + " positions for " + std::to_string(rest_.size()) + " vertices");
+  if (!softTargets.empty() && softTargets.size() != softVertices_.size())
+    throw InputError(source_, std::to_string(softTargets.size()) + " soft targets for " +
+                                  std::to_string(softVertices_.size()) + " soft vertices");
   return evaluate(positions, softTargets).energy;
 }
 

@@ -105,10 +105,10 @@ public:
   // repeats. softVertices / softWeights: #S ids and weights w_k (> 0) of
   // vertices pulled towards targets (a constrained vertex listed there keeps
   // its prescribed position). Every connected part of the mesh needs a
-  // constrained or a soft vertex; a vertex in no tet stays where it is. Throws InputError(source, ...) for an index
-  // out of range or repeated, a non-finite coordinate, a degenerate or
-  // inverted rest tet, or a part with nothing to hold it. The current
-  // positions start at rest.
+  // constrained or a soft vertex; a vertex in no tet stays where it is.
+  // Throws InputError(source, ...) for an index out of range or repeated, a
+  // non-finite coordinate, a degenerate or inverted rest tet, or a part with
+  // nothing to hold it. The current positions start at rest.
   void precompute(std::span<const Eigen::Vector3d> rest, std::span<const Tet> tets,
                   std::span<const std::int32_t> constrained, std::span<const std::int32_t> softVertices = {},
                   std::span<const double> softWeights = {}, const InjectiveSolveOptions& options = {},
@@ -132,10 +132,9 @@ public:
   void setPositions(std::span<const Eigen::Vector3d> positions);
   void resetToRest();
 
-  // E of `positions` (#V) with the given targets (as solveStep); +infinity
-  // when a tet is not positively oriented.
-  double energy(std::span<const Eigen::Vector3d> positions, std::span<const Eigen::Vector3d> constrainedTargets,
-                std::span<const Eigen::Vector3d> softTargets = {}) const;
+  // E of `positions` (#V) with the soft targets (#S; empty: their rest
+  // positions); +infinity when a tet is not positively oriented.
+  double energy(std::span<const Eigen::Vector3d> positions, std::span<const Eigen::Vector3d> softTargets = {}) const;
   // Per tet det J_t of `positions` (#T): its volume relative to rest.
   std::vector<double> relativeVolumes(std::span<const Eigen::Vector3d> positions) const;
 

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 namespace vox {
@@ -316,6 +317,14 @@ TEST(InjectiveSolve, IdentityPoseKeepsTheRest) {
     EXPECT_LT((result.positions[v] - bar.mesh.positions[v]).norm(), 1e-9);
   EXPECT_NEAR(result.minRelativeVolume, 1.0, 1e-9);
   EXPECT_TRUE(result.converged);
+  // At rest every tet's symmetric Dirichlet term is 6 and the volume term 0.
+  InjectiveSolver solver;
+  solver.precompute(bar.mesh.positions, bar.mesh.tets, bar.constrained);
+  EXPECT_NEAR(solver.energy(bar.mesh.positions), 6.0, 1e-9);
+  std::vector<Eigen::Vector3d> flat = bar.mesh.positions;
+  const Tet& t = bar.mesh.tets[0];
+  flat[std::size_t(t[3])] = (flat[std::size_t(t[0])] + flat[std::size_t(t[1])] + flat[std::size_t(t[2])]) / 3.0;
+  EXPECT_EQ(solver.energy(flat), std::numeric_limits<double>::infinity());
 }
 
 void expectInputError(const std::function<void()>& call, const std::string& fragment) {
