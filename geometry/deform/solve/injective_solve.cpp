@@ -5,11 +5,11 @@
 #include "geometry/error.h"
 #include "geometry/parallel.h"
 
+#include <Eigen/IterativeLinearSolvers>
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numbers>
 #include <tuple>
 
 namespace vox {
@@ -20,8 +20,11 @@ constexpr double kInfinity = std::numeric_limits<double>::infinity();
 // A rest tet is degenerate below this volume, relative to the mean edge
 // length cubed (a regular tet has 0.118).
 constexpr double kDegenerateVolume = 1e-9;
-// Line-search halvings before a direction is given up.
-constexpr int kMaxHalvings = 40;
+// Line-search halvings before a direction is given up: in a solve, down to
+// steps of 1e-9 of the first; in a frame, whose time is budgeted, 1/256 (the
+// next frame tries again).
+constexpr int kSolveHalvings = 30;
+constexpr int kFrameHalvings = 8;
 
 using Gradients = std::array<Eigen::Vector3d, 4>;
 
@@ -94,12 +97,12 @@ std::size_t rangeIndex(std::int64_t begin, std::int64_t ranges, std::int64_t n) 
 
 struct TetSum {
   double sum = 0.0;
-  double least = kInfinity;  // the smallest det J_t
+  double least = kInfinity;  // the smallest value reported
 };
 
-// term(t, det) over every tet, on the parallel loop: the sum of the terms,
-// added range by range in order (the same for a given thread count), and
-// the smallest det J_t that the terms report.
+// term(t, value) over every tet, on the parallel loop: the sum of what the
+// terms return, added range by range in order (the same for a given thread
+// count), and the smallest value they report (det J_t, or a step bound).
 template <class Term>
 TetSum sumOverTets(std::int64_t tetCount, int threads, const Term& term) {
   const std::int64_t ranges = std::max<std::int64_t>(1, std::min<std::int64_t>(threads, (tetCount + 4095) / 4096));
@@ -107,9 +110,9 @@ TetSum sumOverTets(std::int64_t tetCount, int threads, const Term& term) {
   parallelRanges(tetCount, threads, [&](std::int64_t begin, std::int64_t end) {
     TetSum part;
     for (std::int64_t t = begin; t < end; ++t) {
-      double det = 0.0;
-      part.sum += term(std::size_t(t), det);
-      part.least = std::min(part.least, det);
+      double value = 0.0;
+      part.sum += term(std::size_t(t), value);
+      part.least = std::min(part.least, value);
     }
     partial[rangeIndex(begin, ranges, tetCount)] = part;
   });
@@ -134,21 +137,59 @@ double tetDistortion(const Eigen::Matrix3d& j, double lambda, double& det) {
 // The rotation R maximizing tr(R^T A), from the warm start `q` (Mueller et
 // al. 2016, "A robust method to extract the rotational part of
 // deformations"): each iteration turns q about the axis and by the angle
-// that the torque of A's columns on R's columns asks for. A few iterations
-// from the previous frame's rotation suffice.
+// that the torque of A's columns on R's columns asks for. From the previous
+// frame's rotation a few iterations reach what a direction needs (1e-6 rad);
+// a tet that turns faster converges over the next frames.
 Eigen::Matrix3d extractRotation(const Eigen::Matrix3d& a, Eigen::Quaterniond& q) {
-  constexpr int kIterations = 12;
+  constexpr int kIterations = 4;
   for (int i = 0; i < kIterations; ++i) {
     const Eigen::Matrix3d r = q.toRotationMatrix();
     const Eigen::Vector3d torque = r.col(0).cross(a.col(0)) + r.col(1).cross(a.col(1)) + r.col(2).cross(a.col(2));
     const double scale = std::abs(r.col(0).dot(a.col(0)) + r.col(1).dot(a.col(1)) + r.col(2).dot(a.col(2))) + 1e-9;
     const Eigen::Vector3d omega = torque / scale;
     const double angle = omega.norm();
-    if (angle < 1e-9) break;
+    if (angle < 1e-6) break;
     q = (Eigen::Quaterniond(Eigen::AngleAxisd(angle, omega / angle)) * q).normalized();
   }
   return q.toRotationMatrix();
 }
+
+// dE_t/dJ of the distortion term: 2 J - 2 J^-T J^-1 J^-T + 2 lambda
+// (det J - 1) cof(J), for det J > 0.
+Eigen::Matrix3d distortionGradient(const Eigen::Matrix3d& j, double lambda) {
+  const double det = j.determinant();
+  const Eigen::Matrix3d inverseTranspose = j.inverse().transpose();
+  return 2.0 * j - 2.0 * inverseTranspose * inverseTranspose.transpose() * inverseTranspose +
+         2.0 * lambda * (det - 1.0) * det * inverseTranspose;
+}
+
+// The rest system's factor (#free by #free, the same for the three
+// coordinates) as the preconditioner of conjugate gradients on the SLIM
+// system (3 #free, vertex-major), in the shape Eigen's solvers take.
+class RestSystemPreconditioner {
+public:
+  RestSystemPreconditioner() = default;
+  template <class Matrix>
+  RestSystemPreconditioner& analyzePattern(const Matrix&) { return *this; }
+  template <class Matrix>
+  RestSystemPreconditioner& factorize(const Matrix&) { return *this; }
+  template <class Matrix>
+  RestSystemPreconditioner& compute(const Matrix&) { return *this; }
+  Eigen::ComputationInfo info() const { return Eigen::Success; }
+  void bind(const SparseCholesky& factor) { factor_ = &factor; }
+
+  Eigen::VectorXd solve(const Eigen::VectorXd& b) const {
+    using Rows = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+    const Eigen::Index n = b.size() / 3;
+    const Eigen::MatrixXd x = factor_->solve(Eigen::MatrixXd(Eigen::Map<const Rows>(b.data(), n, 3)));
+    Eigen::VectorXd out(b.size());
+    Eigen::Map<Rows>(out.data(), n, 3) = x;
+    return out;
+  }
+
+private:
+  const SparseCholesky* factor_ = nullptr;
+};
 
 std::string vertexName(std::int32_t v) { return "vertex " + std::to_string(v); }
 
@@ -226,6 +267,12 @@ void InjectiveSolver::precompute(std::span<const Eigen::Vector3d> rest, std::spa
     throw InputError(source, std::to_string(softWeights.size()) + " soft weights for " + std::to_string(softVertices.size()) +
                                  " soft vertices");
   vertexTets_ = vertexTets(tets_, std::size_t(n));
+  vertexTetCorner_.resize(vertexTets_.tets.size());
+  for (std::int64_t v = 0; v < n; ++v)
+    for (std::int64_t i = vertexTets_.start[std::size_t(v)]; i < vertexTets_.start[std::size_t(v) + 1]; ++i) {
+      const Tet& tet = tets_[std::size_t(vertexTets_.tets[std::size_t(i)])];
+      vertexTetCorner_[std::size_t(i)] = std::uint8_t(std::find(tet.begin(), tet.end(), std::int32_t(v)) - tet.begin());
+    }
   softVertices_.assign(softVertices.begin(), softVertices.end());
   softCoefficient_.resize(softVertices_.size());
   std::vector<std::uint8_t> isSoft(std::size_t(n), 0);
@@ -374,11 +421,12 @@ double InjectiveSolver::softEnergy(std::span<const Eigen::Vector3d> positions,
 }
 
 double InjectiveSolver::energy(std::span<const Eigen::Vector3d> positions,
-                               std::span<const Eigen::Vector3d> constrainedTargets,
                                std::span<const Eigen::Vector3d> softTargets) const {
-  checkTargets(constrainedTargets, softTargets);
   if (positions.size() != rest_.size())
     throw InputError(source_, std::to_string(positions.size()) + " positions for " + std::to_string(rest_.size()) + " vertices");
+  if (!softTargets.empty() && softTargets.size() != softVertices_.size())
+    throw InputError(source_, std::to_string(softTargets.size()) + " soft targets for " +
+                                  std::to_string(softVertices_.size()) + " soft vertices");
   return evaluate(positions, softTargets).energy;
 }
 
@@ -411,7 +459,8 @@ InjectiveSolver::Evaluation InjectiveSolver::slimLocalStep(std::span<const Eigen
   // Per tet: the rotation, the SLIM metric and the linearized volume term,
   // folded into the tet's share of the right-hand side; and E's term.
   const double lambda = options_.volumeWeight;
-  frames_.resize(tets_.size());
+  slimFrames_.resize(tets_.size());
+  tetRhs_.resize(tets_.size());
   const TetSum sum = sumOverTets(std::int64_t(tets_.size()), workerThreads(options_.threads), [&](std::size_t t, double& det) {
     const Tet& tet = tets_[t];
     const Eigen::Matrix3d j = edgeMatrix(current_, tet) * restEdgeInv_[t];
@@ -426,7 +475,7 @@ InjectiveSolver::Evaluation InjectiveSolver::slimLocalStep(std::span<const Eigen
     }
     const Eigen::Vector3d s = svd.singularValues();
     const Eigen::Vector3d w2(slimWeight(s[0]), slimWeight(s[1]), slimWeight(s[2]));
-    TetFrame& frame = frames_[t];
+    SlimFrame& frame = slimFrames_[t];
     frame.metric = u * w2.asDiagonal() * u.transpose();
     const Eigen::Matrix3d rotation = u * v.transpose();
     const Eigen::Matrix3d cofactor = det * j.inverse().transpose();
@@ -446,7 +495,7 @@ InjectiveSolver::Evaluation InjectiveSolver::slimLocalStep(std::span<const Eigen
           r -= g[std::size_t(a)].dot(g[std::size_t(b)]) * (frame.metric * x) +
                lambda * frame.volume[std::size_t(a)] * frame.volume[std::size_t(b)].dot(x);
         }
-      frame.rhs[std::size_t(a)] = tetWeight_[t] * r;
+      tetRhs_[t][std::size_t(a)] = tetWeight_[t] * r;
     }
     return tetWeight_[t] * distortion;
   });
@@ -463,7 +512,7 @@ Eigen::VectorXd InjectiveSolver::slimGlobalStep(std::span<const Eigen::Vector3d>
       Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
       for (std::int64_t i = blockTermStart_[std::size_t(k)]; i < blockTermStart_[std::size_t(k) + 1]; ++i) {
         const BlockTerm& term = blockTerms_[std::size_t(i)];
-        const TetFrame& frame = frames_[std::size_t(term.tet)];
+        const SlimFrame& frame = slimFrames_[std::size_t(term.tet)];
         const Gradients g = barycentricGradients(restEdgeInv_[std::size_t(term.tet)]);
         sum += tetWeight_[std::size_t(term.tet)] *
                (g[term.a].dot(g[term.b]) * frame.metric + lambda * frame.volume[term.a] * frame.volume[term.b].transpose());
@@ -476,8 +525,24 @@ Eigen::VectorXd InjectiveSolver::slimGlobalStep(std::span<const Eigen::Vector3d>
   const std::vector<Eigen::Vector3d> rhs = gatherRightHandSide(softTargets);
   Eigen::MatrixXd b(3 * Eigen::Index(rhs.size()), 1);
   for (std::size_t f = 0; f < rhs.size(); ++f) b.block<3, 1>(3 * Eigen::Index(f), 0) = rhs[f];
-  slimSolver_.factorize(slimMatrix_);
-  return slimSolver_.solve(b).col(0);
+  if (std::int64_t(b.rows()) <= options_.directSolveLimit) {
+    slimSolver_.factorize(slimMatrix_);
+    return slimSolver_.solve(b).col(0);
+  }
+  // Too large to factorize every iteration: conjugate gradients from the
+  // current positions, preconditioned by the rest system's factor (the SLIM
+  // system at rest). An inexact solve still gives a direction the line
+  // search makes safe.
+  factorizeRestSystem();
+  Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower, RestSystemPreconditioner> cg;
+  cg.setMaxIterations(options_.cgIterations);
+  cg.setTolerance(options_.cgTolerance);
+  cg.compute(slimMatrix_);
+  cg.preconditioner().bind(restSolver_);
+  Eigen::VectorXd guess(b.rows());
+  for (std::size_t f = 0; f < freeVertices_.size(); ++f)
+    guess.segment<3>(3 * Eigen::Index(f)) = current_[std::size_t(freeVertices_[f])];
+  return cg.solveWithGuess(b.col(0), guess);
 }
 
 std::vector<Eigen::Vector3d> InjectiveSolver::gatherRightHandSide(std::span<const Eigen::Vector3d> softTargets) const {
@@ -486,10 +551,8 @@ std::vector<Eigen::Vector3d> InjectiveSolver::gatherRightHandSide(std::span<cons
     for (std::int64_t f = begin; f < end; ++f) {
       const std::int32_t v = freeVertices_[std::size_t(f)];
       Eigen::Vector3d r = Eigen::Vector3d::Zero();
-      for (const std::int32_t t : vertexTets_.of(v)) {
-        const Tet& tet = tets_[std::size_t(t)];
-        r += frames_[std::size_t(t)].rhs[std::size_t(std::find(tet.begin(), tet.end(), v) - tet.begin())];
-      }
+      for (std::int64_t i = vertexTets_.start[std::size_t(v)]; i < vertexTets_.start[std::size_t(v) + 1]; ++i)
+        r += tetRhs_[std::size_t(vertexTets_.tets[std::size_t(i)])][vertexTetCorner_[std::size_t(i)]];
       if (const std::int32_t k = freeSoftSlot_[std::size_t(f)]; k >= 0)
         r += freeSoftCoefficient_[std::size_t(f)] * (softTargets.empty() ? rest_[std::size_t(v)] : softTargets[std::size_t(k)]);
       out[std::size_t(f)] = r;
@@ -498,37 +561,49 @@ std::vector<Eigen::Vector3d> InjectiveSolver::gatherRightHandSide(std::span<cons
   return out;
 }
 
-// The SLIM system at rest (J = I: W^T W = 4 I; the volume term left to the
-// line search) is the same for the three coordinates.
+// The SLIM system at rest (J = I: W^T W = 4 I, without the volume term) is
+// the same for the three coordinates.
 constexpr double kRestMetric = 4.0;
 
 InjectiveSolver::Evaluation InjectiveSolver::restLocalStep(std::span<const Eigen::Vector3d> constrainedTargets,
-                                                           std::span<const Eigen::Vector3d> softTargets) {
+                                                           std::span<const Eigen::Vector3d> softTargets,
+                                                           RestDirection kind) {
+  // Rotations: ARAP's right-hand side, 4 |t| / |Omega| R_t g_a, for the
+  // positions. Gradient: the rest system stands for half of E's Hessian
+  // (2 x 4 |t| / |Omega| per unit of the tets' Laplacian) and the right-hand
+  // side is minus half of E's gradient, for the step. Both less the coupling
+  // to the constrained vertices (their targets, or their moves).
   const double lambda = options_.volumeWeight;
-  frames_.resize(tets_.size());
+  tetRhs_.resize(tets_.size());
   const TetSum sum = sumOverTets(std::int64_t(tets_.size()), workerThreads(options_.threads), [&](std::size_t t, double& det) {
     const Tet& tet = tets_[t];
     const Eigen::Matrix3d j = edgeMatrix(current_, tet) * restEdgeInv_[t];
     const double distortion = tetDistortion(j, lambda, det);
     if (!std::isfinite(distortion)) return kInfinity;
     const Gradients g = barycentricGradients(restEdgeInv_[t]);
-    const Eigen::Matrix3d rotation = extractRotation(j, restRotation_[t]);
     const double weight = kRestMetric * tetWeight_[t];
+    const Eigen::Matrix3d m = kind == RestDirection::Rotations ? Eigen::Matrix3d(weight * extractRotation(j, restRotation_[t]))
+                                                               : Eigen::Matrix3d(-0.5 * tetWeight_[t] * distortionGradient(j, lambda));
     for (int a = 0; a < 4; ++a) {
-      Eigen::Vector3d r = rotation * g[std::size_t(a)];
+      Eigen::Vector3d r = m * g[std::size_t(a)];
       if (freeIndex_[std::size_t(tet[std::size_t(a)])] >= 0)
         for (int b = 0; b < 4; ++b) {
-          const std::int32_t slot = constrainedSlot_[std::size_t(tet[std::size_t(b)])];
-          if (slot >= 0) r -= g[std::size_t(a)].dot(g[std::size_t(b)]) * constrainedTargets[std::size_t(slot)];
+          const std::int32_t v = tet[std::size_t(b)];
+          const std::int32_t slot = constrainedSlot_[std::size_t(v)];
+          if (slot < 0) continue;
+          const Eigen::Vector3d x = kind == RestDirection::Rotations
+                                        ? constrainedTargets[std::size_t(slot)]
+                                        : Eigen::Vector3d(constrainedTargets[std::size_t(slot)] - current_[std::size_t(v)]);
+          r -= weight * g[std::size_t(a)].dot(g[std::size_t(b)]) * x;
         }
-      frames_[t].rhs[std::size_t(a)] = weight * r;
+      tetRhs_[t][std::size_t(a)] = r;
     }
     return tetWeight_[t] * distortion;
   });
   return {sum.sum + softEnergy(current_, softTargets), sum.least};
 }
 
-Eigen::VectorXd InjectiveSolver::restGlobalStep(std::span<const Eigen::Vector3d> softTargets) {
+void InjectiveSolver::factorizeRestSystem() {
   if (!restFactorized_) {
     std::vector<Eigen::Triplet<double>> entries;
     entries.reserve(blocks_.size());
@@ -547,12 +622,25 @@ Eigen::VectorXd InjectiveSolver::restGlobalStep(std::span<const Eigen::Vector3d>
     restSolver_.factorize(matrix);
     restFactorized_ = true;
   }
-  const std::vector<Eigen::Vector3d> rhs = gatherRightHandSide(softTargets);
+}
+
+Eigen::VectorXd InjectiveSolver::restGlobalStep(std::span<const Eigen::Vector3d> softTargets, RestDirection kind) {
+  factorizeRestSystem();
+  // The soft pull c_k p_k; for the step, the soft term's share of minus
+  // half the gradient, c_k (p_k - x_k).
+  const bool step = kind == RestDirection::Gradient;
+  std::vector<Eigen::Vector3d> rhs = gatherRightHandSide(softTargets);
+  if (step)
+    for (std::size_t f = 0; f < rhs.size(); ++f)
+      if (freeSoftSlot_[f] >= 0) rhs[f] -= freeSoftCoefficient_[f] * current_[std::size_t(freeVertices_[f])];
   Eigen::MatrixXd b(Eigen::Index(rhs.size()), 3);
   for (std::size_t f = 0; f < rhs.size(); ++f) b.row(Eigen::Index(f)) = rhs[f].transpose();
   const Eigen::MatrixXd solution = restSolver_.solve(b);
   Eigen::VectorXd out(3 * solution.rows());
-  for (Eigen::Index f = 0; f < solution.rows(); ++f) out.segment<3>(3 * f) = solution.row(f).transpose();
+  for (Eigen::Index f = 0; f < solution.rows(); ++f) {
+    out.segment<3>(3 * f) = solution.row(f).transpose();
+    if (step) out.segment<3>(3 * f) += current_[std::size_t(freeVertices_[std::size_t(f)])];
+  }
   return out;
 }
 
@@ -571,19 +659,11 @@ std::vector<Eigen::Vector3d> InjectiveSolver::directionTo(const Eigen::VectorXd&
 }
 
 double InjectiveSolver::injectiveStepBound(std::span<const Eigen::Vector3d> direction) const {
-  const int threads = workerThreads(options_.threads);
-  const auto tetCount = std::int64_t(tets_.size());
-  const std::int64_t ranges = std::max<std::int64_t>(1, std::min<std::int64_t>(threads, (tetCount + 4095) / 4096));
-  std::vector<double> bound(std::size_t(ranges), kInfinity);
-  parallelRanges(tetCount, threads, [&](std::int64_t begin, std::int64_t end) {
-    double least = kInfinity;
-    for (std::int64_t t = begin; t < end; ++t) {
-      const Tet& tet = tets_[std::size_t(t)];
-      least = std::min(least, firstZeroVolumeStep(edgeMatrix(current_, tet), edgeMatrix(direction, tet)));
-    }
-    bound[rangeIndex(begin, ranges, tetCount)] = least;
-  });
-  const double largest = *std::min_element(bound.begin(), bound.end());
+  const double largest =
+      sumOverTets(std::int64_t(tets_.size()), workerThreads(options_.threads), [&](std::size_t t, double& step) {
+        step = firstZeroVolumeStep(edgeMatrix(current_, tets_[t]), edgeMatrix(direction, tets_[t]));
+        return 0.0;
+      }).least;
   return std::min(1.0, options_.flipShrink * largest);
 }
 
@@ -603,7 +683,7 @@ double InjectiveSolver::targetPenalty(std::span<const Eigen::Vector3d> positions
 
 bool InjectiveSolver::lineSearch(std::span<const Eigen::Vector3d> direction,
                                  std::span<const Eigen::Vector3d> constrainedTargets,
-                                 std::span<const Eigen::Vector3d> softTargets, double currentMerit,
+                                 std::span<const Eigen::Vector3d> softTargets, double currentMerit, int halvings,
                                  InjectiveStepReport& report, double& acceptedEnergy) {
   // The merit is E plus the penalty on the constrained vertices' distance to
   // their targets: at the targets, E itself must decrease; on the way, a
@@ -611,7 +691,7 @@ bool InjectiveSolver::lineSearch(std::span<const Eigen::Vector3d> direction,
   // so a tet's barrier energy bounds how far it can be squeezed.
   double alpha = injectiveStepBound(direction);
   std::vector<Eigen::Vector3d> trial(current_.size());
-  for (int halving = 0; halving < kMaxHalvings; ++halving, alpha *= 0.5) {
+  for (int halving = 0; halving < halvings; ++halving, alpha *= 0.5) {
     for (std::size_t v = 0; v < trial.size(); ++v) trial[v] = current_[v] + alpha * direction[v];
     if (alpha == 1.0)
       for (std::size_t k = 0; k < constrained_.size(); ++k) trial[std::size_t(constrained_[k])] = constrainedTargets[k];
@@ -634,7 +714,8 @@ InjectiveStepReport InjectiveSolver::iterate(std::span<const Eigen::Vector3d> co
   for (int iteration = 0; iteration < iterations; ++iteration) {
     const bool startedAtTargets = atTargets(constrainedTargets);
     // The local step evaluates E at the current positions on the way.
-    const Evaluation here = slim ? slimLocalStep(constrainedTargets, softTargets) : restLocalStep(constrainedTargets, softTargets);
+    const Evaluation here = slim ? slimLocalStep(constrainedTargets, softTargets)
+                                 : restLocalStep(constrainedTargets, softTargets, RestDirection::Rotations);
     if (iteration == 0) {
       if (!(here.minRelativeVolume > 0.0))
         throw InputError(source_, "the starting positions invert a tet (smallest relative volume " +
@@ -642,11 +723,31 @@ InjectiveStepReport InjectiveSolver::iterate(std::span<const Eigen::Vector3d> co
       report.minRelativeVolume = here.minRelativeVolume;
       report.energy = energy = here.energy;
     }
-    const Eigen::VectorXd solution = slim ? slimGlobalStep(softTargets) : restGlobalStep(softTargets);
-    const std::vector<Eigen::Vector3d> direction = directionTo(solution, constrainedTargets);
+    const Eigen::VectorXd solution = slim ? slimGlobalStep(softTargets) : restGlobalStep(softTargets, RestDirection::Rotations);
     double next = energy;
     const double merit = energy + targetPenalty(current_, constrainedTargets);
-    if (!lineSearch(direction, constrainedTargets, softTargets, merit, report, next)) {
+    const int halvings = slim ? kSolveHalvings : kFrameHalvings;
+    bool moved =
+        lineSearch(directionTo(solution, constrainedTargets), constrainedTargets, softTargets, merit, halvings, report, next);
+    if (!moved && !slim) {
+      // ARAP's direction does not see the barrier; the preconditioned
+      // gradient does (a descent direction at the targets).
+      restLocalStep(constrainedTargets, softTargets, RestDirection::Gradient);
+      moved = lineSearch(directionTo(restGlobalStep(softTargets, RestDirection::Gradient), constrainedTargets),
+                         constrainedTargets, softTargets, merit, halvings, report, next);
+    }
+    if (!moved && !startedAtTargets) {
+      // The bones cannot come closer along this direction without squeezing
+      // a tet by more than they gain: relax the tissue around where they
+      // are (a descent direction of E), then chase again.
+      std::vector<Eigen::Vector3d> held(constrained_.size());
+      for (std::size_t k = 0; k < constrained_.size(); ++k) held[k] = current_[std::size_t(constrained_[k])];
+      const Eigen::VectorXd relaxed = slim ? (slimLocalStep(held, softTargets), slimGlobalStep(softTargets))
+                                           : (restLocalStep(held, softTargets, RestDirection::Gradient),
+                                              restGlobalStep(softTargets, RestDirection::Gradient));
+      moved = lineSearch(directionTo(relaxed, held), held, softTargets, energy, halvings, report, next);
+    }
+    if (!moved) {
       // No decrease along the direction at the targets: stationary as far as
       // the line search can tell.
       report.converged = startedAtTargets;

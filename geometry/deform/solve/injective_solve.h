@@ -23,22 +23,30 @@
 // the volume term enters linearized (Gauss-Newton: det J + cof(J) : dJ).
 // Global step: the proxy's minimizer, one sparse SPD system in the 3 #free
 // coordinates (the metric W^T W couples them), the constrained vertices
-// eliminated (hard constraints), factorized by CHOLMOD (SparseCholesky).
+// eliminated (hard constraints), factorized by CHOLMOD (SparseCholesky);
+// on large meshes solved instead by conjugate gradients preconditioned by the
+// rest system's factor (below), which is factorized once.
 // Line search: the largest step before any tet's signed volume reaches zero
 // (the smallest positive root of its cubic in the step size; Smith &
-// Schaefer 2015), times flipShrink, then halved until the energy decreases
-// (and until every tet has positive volume: a step is accepted only after
-// that check). The constrained vertices move along the same line search
-// from where they are to their targets, so a step whose targets jump ahead
-// of the free vertices is taken in part, and finished by the next
-// iterations.
+// Schaefer 2015), times flipShrink, then halved until every tet has a
+// positive volume (checked, not assumed) and the merit decreases. The
+// constrained vertices move along the same line from where they are to their
+// targets; the merit is E plus targetPenalty times their mass-weighted
+// squared distance to the targets, so at the targets E never rises, and on
+// the way a step may add distortion only by less than it brings them closer.
 //
 // Interactive mode (frame()): the system of SLIM at rest (J = I: W^T W = 4 I,
-// so the cotangent-like Laplacian of the tets, 4 L, plus the soft targets)
-// is factorized once per constraint set and gives the direction with the
-// per-tet closest rotations on its right-hand side (ARAP's global step); the
-// same injective line search and true energy then decide the step. A fixed
-// number of iterations per frame, warm-started from the previous frame.
+// so the tets' Laplacian L, the same for the three coordinates, plus the
+// soft targets) is factorized once per constraint set. An iteration takes
+// ARAP's global step on it (the tets' closest rotations, extracted
+// warm-started from the previous frame's, on the right-hand side), which
+// follows large turns; where the line search finds no step along it (ARAP
+// does not see the barrier), the system preconditions E's true gradient
+// instead, (2 x 4 L) d = -grad E (the quadratic proxy of Kovalsky et al.
+// 2016 without its acceleration), a descent direction at the targets
+// whatever the distortion. The same injective line search and merit decide
+// the step; a fixed number of iterations per frame, warm-started from the
+// previous frame's positions.
 
 #include "geometry/deform/solve/sparse_cholesky.h"
 #include "geometry/tet_mesh.h"
@@ -68,6 +76,13 @@ struct InjectiveSolveOptions {
   // distortion a step may add to bring them closer.
   double targetPenalty = 100.0;
   int frameIterations = 2;       // frame(): iterations per frame
+  // SLIM unknowns (3 #free) up to which CHOLMOD factorizes the SLIM system
+  // every iteration; above, conjugate gradients preconditioned by the rest
+  // system's factor (factorized once) solve it to cgTolerance (relative
+  // residual) or cgIterations.
+  std::int64_t directSolveLimit = 30000;
+  int cgIterations = 60;
+  double cgTolerance = 1e-4;
   int threads = 0;               // the parallel loop's threads (0: every CPU)
 };
 
@@ -90,10 +105,10 @@ public:
   // repeats. softVertices / softWeights: #S ids and weights w_k (> 0) of
   // vertices pulled towards targets (a constrained vertex listed there keeps
   // its prescribed position). Every connected part of the mesh needs a
-  // constrained or a soft vertex. Throws InputError(source, ...) for an index
-  // out of range or repeated, a non-finite coordinate, a degenerate or
-  // inverted rest tet, or a part with nothing to hold it. The current
-  // positions start at rest.
+  // constrained or a soft vertex; a vertex in no tet stays where it is.
+  // Throws InputError(source, ...) for an index out of range or repeated, a
+  // non-finite coordinate, a degenerate or inverted rest tet, or a part with
+  // nothing to hold it. The current positions start at rest.
   void precompute(std::span<const Eigen::Vector3d> rest, std::span<const Tet> tets,
                   std::span<const std::int32_t> constrained, std::span<const std::int32_t> softVertices = {},
                   std::span<const double> softWeights = {}, const InjectiveSolveOptions& options = {},
@@ -117,10 +132,9 @@ public:
   void setPositions(std::span<const Eigen::Vector3d> positions);
   void resetToRest();
 
-  // E of `positions` (#V) with the given targets (as solveStep); +infinity
-  // when a tet is not positively oriented.
-  double energy(std::span<const Eigen::Vector3d> positions, std::span<const Eigen::Vector3d> constrainedTargets,
-                std::span<const Eigen::Vector3d> softTargets = {}) const;
+  // E of `positions` (#V) with the soft targets (#S; empty: their rest
+  // positions); +infinity when a tet is not positively oriented.
+  double energy(std::span<const Eigen::Vector3d> positions, std::span<const Eigen::Vector3d> softTargets = {}) const;
   // Per tet det J_t of `positions` (#T): its volume relative to rest.
   std::vector<double> relativeVolumes(std::span<const Eigen::Vector3d> positions) const;
 
@@ -135,22 +149,27 @@ private:
     double energy = 0.0;
     double minRelativeVolume = 0.0;
   };
-  // Per tet, what the local step hands the global step.
-  struct TetFrame {
-    Eigen::Matrix3d metric = Eigen::Matrix3d::Identity();  // W^T W (SLIM)
-    std::array<Eigen::Vector3d, 4> volume{};                // c_a = cof(J) g_a, the gradient of det J (SLIM)
-    std::array<Eigen::Vector3d, 4> rhs{};                   // the tet's share of the right-hand side
+  // Per tet, what SLIM's local step hands the assembly of its matrix.
+  struct SlimFrame {
+    Eigen::Matrix3d metric = Eigen::Matrix3d::Identity();  // W^T W
+    std::array<Eigen::Vector3d, 4> volume{};                // c_a = cof(J) g_a, the gradient of det J
   };
   Evaluation evaluate(std::span<const Eigen::Vector3d> positions, std::span<const Eigen::Vector3d> softTargets) const;
   double softEnergy(std::span<const Eigen::Vector3d> positions, std::span<const Eigen::Vector3d> softTargets) const;
   void checkTargets(std::span<const Eigen::Vector3d> constrainedTargets, std::span<const Eigen::Vector3d> softTargets) const;
-  // Local steps: fill frames_ from current_ and return E there.
+  // Local steps: fill tetRhs_ (and slimFrames_) from current_ and return E there.
   Evaluation slimLocalStep(std::span<const Eigen::Vector3d> constrainedTargets, std::span<const Eigen::Vector3d> softTargets);
-  Evaluation restLocalStep(std::span<const Eigen::Vector3d> constrainedTargets, std::span<const Eigen::Vector3d> softTargets);
+  // frame()'s two right-hand sides of the rest system: the tets' closest
+  // rotations (ARAP: the system gives positions), or minus half of E's
+  // gradient (the system gives the step).
+  enum class RestDirection { Rotations, Gradient };
+  Evaluation restLocalStep(std::span<const Eigen::Vector3d> constrainedTargets, std::span<const Eigen::Vector3d> softTargets,
+                           RestDirection kind);
   // Global steps: the free vertices' positions (3 #free, vertex-major).
   Eigen::VectorXd slimGlobalStep(std::span<const Eigen::Vector3d> softTargets);
-  Eigen::VectorXd restGlobalStep(std::span<const Eigen::Vector3d> softTargets);
-  // Per free vertex, the sum of its tets' frames_ rhs and its soft pull.
+  Eigen::VectorXd restGlobalStep(std::span<const Eigen::Vector3d> softTargets, RestDirection kind);
+  void factorizeRestSystem();
+  // Per free vertex, the sum of its tets' tetRhs_ and its soft pull.
   std::vector<Eigen::Vector3d> gatherRightHandSide(std::span<const Eigen::Vector3d> softTargets) const;
   // The full #V direction to the global step's solution `freeSolution` with
   // the constrained vertices going to their targets.
@@ -162,11 +181,11 @@ private:
   // mu sum_k (m_k / |Omega|) ||x_k - target_k||^2 / h^2 over the
   // constrained vertices: 0 at the targets.
   double targetPenalty(std::span<const Eigen::Vector3d> positions, std::span<const Eigen::Vector3d> constrainedTargets) const;
-  // One line search and update of current_, on the merit E + targetPenalty;
-  // returns false when no step lowered it.
+  // One line search and update of current_, on the merit E + targetPenalty,
+  // with at most `halvings` halvings; returns false when no step lowered it.
   bool lineSearch(std::span<const Eigen::Vector3d> direction, std::span<const Eigen::Vector3d> constrainedTargets,
-                  std::span<const Eigen::Vector3d> softTargets, double currentMerit, InjectiveStepReport& report,
-                  double& acceptedEnergy);
+                  std::span<const Eigen::Vector3d> softTargets, double currentMerit, int halvings,
+                  InjectiveStepReport& report, double& acceptedEnergy);
   bool atTargets(std::span<const Eigen::Vector3d> constrainedTargets) const;
   InjectiveStepReport iterate(std::span<const Eigen::Vector3d> constrainedTargets,
                               std::span<const Eigen::Vector3d> softTargets, int iterations, bool slim);
@@ -188,6 +207,7 @@ private:
   std::vector<double> freeSoftCoefficient_;    // #free: its soft coefficient, or 0
   std::vector<std::int32_t> freeSoftSlot_;     // #free: index into softVertices_, or -1
   VertexTets vertexTets_;
+  std::vector<std::uint8_t> vertexTetCorner_;  // per entry of vertexTets_.tets: the vertex's corner in that tet
 
   // The SLIM system's lower triangle: one 3 x 3 block per pair of free
   // vertices sharing a tet (fa >= fb), its entries' places in the values of
@@ -210,8 +230,9 @@ private:
   SparseCholesky restSolver_;
   bool restFactorized_ = false;
 
-  std::vector<TetFrame> frames_;                  // #T, the local step's output
-  std::vector<Eigen::Quaterniond> restRotation_;  // #T, frame(): each tet's rotation, the next warm start
+  std::vector<SlimFrame> slimFrames_;                  // #T
+  std::vector<std::array<Eigen::Vector3d, 4>> tetRhs_;  // #T: each tet's share of the right-hand side, per corner
+  std::vector<Eigen::Quaterniond> restRotation_;  // #T, frame(): each tet's last rotation, the next warm start
   std::vector<Eigen::Vector3d> current_;
 };
 
