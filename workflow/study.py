@@ -105,10 +105,15 @@ def _parse_options(text, where):
 def read_study(path, check_files=True):
     """The rows of a study file; raises StudyError on the first fault."""
     try:
-        with open(path, newline="") as f:
+        with open(path, newline="", encoding="utf-8") as f:
             lines = [(n, l) for n, l in enumerate(f, 1) if l.strip() and not l.lstrip().startswith("#")]
     except OSError as e:
         raise StudyError(f"{path}: cannot read: {e.strerror}")
+    except UnicodeDecodeError as e:
+        raise StudyError(f"{path}: not UTF-8 text (byte {e.start} of the file)")
+    for n, l in lines:
+        if "\0" in l:
+            raise StudyError(f"{path}:{n}: a NUL character (not a text file)")
     if not lines:
         raise StudyError(f"{path}: no header line")
     reader = csv.reader([l for _, l in lines], delimiter="\t", quoting=csv.QUOTE_NONE)

@@ -3,6 +3,7 @@
 #include "geometry/deform/pose/pose_editor.h"
 #include "geometry/error.h"
 #include "geometry/render/raycast_scene.h"
+#include "geometry/skeleton/joints.h"
 
 #include <imgui.h>
 
@@ -23,24 +24,39 @@ double gizmoRadiusMm(const CameraRays& rays, const Eigen::Vector3d& centre) {
   return 0.12 * depth * rays.tanHalfFovY * 2.0;
 }
 
-// The point at angle t (radians) of the ring of radius r about axis a.
-Eigen::Vector3d ringPoint(const Eigen::Vector3d& c, double r, int a, double t) {
-  const Eigen::Vector3d u = Eigen::Vector3d::Unit((a + 1) % 3), v = Eigen::Vector3d::Unit((a + 2) % 3);
+// The ring about axis n: the unit vectors u, v of its plane (u, v, n
+// right-handed; for a grid axis, the next two grid axes).
+void ringBasis(const Eigen::Vector3d& n, Eigen::Vector3d& u, Eigen::Vector3d& v) {
+  for (int a = 0; a < 3; ++a)
+    if (n == Eigen::Vector3d::Unit(a)) {
+      u = Eigen::Vector3d::Unit((a + 1) % 3);
+      v = Eigen::Vector3d::Unit((a + 2) % 3);
+      return;
+    }
+  u = n.unitOrthogonal();
+  v = n.normalized().cross(u);
+}
+
+// The point at angle t (radians) of the ring of radius r about axis n.
+Eigen::Vector3d ringPoint(const Eigen::Vector3d& c, double r, const Eigen::Vector3d& n, double t) {
+  Eigen::Vector3d u, v;
+  ringBasis(n, u, v);
   return c + r * (std::cos(t) * u + std::sin(t) * v);
 }
 
 // The screen angle of the mouse about the gizmo centre, for a rotation about
-// axis a: the signed angle in the ring's plane of the mouse ray's hit.
-bool ringAngle(const CameraRays& rays, const Eigen::Vector3d& c, int a, double mx, double my, double& angle) {
+// axis n: the signed angle (degrees, right-handed about n) in the ring's
+// plane of the mouse ray's hit.
+bool ringAngle(const CameraRays& rays, const Eigen::Vector3d& c, const Eigen::Vector3d& n, double mx, double my, double& angle) {
   mx -= viewLeft(rays.width + int(kPanelWidth));
   const Eigen::Vector3d dir = rays.forward + ((2.0 * mx / rays.width - 1.0) * rays.tanHalfFovY * rays.aspect) * rays.right +
                               ((1.0 - 2.0 * my / rays.height) * rays.tanHalfFovY) * rays.up;
-  const Eigen::Vector3d n = Eigen::Vector3d::Unit(a);
   const double denom = dir.dot(n);
   if (std::abs(denom) < 1e-9) return false;
   const double t = (c - rays.eye).dot(n) / denom;
   const Eigen::Vector3d q = rays.eye + t * dir - c;
-  const Eigen::Vector3d u = Eigen::Vector3d::Unit((a + 1) % 3), v = Eigen::Vector3d::Unit((a + 2) % 3);
+  Eigen::Vector3d u, v;
+  ringBasis(n, u, v);
   angle = std::atan2(q.dot(v), q.dot(u)) * 180.0 / kPi;
   return true;
 }
@@ -68,11 +84,21 @@ std::vector<std::int32_t> cageVerticesInRect(const CameraRays& rays, const std::
   return inside;
 }
 
-Eigen::Vector3d Gizmo::activeCentre() const {
-  const int a = editor_.state().active;
-  if (a < 0) return Eigen::Vector3d::Zero();
-  const PoseTransform& t = editor_.pose().selections[std::size_t(a)].transform;
-  return t.center + t.translation;
+Gizmo::Target Gizmo::target() const {
+  Target t;
+  const EditState& s = editor_.state();
+  if (s.joint >= 0) {
+    const JointFrame f = editor_.jointFrame(s.joint);
+    t.valid = true;
+    t.centre = f.centre;
+    t.axes = f.axes;
+  } else if (s.active >= 0) {
+    const PoseTransform& p = editor_.pose().selections[std::size_t(s.active)].transform;
+    t.valid = t.arrows = true;
+    t.centre = p.center + p.translation;
+    t.axes = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ()};
+  }
+  return t;
 }
 
 void Gizmo::draw(const CameraRays& rays, const InputState& input, const Overlays& overlays, const RaycastMesh& mesh) const {
@@ -108,11 +134,14 @@ void Gizmo::draw(const CameraRays& rays, const InputState& input, const Overlays
     drawTriangles(p, editor_.pipeline().builtCage().triangles, rgba(200, 200, 210, 140), 1.0f);
     const std::vector<std::int32_t> owners = editor_.handleOwners();
     const std::vector<std::int32_t>& picked = editor_.picked();
+    const Pose& compiled = editor_.compiledPose();
+    const int active = editor_.state().active < 0 ? -1 : editor_.state().active + int(editor_.ownSelectionsAt());
     for (std::size_t v = 0; v < p.size(); ++v) {
       if (p[v].x < -1e8f) continue;
       ImU32 c = rgba(230, 230, 235, 200);  // free
       const std::int32_t o = owners[v];
-      if (o >= 0) c = editor_.pose().selections[std::size_t(o)].fixed ? rgba(90, 140, 255) : (o == editor_.state().active ? rgba(255, 150, 40) : rgba(255, 220, 60));
+      if (o >= 0 && std::size_t(o) < compiled.selections.size())
+        c = compiled.selections[std::size_t(o)].fixed ? rgba(90, 140, 255) : (o == active ? rgba(255, 150, 40) : rgba(255, 220, 60));
       const bool isPicked = std::binary_search(picked.begin(), picked.end(), std::int32_t(v));
       dl->AddCircleFilled(p[v], isPicked ? 5.0f : 3.0f, isPicked ? rgba(255, 60, 200) : c);
     }
@@ -145,25 +174,30 @@ void Gizmo::draw(const CameraRays& rays, const InputState& input, const Overlays
 }
 
 void Gizmo::drawGizmo(const CameraRays& rays) const {
-  if (editor_.state().active < 0) return;
+  const Target g = target();
+  if (!g.valid) return;
   ImDrawList* dl = ImGui::GetForegroundDrawList();
-  const Eigen::Vector3d c = activeCentre();
+  const Eigen::Vector3d& c = g.centre;
   const double r = gizmoRadiusMm(rays, c);
   const ImU32 colours[3] = {rgba(235, 70, 70), rgba(80, 210, 90), rgba(70, 130, 245)};
   for (int a = 0; a < 3; ++a) {
+    const Eigen::Vector3d& n = g.axes[std::size_t(a)];
+    if (n == Eigen::Vector3d::Zero()) continue;
     std::vector<ImVec2> ring;
     for (int k = 0; k <= 64; ++k) {
       float x, y;
-      if (project(rays, ringPoint(c, r, a, 2.0 * kPi * k / 64.0), x, y)) ring.emplace_back(x, y);
+      if (project(rays, ringPoint(c, r, n, 2.0 * kPi * k / 64.0), x, y)) ring.emplace_back(x, y);
     }
     const float width = (drag_ == DragKind::GizmoRotate && dragAxis_ == a) ? 4.0f : 2.0f;
     if (ring.size() > 1) dl->AddPolyline(ring.data(), int(ring.size()), colours[a], 0, width);
     float x0, y0, x1, y1;
-    if (project(rays, c, x0, y0) && project(rays, c + 1.4 * r * Eigen::Vector3d::Unit(a), x1, y1)) {
+    if (g.arrows && project(rays, c, x0, y0) && project(rays, c + 1.4 * r * n, x1, y1)) {
       dl->AddLine(ImVec2(x0, y0), ImVec2(x1, y1), colours[a], (drag_ == DragKind::GizmoTranslate && dragAxis_ == a) ? 5.0f : 3.0f);
       dl->AddCircleFilled(ImVec2(x1, y1), 6.0f, colours[a]);
     }
   }
+  float x, y;
+  if (!g.arrows && project(rays, c, x, y)) dl->AddCircleFilled(ImVec2(x, y), 4.0f, rgba(255, 255, 255));
 }
 
 bool Gizmo::handleMouse(const CameraRays& rays, InputState& input, bool ignoreUi) {
@@ -204,13 +238,14 @@ void Gizmo::press(const CameraRays& rays, double mx, double my, bool ctrl, bool 
       dragAxis_ = a;
     }
   }
-  if (editor_.state().active < 0 || drag_ != DragKind::Orbit) return;
+  const Target g = target();
+  if (!g.valid || drag_ != DragKind::Orbit) return;
   // Gizmo handles first: arrow tips, then rings.
-  const Eigen::Vector3d c = activeCentre();
+  const Eigen::Vector3d& c = g.centre;
   const double r = gizmoRadiusMm(rays, c);
-  for (int a = 0; a < 3 && drag_ == DragKind::Orbit; ++a) {
+  for (int a = 0; a < 3 && g.arrows && drag_ == DragKind::Orbit; ++a) {
     float x, y;
-    if (project(rays, c + 1.4 * r * Eigen::Vector3d::Unit(a), x, y) && std::hypot(x - mx, y - my) < 10.0) {
+    if (project(rays, c + 1.4 * r * g.axes[std::size_t(a)], x, y) && std::hypot(x - mx, y - my) < 10.0) {
       drag_ = DragKind::GizmoTranslate;
       dragAxis_ = a;
     }
@@ -218,9 +253,10 @@ void Gizmo::press(const CameraRays& rays, double mx, double my, bool ctrl, bool 
   // The ring nearest the pointer, within a few pixels.
   double nearest = 7.0;
   for (int a = 0; a < 3 && drag_ != DragKind::GizmoTranslate; ++a) {
+    if (g.axes[std::size_t(a)] == Eigen::Vector3d::Zero()) continue;
     for (int k = 0; k < 128; ++k) {
       float x, y;
-      if (project(rays, ringPoint(c, r, a, 2.0 * kPi * k / 128.0), x, y))
+      if (project(rays, ringPoint(c, r, g.axes[std::size_t(a)], 2.0 * kPi * k / 128.0), x, y))
         if (const double d = std::hypot(x - mx, y - my); d < nearest) {
           nearest = d;
           drag_ = DragKind::GizmoRotate;
@@ -228,7 +264,11 @@ void Gizmo::press(const CameraRays& rays, double mx, double my, bool ctrl, bool 
         }
     }
   }
-  if (drag_ == DragKind::GizmoRotate) ringAngle(rays, c, dragAxis_, mx, my, dragAngle_);
+  if (drag_ == DragKind::GizmoRotate) ringAngle(rays, c, g.axes[std::size_t(dragAxis_)], mx, my, dragAngle_);
+  if (drag_ == DragKind::GizmoRotate && editor_.state().joint >= 0) {
+    jointStart_ = editor_.jointAngle(editor_.state().joint, dragAxis_);
+    jointTurn_ = 0.0;
+  }
   if (drag_ == DragKind::GizmoRotate || drag_ == DragKind::GizmoTranslate) editor_.beginDrag();
 }
 
@@ -242,18 +282,27 @@ bool Gizmo::move(const CameraRays& rays, double mx, double my) {
       orbit_.pan(rays, dx, dy);
       return true;
     case DragKind::GizmoRotate: {
+      const Target g = target();
       double angle = 0.0;
-      if (ringAngle(rays, activeCentre(), dragAxis_, mx, my, angle)) {
+      if (ringAngle(rays, g.centre, g.axes[std::size_t(dragAxis_)], mx, my, angle)) {
         double delta = angle - dragAngle_;
         while (delta > 180.0) delta -= 360.0;
         while (delta < -180.0) delta += 360.0;
-        if (delta != 0.0) editor_.rotateActive(Eigen::Vector3d::Unit(dragAxis_), delta, true);
+        const int joint = editor_.state().joint;
+        if (joint >= 0) {
+          // The ring's turn since the press, the angle held to the joint's range.
+          jointTurn_ += delta;
+          const auto& range = skeleton::jointKind(skeleton::JointId(joint)).range[std::size_t(dragAxis_)];
+          editor_.setJointAngle(joint, dragAxis_, std::clamp(jointStart_ + jointTurn_, range[0], range[1]), true);
+        } else if (delta != 0.0) {
+          editor_.rotateActive(Eigen::Vector3d::Unit(dragAxis_), delta, true);
+        }
         dragAngle_ = angle;
       }
       break;
     }
     case DragKind::GizmoTranslate: {
-      const Eigen::Vector3d c = activeCentre();
+      const Eigen::Vector3d c = target().centre;
       double mm = 0.0;
       if (screenAxisMm(rays, c, gizmoRadiusMm(rays, c), dragAxis_, dx, dy, mm) && mm != 0.0)
         editor_.translateActive(mm * Eigen::Vector3d::Unit(dragAxis_), true);
@@ -298,20 +347,25 @@ void Gizmo::release(const CameraRays& rays, double mx, double my, bool shift) {
 
 PointerPath Gizmo::rotatePath(const CameraRays& rays, int axis, double degrees, int steps) const {
   // Through the gizmo's drag code: press on the ring, move along it, release.
-  const Eigen::Vector3d c = activeCentre();
+  const Target g = target();
+  if (!g.valid || g.axes[std::size_t(axis)] == Eigen::Vector3d::Zero())
+    throw InputError("script", "gizmo_rotate: the gizmo has no such ring (no active selection or selected joint, or a degree of freedom the joint lacks)");
+  const Eigen::Vector3d& c = g.centre;
+  const Eigen::Vector3d& n = g.axes[std::size_t(axis)];
   const double r = gizmoRadiusMm(rays, c);
-  // Start at the point of the ring farthest on screen from the other two.
+  // Start at the point of the ring farthest on screen from the other rings.
   double start = 0.0, widest = -1.0;
   for (int k = 0; k < 32; ++k) {
     const double t = 2.0 * kPi * (k + 0.5) / 32.0;
     float x, y;
-    if (!project(rays, ringPoint(c, r, axis, t), x, y)) continue;
+    if (!project(rays, ringPoint(c, r, n, t), x, y)) continue;
     double clearance = 1e30;
     for (int b = 0; b < 3; ++b) {
-      if (b == axis) continue;
+      if (b == axis || g.axes[std::size_t(b)] == Eigen::Vector3d::Zero()) continue;
       for (int j = 0; j < 128; ++j) {
         float bx, by;
-        if (project(rays, ringPoint(c, r, b, 2.0 * kPi * j / 128.0), bx, by)) clearance = std::min(clearance, double(std::hypot(bx - x, by - y)));
+        if (project(rays, ringPoint(c, r, g.axes[std::size_t(b)], 2.0 * kPi * j / 128.0), bx, by))
+          clearance = std::min(clearance, double(std::hypot(bx - x, by - y)));
       }
     }
     if (clearance > widest) {
@@ -322,14 +376,16 @@ PointerPath Gizmo::rotatePath(const CameraRays& rays, int axis, double degrees, 
   PointerPath path{{}, DragKind::GizmoRotate};
   for (int k = 0; k <= steps; ++k) {
     float x = 0, y = 0;
-    project(rays, ringPoint(c, r, axis, start + degrees * kPi / 180.0 * k / steps), x, y);
+    project(rays, ringPoint(c, r, n, start + degrees * kPi / 180.0 * k / steps), x, y);
     path.points.emplace_back(x, y);
   }
   return path;
 }
 
 PointerPath Gizmo::translatePath(const CameraRays& rays, int axis, double mm, int steps) const {
-  const Eigen::Vector3d c = activeCentre();
+  const Target g = target();
+  if (!g.arrows) throw InputError("script", "gizmo_translate: no active selection (a joint only turns)");
+  const Eigen::Vector3d c = g.centre;
   const double r = gizmoRadiusMm(rays, c);
   float x0, y0, x1, y1;
   project(rays, c, x0, y0);

@@ -1,6 +1,8 @@
 #pragma once
 // What the mouse does in the view: orbit, pan and zoom the camera, drag the
-// active selection's gizmo (rings rotate, arrows translate), slide a cutting
+// gizmo of the active selection (rings rotate, arrows translate) or of the
+// selected joint (a ring per degree of freedom, about the joint's axis at
+// its centre, turns the joint within its range), slide a cutting
 // plane by its handle, and pick built-cage vertices (click, ctrl-drag a
 // rectangle; shift adds). Also the overlays drawn over the ray-cast view
 // (cage, envelope, transfer mesh, planes, gizmo) and the pointer paths of
@@ -12,6 +14,7 @@
 
 #include <Eigen/Core>
 
+#include <array>
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -64,14 +67,24 @@ public:
   void draw(const CameraRays& rays, const InputState& input, const Overlays& overlays, const RaycastMesh& mesh) const;
 
   // Scripted drags: about (rotate) or along (translate) the active
-  // selection's gizmo axis, and an axis plane's handle along its axis
-  // (InputError when that plane is off).
+  // selection's gizmo axis (x, y, z: 0, 1, 2) or about the selected joint's
+  // axis (its skeleton::Dof), and an axis plane's handle along its axis
+  // (InputError when that plane is off or the gizmo lacks that handle).
   PointerPath rotatePath(const CameraRays& rays, int axis, double degrees, int steps) const;
   PointerPath translatePath(const CameraRays& rays, int axis, double mm, int steps) const;
   PointerPath cutPath(const CameraRays& rays, int axis, double mm, int steps) const;
 
+  // What the gizmo acts on: its centre, the axes of its rings (a zero axis:
+  // no ring) and whether it has arrows; none without an active selection or
+  // a selected joint.
+  struct Target {
+    bool valid = false, arrows = false;
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    std::array<Eigen::Vector3d, 3> axes{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+  };
+  Target target() const;
+
 private:
-  Eigen::Vector3d activeCentre() const;
   void drawGizmo(const CameraRays& rays) const;
   void press(const CameraRays& rays, double mx, double my, bool ctrl, bool otherButton);
   bool move(const CameraRays& rays, double mx, double my);
@@ -83,6 +96,7 @@ private:
   DragKind drag_ = DragKind::None;
   int dragAxis_ = -1;
   double dragX0_ = 0, dragY0_ = 0, lastX_ = 0, lastY_ = 0, dragAngle_ = 0;
+  double jointStart_ = 0, jointTurn_ = 0;  // a joint drag: the angle at the press, the ring's turn since
 };
 
 }  // namespace vox::app

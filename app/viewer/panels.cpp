@@ -19,6 +19,7 @@ void Panels::draw(Viewer& viewer) {
   ImGui::SetNextWindowSize(ImVec2(kPanelWidth, float(fh)), ImGuiCond_Always);
   ImGui::Begin("voxmorph", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
   if (ImGui::CollapsingHeader("Pose", ImGuiTreeNodeFlags_DefaultOpen)) posePanel(viewer);
+  if (ImGui::CollapsingHeader("Joints", ImGuiTreeNodeFlags_DefaultOpen)) joints_.draw(viewer);
   if (ImGui::CollapsingHeader("View", ImGuiTreeNodeFlags_DefaultOpen)) viewPanel(viewer);
   if (ImGui::CollapsingHeader("Live figures", ImGuiTreeNodeFlags_DefaultOpen)) figuresPanel(viewer);
   if (ImGui::CollapsingHeader("Organs", ImGuiTreeNodeFlags_DefaultOpen)) organsPanel(viewer);
@@ -55,6 +56,8 @@ void Panels::posePanel(Viewer& viewer) {
   }
   ImGui::SameLine();
   if (ImGui::Button("Clear")) editor.clearPicked();
+  if (const std::size_t compiled = editor.ownSelectionsAt(); compiled > 0)
+    ImGui::TextDisabled("%zu selections compiled from the joints", compiled);
   for (std::size_t k = 0; k < editor.pose().selections.size(); ++k) {
     const PoseSelection& s = editor.pose().selections[k];
     ImGui::PushID(int(k));

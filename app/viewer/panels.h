@@ -1,9 +1,12 @@
 #pragma once
 // The viewer's Dear ImGui panels: the column on the left (pose: picking,
-// selections, rotation steps, ARAP, pose files; view: overlays, camera,
+// selections, rotation steps, ARAP, pose files; joints (joints_panel.h):
+// the skeleton's joint angles; view: overlays, camera,
 // cutting planes; live figures; organs: visibility, masses, changes) and
 // the export and status box at the bottom right. They act through the
 // Viewer's public members.
+
+#include "app/viewer/joints_panel.h"
 
 namespace vox::app {
 
@@ -29,6 +32,7 @@ private:
   void organsPanel(Viewer& viewer);
   void exportBox(Viewer& viewer, int fw, int fh);
 
+  JointsPanel joints_;
   bool arapOn_ = true;
   int arapIterations_ = 10;
   char organFilter_[64] = "";

@@ -3,6 +3,7 @@
 #include "app/viewer/viewer_app.h"
 #include "geometry/deform/pose/pose_editor.h"
 #include "geometry/error.h"
+#include "geometry/skeleton/joints.h"
 
 #include <algorithm>
 #include <filesystem>
@@ -83,7 +84,20 @@ void ScriptRunner::runStep(const ScriptStep& s, Viewer& viewer) {
     if (k == "move" && s.numbers.size() == 3) editor.setActiveCenter({s.numbers[0], s.numbers[1], s.numbers[2]});
     editor.clearPicked();
   } else if (k == "gizmo_rotate") {
-    drag(viewer.gizmo().rotatePath(viewer.viewRays(), s.text[0] - 'x', s.value, s.substeps));
+    // x, y, z: the active selection's rings; a degree of freedom: the selected joint's.
+    const int joint = editor.state().joint;
+    const bool gridAxis = s.text.size() == 1;
+    if (gridAxis == (joint >= 0))
+      throw InputError("script", gridAxis ? "gizmo_rotate: a joint is selected; turn it about one of its degrees of freedom (\"flexion\"...)"
+                                          : "gizmo_rotate: '" + s.text + "' turns a joint; select one first (select_joint)");
+    const int ring = gridAxis ? s.text[0] - 'x' : jointDof(skeleton::JointId(joint), s.text, "script");
+    drag(viewer.gizmo().rotatePath(viewer.viewRays(), ring, s.value, s.substeps));
+  } else if (k == "select_joint") {
+    editor.selectJoint(int(*skeleton::jointFromName(s.joint)));
+    if (editor.state().joint < 0) throw InputError("script", "select_joint: the session has no joint '" + s.joint + "' (open a joint pose with view --pose)");
+  } else if (k == "set_joint") {
+    const skeleton::JointId joint = *skeleton::jointFromName(s.joint);
+    editor.setJointAngle(int(joint), jointDof(joint, s.text, "script"), s.value);
   } else if (k == "gizmo_translate") {
     drag(viewer.gizmo().translatePath(viewer.viewRays(), s.text[0] - 'x', s.value, s.substeps));
   } else if (k == "cut_drag") {

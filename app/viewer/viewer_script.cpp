@@ -1,6 +1,8 @@
 #include "app/viewer/viewer_script.h"
 
+#include "geometry/deform/pose/pose.h"
 #include "geometry/error.h"
+#include "geometry/skeleton/joints.h"
 
 #include <nlohmann/json.hpp>
 
@@ -17,7 +19,8 @@ using nlohmann::json;
 const std::set<std::string> kSteps = {"mouse_move", "mouse_down", "mouse_up", "scroll",      "key",       "select_group", "pick_rect",
                                       "pick_clear", "fix",        "move",     "gizmo_rotate", "gizmo_translate", "toggle", "cut", "cut_drag",
                                       "hide",       "arap",       "undo",     "redo",        "save_pose", "load_pose",    "export",       "cancel_export",
-                                      "screenshot", "camera",     "wait",     "quit"};
+                                      "screenshot", "camera",     "wait",     "quit",        "select_joint", "set_joint"};
+const std::set<std::string> kGizmoAxes = {"x", "y", "z", "flexion", "abduction", "lateral_flexion", "rotation"};
 
 struct Reader {
   std::string source;
@@ -48,7 +51,8 @@ struct Reader {
       const std::string k = what + " '" + key + "'";
       if (key == "step") continue;
       if (key == "frames") s.frames = int(number(v, k));
-      else if (key == "group" || key == "name" || key == "key" || key == "axis" || key == "what") s.text = text(v, k);
+      else if (key == "group" || key == "name" || key == "key" || key == "axis" || key == "what" || key == "dof") s.text = text(v, k);
+      else if (key == "joint") s.joint = text(v, k);
       else if (key == "path") s.path = text(v, k);
       else if (key == "report") s.report = text(v, k);
       else if (key == "png") s.png = text(v, k);
@@ -82,8 +86,19 @@ struct Reader {
     if (s.step == "pick_rect" && s.numbers.size() != 4) fail(what + " needs 'rect': [x0, y0, x1, y1]");
     if ((s.step == "screenshot" || s.step == "save_pose" || s.step == "load_pose" || s.step == "export") && s.path.empty())
       fail(what + " needs a 'path'");
-    if ((s.step == "gizmo_rotate" || s.step == "gizmo_translate" || s.step == "cut_drag") && s.text != "x" && s.text != "y" && s.text != "z")
+    if ((s.step == "gizmo_translate" || s.step == "cut_drag") && s.text != "x" && s.text != "y" && s.text != "z")
       fail(what + " needs 'axis': \"x\", \"y\" or \"z\"");
+    if (s.step == "gizmo_rotate" && !kGizmoAxes.count(s.text))
+      fail(what + " needs 'axis': \"x\", \"y\" or \"z\" (a selection), or a joint's degree of freedom (\"flexion\"...)");
+    if (s.step == "select_joint" || s.step == "set_joint") {
+      const auto joint = skeleton::jointFromName(s.joint);
+      if (!joint) fail(what + ": unknown joint '" + s.joint + "' (expected one of " + skeleton::jointNames() + ")");
+      if (s.step == "set_joint") {
+        if (!j.contains("degrees")) fail(what + " needs 'degrees'");
+        // The pose reader's checks: the degree of freedom, the range.
+        checkJointAngle(*joint, jointDof(*joint, s.text, source + ": " + what), s.value, source + ": " + what);
+      }
+    }
     return s;
   }
 };

@@ -24,7 +24,13 @@
 // pick_rect, pick_clear, fix, move, gizmo_rotate and gizmo_translate through
 // the gizmo's drag code, cut_drag through a cutting plane's handle, toggle,
 // cut, hide, arap, undo, redo, save_pose,
-// load_pose, export, cancel_export, screenshot, camera, wait, quit). An
+// load_pose, export, cancel_export, screenshot, camera, wait, quit). Joints
+// (a session opened with a joint pose; skeleton/joints.h names them):
+//   {"step": "select_joint", "joint": "right_shoulder"}     the Joints panel's click: the gizmo's target
+//   {"step": "set_joint", "joint": "right_shoulder", "dof": "abduction", "degrees": 60}   its slider
+//   {"step": "gizmo_rotate", "axis": "abduction", "degrees": 15}   the selected joint's ring
+// A joint or degree of freedom that does not exist, or an angle outside the
+// joint's range, is an error naming the joint when the script is read. An
 // export waits for its end unless "background": true; cancel_export cancels
 // the running export and waits until it has stopped. Paths are relative to
 // the working directory; screenshot paths to --screenshot-dir when given.
@@ -38,7 +44,8 @@ namespace vox::app {
 struct ScriptStep {
   std::string step;
   int frames = 1;  // frames to wait before this step runs
-  std::string text, path, report, png;  // group / name / key / axis / toggle name; paths
+  std::string text, path, report, png;  // group / name / key / axis / dof / toggle name; paths
+  std::string joint;                    // select_joint, set_joint
   std::vector<std::string> list;        // cuts, hidden organs
   std::vector<double> numbers;          // pixels, rect, centre...
   double value = 0.0;                   // degrees, mm, dy, count...

@@ -110,7 +110,8 @@ constexpr int kCoveragePasses = 3;
 
 }  // namespace
 
-TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, const TransferMeshOptions& options) {
+TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, const TransferMeshOptions& options,
+                          const TransferMeshRelabel& relabel) {
   if (sizing.values.empty() || *std::min_element(sizing.values.begin(), sizing.values.end()) <= 0.0f)
     throw InputError("sizing field", "must be positive everywhere");
   reportProgress("transfer mesh", 0.0);
@@ -130,7 +131,11 @@ TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, con
   DistanceTransform dt = euclideanDistanceTransform(padded, foreground, true);
   LabelGrid nearestGroup(padded, 0);
   for (std::size_t v = 0; v < foreground.size(); ++v) nearestGroup.labels()[v] = labels.labels()[std::size_t(dt.nearest[v])];
-  const TransferMeshDomain label(dt.distance, nearestGroup, offset);
+  const TransferMeshDomain domainLabel(dt.distance, nearestGroup, offset);
+  const auto label = [&](const Eigen::Vector3d& p) {
+    const int l = domainLabel(p);
+    return l > 0 && relabel ? relabel(p, l) : l;
+  };
   LabelGrid atCentres(padded, 0);
   SampledDomain domain;
   domain.labels = &atCentres;
@@ -179,21 +184,32 @@ std::int64_t countUncoveredVoxels(const TetMesh& mesh, const LabelGrid& grid) {
 }
 
 CutReport cutTransferMesh(TetMesh& mesh, std::int32_t groupA, std::int32_t groupB, const std::optional<Eigen::AlignedBox3d>& region) {
+  CutSides sides;
+  sides.sideA = [groupA](std::int32_t label) { return label == groupA; };
+  sides.sideB = [groupB](std::int32_t label) { return label == groupB; };
+  if (region) sides.inRegion = [box = *region](const Eigen::Vector3d& p) { return box.contains(p); };
+  return cutTransferMesh(mesh, sides);
+}
+
+CutReport cutTransferMesh(TetMesh& mesh, const CutSides& sides) {
   CutReport report;
   const auto neighbors = faceNeighbors(mesh, "transfer mesh");
   const std::size_t nt = mesh.tetCount();
+  const auto isA = [&](std::int32_t t) { return sides.sideA(mesh.labels[std::size_t(t)]); };
+  const auto isB = [&](std::int32_t t) { return sides.sideB(mesh.labels[std::size_t(t)]); };
+  const auto inRegion = [&](const Eigen::Vector3d& p) { return !sides.inRegion || sides.inRegion(p); };
 
-  // Cut faces: groupB tet against groupA tet, centroid in the region.
+  // Cut faces: sideB tet against sideA tet, centroid in the region.
   std::vector<std::uint8_t> tetHasCutFace(nt, 0);
   std::vector<std::uint8_t> vertexOnCut(mesh.vertexCount(), 0);
   for (std::size_t t = 0; t < nt; ++t) {
-    if (mesh.labels[t] != groupB) continue;
+    if (!isB(std::int32_t(t))) continue;
     for (int k = 0; k < 4; ++k) {
       const std::int32_t n = neighbors[t][k];
-      if (n < 0 || mesh.labels[n] != groupA) continue;
+      if (n < 0 || !isA(n)) continue;
       const Tri f = tetFace(mesh.tets[t], k);
       const Eigen::Vector3d centroid = (mesh.positions[f[0]] + mesh.positions[f[1]] + mesh.positions[f[2]]) / 3.0;
-      if (region && !region->contains(centroid)) continue;
+      if (!inRegion(centroid)) continue;
       ++report.cutFaces;
       tetHasCutFace[t] = 1;
       for (const std::int32_t v : f) vertexOnCut[v] = 1;
@@ -202,17 +218,17 @@ CutReport cutTransferMesh(TetMesh& mesh, std::int32_t groupA, std::int32_t group
 
   const VertexTets around = vertexTets(mesh.tets, mesh.vertexCount());
 
-  // Contacts: vertices in the region where groupA and groupB tets meet
+  // Contacts: vertices in the region where sideA and sideB tets meet
   // without a cut face (through an edge or the vertex alone). Left shared,
   // such a vertex ties the two groups together: moving one pulls a sliver
-  // of tets across the gap. Every groupB fan there gets its own copy.
+  // of tets across the gap. Every sideB fan there gets its own copy.
   std::vector<std::uint8_t> contact(mesh.vertexCount(), 0);
   for (std::int32_t v = 0; v < std::int32_t(mesh.vertexCount()); ++v) {
-    if (vertexOnCut[v] || (region && !region->contains(mesh.positions[v]))) continue;
+    if (vertexOnCut[v] || !inRegion(mesh.positions[v])) continue;
     bool a = false, b = false;
     for (const std::int32_t t : around.of(v)) {
-      a = a || mesh.labels[t] == groupA;
-      b = b || mesh.labels[t] == groupB;
+      a = a || isA(t);
+      b = b || isB(t);
     }
     if (a && b) {
       contact[v] = 1;
@@ -224,18 +240,18 @@ CutReport cutTransferMesh(TetMesh& mesh, std::int32_t groupA, std::int32_t group
 
   const std::vector<Tet> original = mesh.tets;
   std::vector<std::int32_t> fanOf;
-  // local[t]: t's index among v's groupB tets, -1 elsewhere; reset through
+  // local[t]: t's index among v's sideB tets, -1 elsewhere; reset through
   // those tets after each vertex (a map cleared per vertex would cost its
   // bucket count, the largest valence seen, every time).
   std::vector<std::int32_t> local(nt, -1);
   const auto originalVertices = std::int32_t(vertexOnCut.size());
   for (std::int32_t v = 0; v < originalVertices; ++v) {
     if (!vertexOnCut[v]) continue;
-    // Fans of groupB tets around v: joined through groupB-groupB faces
+    // Fans of sideB tets around v: joined through sideB-sideB faces
     // containing v (the faces opposite the tets' other vertices).
     std::vector<std::int32_t> btets;
     for (const std::int32_t t : around.of(v))
-      if (mesh.labels[t] == groupB) {
+      if (isB(t)) {
         local[t] = std::int32_t(btets.size());
         btets.push_back(t);
       }
@@ -252,22 +268,22 @@ CutReport cutTransferMesh(TetMesh& mesh, std::int32_t groupA, std::int32_t group
         stack.pop_back();
         members.push_back(b);
         const std::int32_t t = btets[b];
-        // Faces of t containing v: grow the fan through groupB neighbours,
+        // Faces of t containing v: grow the fan through sideB neighbours,
         // and note whether one of them is a cut face.
         for (int k = 0; k < 4; ++k) {
           if (original[t][k] == v) continue;
           const std::int32_t n = neighbors[t][k];
           if (n < 0) continue;
-          if (mesh.labels[n] == groupB) {
+          if (isB(n)) {
             const std::int32_t ln = local[std::size_t(n)];
             if (ln >= 0 && fanOf[std::size_t(ln)] < 0) {
               fanOf[std::size_t(ln)] = std::int32_t(seed);
               stack.push_back(ln);
             }
-          } else if (mesh.labels[n] == groupA && tetHasCutFace[t]) {
+          } else if (isA(n) && tetHasCutFace[t]) {
             const Tri f = tetFace(original[t], k);
             const Eigen::Vector3d centroid = (mesh.positions[f[0]] + mesh.positions[f[1]] + mesh.positions[f[2]]) / 3.0;
-            if (!region || region->contains(centroid)) touchesCut = true;
+            if (inRegion(centroid)) touchesCut = true;
           }
         }
       }

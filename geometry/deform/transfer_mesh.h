@@ -11,6 +11,7 @@
 #include "geometry/tet_mesh.h"
 
 #include <Eigen/Geometry>
+#include <functional>
 #include <optional>
 #include <vector>
 
@@ -41,7 +42,12 @@ ScalarGrid defaultSizingField(const GridGeometry& geometry, double fraction = 0.
 // Tets carry their group (> 0), are positively oriented, grid frame mm;
 // the result is the same on every run. Throws InputError("grid", ...) for a
 // grid without foreground or a sizing field with non-positive values.
-TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, const TransferMeshOptions& options = {});
+// `relabel`, when given, takes each foreground point's group and returns the
+// label the mesher resolves there (> 0): analytic interfaces, such as a
+// joint's articular sphere, that the grid's voxels would only staircase.
+using TransferMeshRelabel = std::function<int(const Eigen::Vector3d& p, int group)>;
+TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, const TransferMeshOptions& options = {},
+                          const TransferMeshRelabel& relabel = {});
 
 // Foreground voxels (label != 0) of `grid` whose centres lie in no tet.
 std::int64_t countUncoveredVoxels(const TetMesh& mesh, const LabelGrid& grid);
@@ -69,5 +75,15 @@ struct CutReport {
 // so no tet stays vertex-connected across the cut either.
 CutReport cutTransferMesh(TetMesh& mesh, std::int32_t groupA, std::int32_t groupB,
                           const std::optional<Eigen::AlignedBox3d>& region = std::nullopt);
+
+// The same cut between two sets of tet labels inside any region: the faces
+// between a sideB and a sideA tet whose centroid is in the region (all of
+// them without inRegion) open, and sideB tets take the copies (a joint's
+// articular body against the tissue around it, articulated_mesh.h).
+struct CutSides {
+  std::function<bool(std::int32_t label)> sideA, sideB;
+  std::function<bool(const Eigen::Vector3d& p)> inRegion;
+};
+CutReport cutTransferMesh(TetMesh& mesh, const CutSides& sides);
 
 }  // namespace vox

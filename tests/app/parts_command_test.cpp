@@ -13,8 +13,10 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 
 namespace vox {
 namespace {
@@ -108,6 +110,24 @@ TEST(PartsCommand, JointPoseDeformsAndRenders) {
   ASSERT_TRUE(j.contains("bones"));
   EXPECT_TRUE(j["bones"].contains("held_rigid"));
   EXPECT_FALSE(j["bones"]["per_bone"].empty());
+  // Each part's rigid motion, world mm: the trunk still, the upper arm
+  // turned by the shoulder's 30 degrees, the forearm by more.
+  ASSERT_TRUE(j.contains("part_transforms"));
+  ASSERT_EQ(j["part_transforms"].size(), 16u);
+  const auto turn = [&](const std::string& part) {
+    for (const auto& t : j["part_transforms"])
+      if (t["part"] == part) {
+        const auto& m = t["matrix"];
+        EXPECT_EQ(m[3], nlohmann::json({0.0, 0.0, 0.0, 1.0}));
+        const double trace = m[0][0].get<double>() + m[1][1].get<double>() + m[2][2].get<double>();
+        return std::acos(std::clamp((trace - 1.0) / 2.0, -1.0, 1.0)) * 180.0 / std::numbers::pi;
+      }
+    ADD_FAILURE() << "no transform for " << part;
+    return -1.0;
+  };
+  EXPECT_NEAR(turn("trunk"), 0.0, 1e-6);
+  EXPECT_NEAR(turn("right_upper_arm"), 30.0, 1e-6);
+  EXPECT_GT(turn("right_forearm"), 40.0);
   std::vector<std::string> names;
   for (const auto& s : j["selections"]) names.push_back(s["name"]);
   ASSERT_GE(names.size(), 3u);

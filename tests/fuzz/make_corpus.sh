@@ -81,6 +81,16 @@ printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvt 0 0\nf 1/1 3/1 2/1\nf 1//1 2//1 4
 printf 'OFF\n4 4 6\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n' > "$out/off/tet.off"
 cp ../../assets/poses/*.json "$out/pose/"
 printf '{"selections": [{"name": "all", "sphere": {"center": [0, 0, 0], "radius": 5}, "transform": {"rotation": {"axis": [0, 0, 1], "angle_deg": 10, "center": [0, 0, 0]}, "translation": [1, 2, 3]}}]}' > "$out/pose/sphere.json"
+# Joint poses for fuzz_joint_pose (compiled against the skeleton figure):
+# the shipped ones, the hard postures, and the overrides of joint_options,
+# a joint centre and an axis.
+cp ../../assets/poses/*_joints.json ../../assets/poses/hard/*_joints.json "$out/joint_pose/"
+# The figure's joints: right_shoulder, right_elbow, right_wrist, right_hip,
+# left_hip, left_knee.
+printf '{"joints": {"right_shoulder": {"flexion": 90, "abduction": 30, "rotation": 20}, "right_elbow": {"flexion": 120}, "right_wrist": {"flexion": 30, "abduction": 10}}}' > "$out/joint_pose/figure_arm.json"
+printf '{"joints": {"right_hip": {"flexion": 90}, "left_hip": {"flexion": 90}, "left_knee": {"flexion": 90}}}' > "$out/joint_pose/figure_seated.json"
+printf '{"joints": {"right_shoulder": {"flexion": 30, "abduction": 20, "center": [10, 0, 60]}, "right_elbow": {"flexion": 90, "axis": [1, 0, 0.2]}}, "joint_options": {"zone": "free", "margin_mm": 20, "groups": "organs"}}' > "$out/joint_pose/overrides.json"
+printf '{"joints": {"left_hip": {"flexion": 45}, "left_knee": {"flexion": 60}}, "joint_options": {"zone": "child"}, "selections": [{"name": "hand", "body_parts": ["right_hand"], "transform": {"translation": [0, 5, 0]}}]}' > "$out/joint_pose/leg_and_parts.json"
 # Body-part grids of the skeleton figure fuzz_parts checks against (size 24),
 # and of a smaller figure (other dims).
 "$bin" synth skeleton --size 24 -o "$tmp/sk24.nii" --organs "$tmp/sk24.dat" >/dev/null

@@ -278,28 +278,10 @@ Pose compileJointPose(const Pose& pose, const Skeleton& skeleton, const std::str
   return out;
 }
 
-PipelineOptions skeletalPoseOptions(const Pose& pose, const std::string& poseSource, const LabelGrid& grid,
-                                    const std::optional<OrganTable>& organs, const SkeletonSources& sources,
-                                    std::optional<LabelGrid> userParts, const JointPoseOptions& options) {
-  if (pose.joints.empty() && !usesBodyParts(pose) && !userParts) return poseOptions(pose, poseSource, organs);
-  requireOrganTable(organs.has_value(), OrganTableNeed::Bones, poseSource);
-  return skeletalPoseOptions(pose, poseSource, buildSkeleton(grid, *organs, sources, std::move(userParts)), organs, options);
-}
-
 JointPoseOptions jointPoseOptions(const PoseJointOptions& given, JointPoseOptions base) {
   if (given.zone) base.jointZone = *given.zone == "free" ? JointZone::Free : *given.zone == "child" ? JointZone::Child : JointZone::Parent;
   if (given.marginMm) base.jointMarginMm = *given.marginMm;
   return base;
-}
-
-PipelineOptions skeletalPoseOptions(const Pose& pose, const std::string& poseSource, const Skeleton& skeleton,
-                                    const std::optional<OrganTable>& organs, const JointPoseOptions& options) {
-  PipelineOptions o =
-      poseOptions(compileJointPose(pose, skeleton, poseSource, jointPoseOptions(pose.jointOptions, options)), poseSource, organs);
-  if (!pose.joints.empty()) o.partMotions = partTransforms(pose, skeleton, poseSource);
-  o.bodyParts = skeleton.parts.parts;
-  o.groupsFromParts = pose.jointOptions.groups.value_or("parts") == "parts";
-  return o;
 }
 
 }  // namespace vox::skeleton

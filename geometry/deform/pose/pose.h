@@ -72,6 +72,10 @@
 #include <string>
 #include <vector>
 
+namespace vox::skeleton {
+enum class JointId : std::uint8_t;
+}
+
 namespace vox {
 
 struct PoseTransform {
@@ -176,6 +180,17 @@ Pose readPose(const std::string& path);
 // Serializes with the same schema (readPose(writePose(p)) == p); atomic write.
 std::string poseToJson(const Pose& pose);
 void writePose(const std::string& path, const Pose& pose);
+
+// The one place a joint angle is checked against its joint (skeleton/joints.h
+// states the degrees of freedom and their ranges), for pose files and the
+// viewer's edits and scripts alike. jointDof: the index (skeleton::Dof) of
+// the degree of freedom `dof` names, else InputError(source, "joint
+// 'right_elbow' has no 'abduction' (it has flexion<alsoAllowed>)").
+// checkJointAngle: InputError(source, "joint 'right_elbow' flexion 170 is
+// outside its range [0, 150] degrees") for an angle outside the range (or
+// not finite).
+int jointDof(skeleton::JointId joint, const std::string& dof, const std::string& source, const std::string& alsoAllowed = "");
+void checkJointAngle(skeleton::JointId joint, int dof, double degrees, const std::string& source);
 
 // The ARAP handle set a pose induces on a cage.
 struct PoseHandles {

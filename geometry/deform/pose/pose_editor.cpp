@@ -22,11 +22,15 @@ bool sameShape(const PoseSelection& a, const PoseSelection& b) {
          a.points == b.points && a.fixed == b.fixed && a.part == b.part && a.group == b.group && a.bodyParts == b.bodyParts;
 }
 
+bool hasJoint(const skeleton::Skeleton* s, int joint) {
+  return s && std::any_of(s->joints.begin(), s->joints.end(), [&](const skeleton::Joint& j) { return int(j.id) == joint; });
+}
+
 }  // namespace
 
 bool EditState::operator==(const EditState& o) const {
-  if (cuts != o.cuts || hidden != o.hidden || active != o.active || pose.arapIterations != o.pose.arapIterations ||
-      !sameHandleSets(pose, o.pose))
+  if (cuts != o.cuts || hidden != o.hidden || active != o.active || joint != o.joint || pose.arapIterations != o.pose.arapIterations ||
+      pose.joints != o.pose.joints || !(pose.jointOptions == o.pose.jointOptions) || !sameHandleSets(pose, o.pose))
     return false;
   for (std::size_t k = 0; k < pose.selections.size(); ++k) {
     const PoseTransform &a = pose.selections[k].transform, &b = o.pose.selections[k].transform;
@@ -53,20 +57,23 @@ PoseEditor::PoseEditor(const LabelGrid& grid, std::optional<OrganTable> organs, 
     requireOrganTable(organs_.has_value(), OrganTableNeed::Bones, setupSource);
     skeleton_ = std::make_unique<skeleton::Skeleton>(skeleton::buildSkeleton(grid_, *organs_, {"grid", "organ table", "body parts"}));
     options = skeleton::skeletalPoseOptions(shaping, setupSource, *skeleton_, organs_);
-    shaping = *options.pose;
-    separations_ = shaping.separations;
+    separations_ = options.pose->separations;
   } else {
     options = poseOptions(shaping, setupSource, organs_);
   }
   // The selections are embedded by update(); a pose without any has none.
+  const Pose compiledSetup = *options.pose;
   options.pose.reset();
   pipeline_ = std::make_unique<DeformationPipeline>(grid_, options);
   tetVoxels_ = tetLabelVoxels(grid_, pipeline_->transferMesh());
+  // The edited pose keeps its joints and its own separations (the compiled
+  // ones follow from the joints); the session works in the grid frame, and
+  // saves its poses so.
   state_.pose = shaping;
-  // The session works in the grid frame, and saves its poses so.
   state_.pose.frame = PoseFrame::Grid;
-  if (!state_.pose.selections.empty())
-    selectHandles(state_.pose, pipeline_->builtCage(), setupSource_, pipeline_->cageGroups(), pipeline_->cageBodyParts());
+  setCompiled(compiledSetup);
+  if (!compiled_.selections.empty())
+    selectHandles(compiled_, pipeline_->builtCage(), setupSource_, pipeline_->cageGroups(), pipeline_->cageBodyParts());
   refreshFigures();
 }
 
@@ -109,7 +116,10 @@ int PoseEditor::addPickedSelection(const std::string& name, bool fixed) {
   push();
   state_.pose.selections.push_back(std::move(s));
   const int index = int(state_.pose.selections.size()) - 1;
-  if (!fixed) state_.active = index;
+  if (!fixed) {
+    state_.active = index;
+    state_.joint = -1;
+  }
   return index;
 }
 
@@ -131,7 +141,10 @@ int PoseEditor::addGroupSelection(const std::string& group, bool fixed) {
   push();
   state_.pose.selections.push_back(std::move(s));
   const int index = int(state_.pose.selections.size()) - 1;
-  if (!fixed) state_.active = index;
+  if (!fixed) {
+    state_.active = index;
+    state_.joint = -1;
+  }
   return index;
 }
 
@@ -146,9 +159,10 @@ void PoseEditor::removeSelection(int index) {
 void PoseEditor::setActive(int index) {
   if (index >= int(state_.pose.selections.size())) index = -1;
   if (index >= 0 && state_.pose.selections[std::size_t(index)].fixed) index = -1;
-  if (index == state_.active) return;
+  if (index == state_.active && (index < 0 || state_.joint < 0)) return;
   push();
   state_.active = index;
+  if (index >= 0) state_.joint = -1;
 }
 
 void PoseEditor::beginDrag() { push(); }
@@ -209,22 +223,154 @@ void PoseEditor::setHidden(std::vector<Label> hidden) {
 }
 
 void PoseEditor::loadPose(const Pose& given, const std::string& source) {
-  Pose pose = given;
-  if (!given.joints.empty()) {
-    if (!skeleton_)
-      throw InputError(source, "a pose with joints opens with view --pose (this session was not built from the skeleton)");
-    pose = skeleton::compileJointPose(given, *skeleton_, source, skeleton::jointPoseOptions(given.jointOptions));
-  }
-  if (pose.separations.size() != separations_.size())
+  if (!skeleton_ && (!given.joints.empty() || usesBodyParts(given)))
+    throw InputError(source, "a pose with joints opens with view --pose (this session was not built from the skeleton)");
+  Pose compiled = compile(given, source);
+  if (compiled.separations.size() != separations_.size())
     throw InputError(source, "its limb separations differ from the ones this session was built with; open it with view --pose");
-  selectHandles(pose, pipeline_->builtCage(), source, pipeline_->cageGroups(), pipeline_->cageBodyParts());
+  selectHandles(compiled, pipeline_->builtCage(), source, pipeline_->cageGroups(), pipeline_->cageBodyParts());
   push();
-  state_.pose = pose;
+  state_.pose = given;
   state_.pose.frame = PoseFrame::Grid;
-  state_.pose.separations = separations_;
+  // A compiled pose keeps its own separations (saved as given); the others
+  // take the session's.
+  if (!compiles(given)) state_.pose.separations = separations_;
   state_.active = -1;
-  for (std::size_t k = 0; k < pose.selections.size(); ++k)
-    if (!pose.selections[k].fixed) state_.active = int(k);
+  state_.joint = -1;
+  for (std::size_t k = 0; k < given.selections.size(); ++k)
+    if (!given.selections[k].fixed) state_.active = int(k);
+  setCompiled(std::move(compiled));
+}
+
+std::vector<skeleton::Joint> PoseEditor::joints() const {
+  if (!skeleton_) return {};
+  return skeleton::posedJoints(*skeleton_, state_.pose.joints, setupSource_);
+}
+
+double PoseEditor::jointAngle(int joint, int dof) const {
+  for (const PoseJoint& j : state_.pose.joints)
+    if (skeleton::jointFromName(j.name) == skeleton::JointId(joint)) return j.degrees[std::size_t(dof)];
+  return 0.0;
+}
+
+JointFrame PoseEditor::jointFrame(int joint) const {
+  JointFrame f;
+  const std::vector<skeleton::Joint> all = joints();
+  for (const skeleton::Joint& j : all) {
+    if (int(j.id) != joint) continue;
+    const Eigen::Isometry3d parent = skeleton::partMotions(all, state_.pose.joints)[std::size_t(j.kind().parent)];
+    f.centre = parent * j.centre;
+    for (int d = 0; d < skeleton::kDofCount; ++d)
+      if (j.kind().dofNames[std::size_t(d)]) f.axes[std::size_t(d)] = parent.linear() * j.axis(skeleton::Dof(d));
+  }
+  return f;
+}
+
+void PoseEditor::setJointAngle(int joint, int dof, double degrees, bool continuing) {
+  const skeleton::JointKind& kind = skeleton::jointKind(skeleton::JointId(joint));
+  const std::string what = std::string("joint '") + kind.name + "'";
+  if (!skeleton_) throw InputError(what, "this session was not built from the skeleton (open a joint pose with view --pose)");
+  if (dof < 0 || dof >= skeleton::kDofCount || !kind.dofNames[std::size_t(dof)])
+    throw InputError(what, "no such degree of freedom");
+  if (!hasJoint(skeleton_.get(), joint))
+    throw InputError(what, "the grid's skeleton lacks it (its bones are missing)");
+  checkJointAngle(kind.id, dof, degrees, "view");
+  if (jointAngle(joint, dof) == degrees) return;
+  if (!continuing) push();
+  for (PoseJoint& j : state_.pose.joints)
+    if (j.name == kind.name) {
+      j.degrees[std::size_t(dof)] = degrees;
+      return;
+    }
+  PoseJoint added;
+  added.name = kind.name;
+  added.degrees[std::size_t(dof)] = degrees;
+  state_.pose.joints.push_back(added);
+}
+
+void PoseEditor::selectJoint(int joint) {
+  if (joint >= 0 && !hasJoint(skeleton_.get(), joint)) joint = -1;
+  if (joint == state_.joint && (joint < 0 || state_.active < 0)) return;
+  push();
+  state_.joint = joint;
+  if (joint >= 0) state_.active = -1;
+}
+
+bool PoseEditor::compiles(const Pose& pose) const { return skeleton_ && (!pose.joints.empty() || usesBodyParts(pose)); }
+
+Pose PoseEditor::compile(const Pose& pose, const std::string& source) const {
+  if (!compiles(pose)) return pose;
+  return skeleton::compileJointPose(pose, *skeleton_, source, skeleton::jointPoseOptions(pose.jointOptions));
+}
+
+namespace {
+
+// What the compiled selections' shapes depend on: which joints are turned
+// (not by how much), their overrides, the options and the own selections'
+// shapes.
+bool sameCompiledShapes(const Pose& a, const Pose& b) {
+  const auto turned = [](const PoseJoint& j) { return std::any_of(j.degrees.begin(), j.degrees.end(), [](double d) { return d != 0.0; }); };
+  if (a.joints.size() != b.joints.size() || !(a.jointOptions == b.jointOptions) || !sameHandleSets(a, b)) return false;
+  for (std::size_t k = 0; k < a.joints.size(); ++k)
+    if (a.joints[k].name != b.joints[k].name || turned(a.joints[k]) != turned(b.joints[k]) || a.joints[k].center != b.joints[k].center ||
+        a.joints[k].axis != b.joints[k].axis)
+      return false;
+  return true;
+}
+
+bool sameTransform(const PoseTransform& a, const PoseTransform& b) {
+  return a.axis == b.axis && a.angleDeg == b.angleDeg && a.center == b.center && a.translation == b.translation;
+}
+
+}  // namespace
+
+void PoseEditor::recompile() {
+  const Pose& pose = state_.pose;
+  if (!compiles(pose) || !retargetable_ || !sameCompiledShapes(pose, compiledFrom_)) {
+    setCompiled(compile(pose, setupSource_));
+    return;
+  }
+  // The same turned joints at other angles: only the transforms change.
+  const std::vector<skeleton::Joint> joints = skeleton::posedJoints(*skeleton_, pose.joints, setupSource_);
+  const skeleton::PartMotions motions = skeleton::partMotions(joints, pose.joints);
+  for (std::size_t k = 0; k < compiledMotions_.size(); ++k)
+    if (const auto [part, joint] = compiledMotions_[k]; part >= 0)
+      compiled_.selections[k].transform = skeleton::screwTransform(motions[std::size_t(part)], joints[std::size_t(joint)].centre);
+  std::copy(pose.selections.begin(), pose.selections.end(), compiled_.selections.begin() + std::ptrdiff_t(compiledMotions_.size()));
+  compiled_.arapIterations = pose.arapIterations;
+  compiledFrom_ = pose;
+}
+
+void PoseEditor::setCompiled(Pose compiled) {
+  compiled_ = std::move(compiled);
+  compiled_.separations = separations_;
+  compiled_.arapIterations = state_.pose.arapIterations;
+  compiledFrom_ = state_.pose;
+  if (compiles(state_.pose)) findCompiledMotions();
+  else retargetable_ = false;
+}
+
+void PoseEditor::findCompiledMotions() {
+  // Each compiled joint selection's transform is the screw of one part's
+  // forward-kinematics motion about one joint's centre: found once, redone
+  // for new angles. Any selection not found so makes every change compile.
+  const Pose& pose = state_.pose;
+  const std::size_t count = compiled_.selections.size() - pose.selections.size();
+  const std::vector<skeleton::Joint> joints = skeleton::posedJoints(*skeleton_, pose.joints, setupSource_);
+  const skeleton::PartMotions motions = skeleton::partMotions(joints, pose.joints);
+  compiledMotions_.assign(count, {-1, -1});
+  retargetable_ = true;
+  for (std::size_t k = 0; k < count; ++k) {
+    const PoseSelection& s = compiled_.selections[k];
+    if (s.fixed) continue;
+    for (std::size_t p = 0; p < motions.size() && compiledMotions_[k][0] < 0; ++p)
+      for (std::size_t j = 0; j < joints.size(); ++j)
+        if (sameTransform(skeleton::screwTransform(motions[p], joints[j].centre), s.transform)) {
+          compiledMotions_[k] = {int(p), int(j)};
+          break;
+        }
+    retargetable_ = retargetable_ && compiledMotions_[k][0] >= 0;
+  }
 }
 
 bool PoseEditor::undo() {
@@ -245,7 +391,8 @@ bool PoseEditor::redo() {
 
 bool PoseEditor::update() {
   const auto t0 = std::chrono::steady_clock::now();
-  const Pose& pose = state_.pose;
+  if (!(EditState{state_.pose, {}, {}, -1, -1} == EditState{compiledFrom_, {}, {}, -1, -1})) recompile();
+  const Pose& pose = compiled_;
   bool changed = false;
   if (pose.selections.empty()) {
     changed = embedded_;
@@ -257,7 +404,7 @@ bool PoseEditor::update() {
       embedded_ = true;
       deformed_ = false;
     }
-    const bool transformsChanged = !deformed_ || !(EditState{pose, {}, {}, -1} == EditState{embeddedPose_, {}, {}, -1});
+    const bool transformsChanged = !deformed_ || !(EditState{pose, {}, {}, -1, -1} == EditState{embeddedPose_, {}, {}, -1, -1});
     if (transformsChanged) {
       pipeline_->deformTo(handleTargets(pose, pipeline_->handles(), pipeline_->cage()), pose.arapIterations);
       deformed_ = true;
@@ -285,9 +432,9 @@ std::vector<Eigen::Vector3d> PoseEditor::builtCagePositions() const {
 
 std::vector<std::int32_t> PoseEditor::handleOwners() const {
   std::vector<std::int32_t> owners(pipeline_->builtCage().vertexCount(), -1);
-  if (state_.pose.selections.empty()) return owners;
+  if (compiled_.selections.empty()) return owners;
   try {
-    const PoseHandles h = selectHandles(state_.pose, pipeline_->builtCage(), setupSource_, pipeline_->cageGroups());
+    const PoseHandles h = selectHandles(compiled_, pipeline_->builtCage(), setupSource_, pipeline_->cageGroups(), pipeline_->cageBodyParts());
     for (std::size_t k = 0; k < h.vertices.size(); ++k) owners[std::size_t(h.vertices[k])] = h.selection[k];
   } catch (const InputError&) {
     // A selection that selects nothing shows no handles; update() reports it.

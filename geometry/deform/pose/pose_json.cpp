@@ -213,21 +213,9 @@ private:
           joint.axis = axis;
           continue;
         }
-        int dof = -1;
-        std::string has;
-        for (int d = 0; d < skeleton::kDofCount; ++d)
-          if (const char* n = kind.dofNames[std::size_t(d)]) {
-            if (dofKey == n) dof = d;
-            has += std::string(has.empty() ? "" : ", ") + n;
-          }
-        if (dof < 0) fail(what + " has no '" + dofKey + "' (it has " + has + ", and 'center' and 'axis')");
+        const int dof = jointDof(*id, dofKey, source_, ", and 'center' and 'axis'");
         const double degrees = number(dofValue, what + " " + dofKey);
-        const auto& range = kind.range[std::size_t(dof)];
-        if (degrees < range[0] || degrees > range[1]) {
-          std::ostringstream m;
-          m << what << " " << dofKey << " " << degrees << " is outside its range [" << range[0] << ", " << range[1] << "] degrees";
-          fail(m.str());
-        }
+        checkJointAngle(*id, dof, degrees, source_);
         joint.degrees[std::size_t(dof)] = degrees;
       }
       out.push_back(std::move(joint));
@@ -268,6 +256,27 @@ private:
 json toJson(const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); }
 
 }  // namespace
+
+int jointDof(skeleton::JointId joint, const std::string& dof, const std::string& source, const std::string& alsoAllowed) {
+  const skeleton::JointKind& kind = skeleton::jointKind(joint);
+  std::string has;
+  for (int d = 0; d < skeleton::kDofCount; ++d)
+    if (const char* n = kind.dofNames[std::size_t(d)]) {
+      if (dof == n) return d;
+      has += std::string(has.empty() ? "" : ", ") + n;
+    }
+  throw InputError(source, std::string("joint '") + kind.name + "' has no '" + dof + "' (it has " + has + alsoAllowed + ")");
+}
+
+void checkJointAngle(skeleton::JointId joint, int dof, double degrees, const std::string& source) {
+  const skeleton::JointKind& kind = skeleton::jointKind(joint);
+  const auto& range = kind.range[std::size_t(dof)];
+  if (degrees >= range[0] && degrees <= range[1]) return;
+  std::ostringstream m;
+  m << "joint '" << kind.name << "' " << kind.dofNames[std::size_t(dof)] << " " << degrees << " is outside its range [" << range[0] << ", "
+    << range[1] << "] degrees";
+  throw InputError(source, m.str());
+}
 
 Pose parsePose(const std::string& jsonText, const std::string& source) { return PoseParser(source).parse(jsonText); }
 

@@ -103,6 +103,11 @@ struct DeformationReport {
   std::size_t rigidGroups = 0, rigidVertices = 0, sharedBoneVertices = 0;
   std::int64_t uncoveredBoneVoxels = 0;
   std::vector<BoneRigidity> bones;
+  // With a joint pose: per body part (skeleton::Part order, part name), the
+  // rigid motion of its bones from rest to posed by the joints' forward
+  // kinematics, a 4 x 4 matrix in world mm (the posed bone of a part is its
+  // rest bone moved by this; bones.per_bone measures how far it is from that).
+  std::vector<std::pair<std::string, Eigen::Matrix4d>> partTransforms;
   // With body parts: tissue of two parts overlapping in the posed body.
   std::optional<Collisions> collisions;
   RefinementResult refinement;

@@ -168,6 +168,15 @@ std::string deformationReportJson(const DeformationReport& r) {
                      {"uncovered_bone_voxels", r.uncoveredBoneVoxels},
                      {"per_bone", bones}};
   }
+  if (!r.partTransforms.empty()) {
+    nlohmann::json parts = nlohmann::json::array();
+    for (const auto& [name, m] : r.partTransforms) {
+      nlohmann::json rows = nlohmann::json::array();
+      for (int row = 0; row < 4; ++row) rows.push_back({m(row, 0), m(row, 1), m(row, 2), m(row, 3)});
+      parts.push_back({{"part", name}, {"matrix", rows}});
+    }
+    root["part_transforms"] = parts;
+  }
   if (const auto& c = r.collisions) {
     json pairs = json::array();
     for (const CollisionPair& p : c->pairs)

@@ -20,6 +20,7 @@
 #include <cmath>
 #include <filesystem>
 #include <memory>
+#include <numbers>
 #include <optional>
 
 namespace vox {
@@ -146,6 +147,22 @@ PipelineOptions pipelineOptions(const DeformGridRequest& o, const Source& source
   return options;
 }
 
+// Each part's forward-kinematics motion (grid frame, PoseTransform) as a
+// 4 x 4 matrix in the world frame (world = direction * grid).
+std::vector<std::pair<std::string, Eigen::Matrix4d>> partTransformsInWorld(const std::vector<PoseTransform>& motions,
+                                                                             const GridGeometry& g) {
+  std::vector<std::pair<std::string, Eigen::Matrix4d>> out;
+  for (std::size_t p = 1; p < motions.size(); ++p) {
+    const PoseTransform& t = motions[p];
+    const Eigen::Matrix3d r = Eigen::AngleAxisd(t.angleDeg * std::numbers::pi / 180.0, t.axis).toRotationMatrix();
+    Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+    m.topLeftCorner<3, 3>() = g.direction * r * g.direction.transpose();
+    m.topRightCorner<3, 1>() = g.direction * (t.center - r * t.center + t.translation);
+    out.emplace_back(skeleton::partName(skeleton::Part(p)), m);
+  }
+  return out;
+}
+
 }  // namespace
 
 void checkDeformGridRequest(const DeformGridRequest& o) {
@@ -209,6 +226,7 @@ DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines)
   report.refinement = pipeline->refine({.maxIterations = o.refineIterations, .maxTets = o.maxTets}, engines.interpolation());
   describePipeline(report, *pipeline);
   report.rigidBonesRequested = o.rigidBones;
+  report.partTransforms = partTransformsInWorld(options.partMotions, source.geometry());
   // A bone the pose crushes or swells is refused before anything is written.
   if (const std::optional<std::string> fault = boneChangeFault(report, o.maxBoneChangePercent)) refuseOrForce(o, report, *fault);
   std::optional<StageTime> collisionTime;

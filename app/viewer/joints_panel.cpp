@@ -1,0 +1,58 @@
+#include "app/viewer/joints_panel.h"
+
+#include "app/viewer/viewer_app.h"
+#include "geometry/deform/pose/pose_editor.h"
+#include "geometry/skeleton/joints.h"
+
+#include <imgui.h>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+namespace vox::app {
+
+void JointsPanel::draw(Viewer& viewer) {
+  PoseEditor& editor = viewer.editor();
+  if (!editor.turnsJoints()) {
+    ImGui::TextWrapped("Open a joint pose (view --pose *_joints.json, with --organs) to turn the skeleton's joints.");
+    return;
+  }
+  ImGui::BeginChild("joints", ImVec2(0, 250), true);
+  for (const skeleton::Joint& joint : editor.joints()) {
+    const skeleton::JointKind& kind = joint.kind();
+    const int id = int(joint.id);
+    ImGui::PushID(id);
+    std::string label = kind.name;
+    for (int d = 0; d < skeleton::kDofCount; ++d)
+      if (const double a = editor.jointAngle(id, d); kind.dofNames[std::size_t(d)] && a != 0.0) {
+        char angle[64];
+        std::snprintf(angle, sizeof angle, "  %s %.1f", kind.dofNames[std::size_t(d)], a);
+        label += angle;
+      }
+    const bool selected = editor.state().joint == id;
+    if (ImGui::Selectable(label.c_str(), selected)) editor.selectJoint(selected ? -1 : id);
+    if (selected && scrolledTo_ != id) ImGui::SetScrollHereY(0.0f);  // selected elsewhere (the script, undo): shown
+    ImGui::Indent();
+    for (int d = 0; d < skeleton::kDofCount; ++d) {
+      const char* dof = kind.dofNames[std::size_t(d)];
+      if (!dof) continue;
+      const auto& range = kind.range[std::size_t(d)];
+      float value = float(editor.jointAngle(id, d));
+      const int key = id * skeleton::kDofCount + d;
+      ImGui::SetNextItemWidth(170);
+      if (ImGui::SliderFloat(dof, &value, float(range[0]), float(range[1]), "%.1f deg", ImGuiSliderFlags_AlwaysClamp)) {
+        // Tenths of a degree, so that a saved pose reads as typed.
+        editor.setJointAngle(id, d, std::round(double(value) * 10.0) / 10.0, sliding_ == key);
+        sliding_ = key;
+      }
+      if (sliding_ == key && !ImGui::IsItemActive()) sliding_ = -1;
+    }
+    ImGui::Unindent();
+    ImGui::PopID();
+  }
+  scrolledTo_ = editor.state().joint;
+  ImGui::EndChild();
+}
+
+}  // namespace vox::app

@@ -1,0 +1,447 @@
+#include "geometry/deform/articulated_mesh.h"
+
+#include "geometry/distance_transform.h"
+#include "geometry/error.h"
+#include "geometry/scalar_grid.h"
+#include "geometry/skeleton/bones.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+namespace vox {
+
+using skeleton::JointId;
+using skeleton::Part;
+
+bool ArticularBody::contains(const Eigen::Vector3d& p) const {
+  const Eigen::Vector3d d = p - centre;
+  if (shape == ArticularShape::Sphere) return d.squaredNorm() < radius * radius;
+  const double s = d.dot(axis);
+  return std::abs(s) < halfLength && (d - s * axis).squaredNorm() < radius * radius;
+}
+
+Eigen::Vector3d ArticularBody::project(const Eigen::Vector3d& p) const {
+  const Eigen::Vector3d d = p - centre;
+  if (shape == ArticularShape::Sphere) {
+    const double n = d.norm();
+    return n > 0 ? Eigen::Vector3d(centre + d * (radius / n)) : Eigen::Vector3d(centre + radius * attachment);
+  }
+  const double s = d.dot(axis);
+  Eigen::Vector3d u = d - s * axis;
+  const double r = u.norm();
+  const Eigen::Vector3d dir = r > 0 ? Eigen::Vector3d(u / r) : attachment;
+  // Nearest of the lateral surface and the two end discs.
+  const double toSide = std::abs(r - radius), toEnd = std::abs(std::abs(s) - halfLength);
+  if (std::abs(s) <= halfLength && (r > radius || toSide <= toEnd)) return centre + s * axis + radius * dir;
+  if (r <= radius) return centre + std::copysign(halfLength, s) * axis + u;
+  return centre + std::clamp(s, -halfLength, halfLength) * axis + radius * dir;
+}
+
+bool ArticularBody::cutAt(const Eigen::Vector3d& p) const {
+  const double c = std::cos(attachmentHalfAngleDeg * std::numbers::pi / 180.0);
+  Eigen::Vector3d d = p - centre;
+  if (shape == ArticularShape::Cylinder) d -= d.dot(axis) * axis;
+  const double n = d.norm();
+  if (n < 1e-9 * std::max(1.0, radius)) return true;
+  return d.dot(attachment) / n < c;
+}
+
+LabelGrid bonePartGrid(const LabelGrid& grid, const OrganTable& organs, const skeleton::Skeleton& skeleton) {
+  if (skeleton.parts.parts.dims() != grid.dims()) throw InputError("body parts", "the body-part grid's dims differ from the grid's");
+  const std::vector<skeleton::Bone> boneOf = skeleton::boneOfLabels(organs, grid.maxLabel());
+  LabelGrid out(grid.geometry(), 0);
+  const std::vector<Label>& labels = grid.labels();
+  const std::vector<Label>& parts = skeleton.parts.parts.labels();
+  for (std::size_t v = 0; v < labels.size(); ++v) {
+    const Label l = labels[v];
+    if (l != 0 && l < boneOf.size() && boneOf[l] != skeleton::Bone::None) out.labels()[v] = parts[v];
+  }
+  return out;
+}
+
+namespace {
+
+bool isBallJoint(JointId id) {
+  return id == JointId::RightShoulder || id == JointId::LeftShoulder || id == JointId::RightHip || id == JointId::LeftHip;
+}
+bool isHingeJoint(JointId id) {
+  return id == JointId::RightElbow || id == JointId::LeftElbow || id == JointId::RightKnee || id == JointId::LeftKnee;
+}
+
+// Calls fn(voxel centre, part) for every bone voxel within `reach` mm of `c`.
+template <class Fn>
+void bonesNear(const LabelGrid& boneParts, const Eigen::Vector3d& c, double reach, Fn&& fn) {
+  const GridGeometry& g = boneParts.geometry();
+  const Eigen::Vector3d lo = g.continuousIndex(c - Eigen::Vector3d::Constant(reach));
+  const Eigen::Vector3d hi = g.continuousIndex(c + Eigen::Vector3d::Constant(reach));
+  std::int64_t i0[3], i1[3];
+  for (int a = 0; a < 3; ++a) {
+    i0[a] = std::max<std::int64_t>(0, std::int64_t(std::floor(std::min(lo[a], hi[a]))));
+    i1[a] = std::min<std::int64_t>(g.dims[a] - 1, std::int64_t(std::ceil(std::max(lo[a], hi[a]))));
+  }
+  for (std::int64_t k = i0[2]; k <= i1[2]; ++k)
+    for (std::int64_t j = i0[1]; j <= i1[1]; ++j)
+      for (std::int64_t i = i0[0]; i <= i1[0]; ++i) {
+        const Label part = boneParts.at(i, j, k);
+        if (part != 0) fn(g.voxelCenter(i, j, k), Part(part));
+      }
+}
+
+}  // namespace
+
+std::vector<ArticularBody> articularBodies(const LabelGrid& grid, const LabelGrid& boneParts, const skeleton::Skeleton& skeleton,
+                                           const ArticulatedMeshOptions& options) {
+  const double finest = grid.geometry().spacing.minCoeff();
+  const double margin = options.bodyMarginVoxels * finest;
+  std::vector<ArticularBody> bodies;
+  for (const skeleton::Joint& joint : skeleton.joints) {
+    ArticularBody b;
+    b.joint = joint.id;
+    b.centre = joint.centre;
+    b.attachmentHalfAngleDeg = options.attachmentHalfAngleDeg;
+    const Part parent = joint.kind().parent, child = joint.kind().child;
+    if (isBallJoint(joint.id)) {
+      // The head's sphere, up to the socket: the nearest bone voxel of
+      // another part than the head's.
+      b.shape = ArticularShape::Sphere;
+      b.owner = child;
+      b.other = parent;
+      const double cap = joint.radius > 0 ? 1.25 * joint.radius : 30.0;
+      double nearest = cap + margin;
+      bonesNear(boneParts, b.centre, cap + margin, [&](const Eigen::Vector3d& p, Part part) {
+        if (part != child) nearest = std::min(nearest, (p - b.centre).norm());
+      });
+      b.radius = nearest - margin;
+      b.attachment = joint.longAxis.normalized();
+    } else if (isHingeJoint(joint.id)) {
+      // The cylinder about the flexion axis, as long as the parent's bone end
+      // is wide, up to the child's bone.
+      b.shape = ArticularShape::Cylinder;
+      b.owner = parent;
+      b.other = child;
+      b.axis = joint.leftRight.normalized();
+      constexpr double kReach = 60.0;
+      double lo = std::numeric_limits<double>::max(), hi = -lo;
+      bonesNear(boneParts, b.centre, kReach, [&](const Eigen::Vector3d& p, Part part) {
+        const Eigen::Vector3d d = p - joint.centre;
+        if (part != parent || std::abs(d.dot(joint.longAxis)) > 0.25 * kReach) return;
+        lo = std::min(lo, d.dot(b.axis));
+        hi = std::max(hi, d.dot(b.axis));
+      });
+      if (lo > hi) continue;
+      b.centre = joint.centre + 0.5 * (lo + hi) * b.axis;  // along the axis: the same rotation
+      b.halfLength = 0.5 * (hi - lo);
+      double nearest = 40.0 + margin;
+      bonesNear(boneParts, b.centre, kReach, [&](const Eigen::Vector3d& p, Part part) {
+        if (part == parent) return;
+        const Eigen::Vector3d d = p - b.centre;
+        const double s = d.dot(b.axis);
+        if (std::abs(s) <= b.halfLength + margin) nearest = std::min(nearest, (d - s * b.axis).norm());
+      });
+      b.radius = nearest - margin;
+      Eigen::Vector3d shaft = -joint.longAxis;
+      shaft -= shaft.dot(b.axis) * b.axis;
+      if (shaft.norm() < 1e-6) continue;
+      b.attachment = shaft.normalized();
+    } else {
+      continue;
+    }
+    if (b.radius < options.minBodyRadiusVoxels * finest) continue;
+    bodies.push_back(b);
+  }
+  return bodies;
+}
+
+Eigen::Isometry3d partialMotion(const Eigen::Isometry3d& motion, double fraction) {
+  if (fraction == 1.0) return motion;
+  const Eigen::AngleAxisd aa(Eigen::Matrix3d(motion.linear()));
+  const Eigen::Vector3d t = motion.translation();
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  if (std::abs(aa.angle()) < 1e-12) {
+    out.translation() = fraction * t;
+    return out;
+  }
+  // Screw: x -> q + R (x - q) + d a, with q on the axis nearest the origin.
+  const Eigen::Vector3d a = aa.axis();
+  const double d = a.dot(t);
+  const Eigen::Matrix3d m = Eigen::Matrix3d::Identity() - aa.toRotationMatrix() + a * a.transpose();
+  const Eigen::Vector3d q = m.partialPivLu().solve(t - d * a);
+  const Eigen::Matrix3d r = Eigen::AngleAxisd(fraction * aa.angle(), a).toRotationMatrix();
+  out.linear() = r;
+  out.translation() = q - r * q + fraction * d * a;
+  return out;
+}
+
+namespace {
+
+Eigen::Isometry3d motionOf(std::span<const Eigen::Isometry3d> motions, Part part, double fraction) {
+  const auto p = std::size_t(part);
+  return p < motions.size() ? partialMotion(motions[p], fraction) : Eigen::Isometry3d::Identity();
+}
+
+}  // namespace
+
+void placeRigidVertices(const ArticulatedMesh& mesh, std::span<const Eigen::Isometry3d> motions, double fraction,
+                        std::span<Eigen::Vector3d> positions) {
+  std::array<Eigen::Isometry3d, skeleton::kPartCount + 1> m;
+  for (int p = 0; p <= skeleton::kPartCount; ++p) m[std::size_t(p)] = motionOf(motions, Part(p), fraction);
+  for (std::size_t v = 0; v < mesh.role.size(); ++v)
+    if (mesh.role[v] == VertexRole::Rigid) positions[v] = m[std::size_t(mesh.vertexPart[v])] * mesh.mesh.positions[v];
+}
+
+void projectSlidingVertices(const ArticulatedMesh& mesh, std::span<const Eigen::Isometry3d> motions, double fraction,
+                            std::span<Eigen::Vector3d> positions) {
+  std::vector<Eigen::Isometry3d> m;
+  for (const ArticularBody& b : mesh.bodies) m.push_back(motionOf(motions, b.owner, fraction));
+  for (std::size_t v = 0; v < mesh.role.size(); ++v) {
+    if (mesh.role[v] != VertexRole::Sliding) continue;
+    const auto b = std::size_t(mesh.vertexBody[v]);
+    positions[v] = m[b] * mesh.bodies[b].project(m[b].inverse() * positions[v]);
+  }
+}
+
+namespace {
+
+// Splits every edge between vertices that two different parts place (soft
+// tissue tets spanning the thin gap between two bones): its midpoint, a
+// free vertex, goes into every tet around it, so that no tet has all its
+// vertices prescribed by parts that move against each other.
+void splitBridgingEdges(ArticulatedMesh& out) {
+  TetMesh& m = out.mesh;
+  const auto bridging = [&](std::int32_t a, std::int32_t b) {
+    return out.role[std::size_t(a)] == VertexRole::Rigid && out.role[std::size_t(b)] == VertexRole::Rigid &&
+           out.vertexPart[std::size_t(a)] != out.vertexPart[std::size_t(b)];
+  };
+  std::vector<std::pair<std::int32_t, std::int32_t>> edges;
+  for (const Tet& t : m.tets)
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j)
+        if (bridging(t[std::size_t(i)], t[std::size_t(j)]))
+          edges.emplace_back(std::min(t[std::size_t(i)], t[std::size_t(j)]), std::max(t[std::size_t(i)], t[std::size_t(j)]));
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  if (edges.empty()) return;
+  std::vector<std::vector<std::int32_t>> around(m.vertexCount());
+  for (std::size_t t = 0; t < m.tetCount(); ++t)
+    for (const std::int32_t v : m.tets[t]) around[std::size_t(v)].push_back(std::int32_t(t));
+  for (const auto& [a, b] : edges) {
+    std::vector<std::int32_t> shared;
+    for (const std::int32_t t : around[std::size_t(a)])
+      if (std::find(m.tets[std::size_t(t)].begin(), m.tets[std::size_t(t)].end(), b) != m.tets[std::size_t(t)].end()) shared.push_back(t);
+    if (shared.empty()) continue;
+    const auto mid = std::int32_t(m.positions.size());
+    m.positions.push_back(0.5 * (m.positions[std::size_t(a)] + m.positions[std::size_t(b)]));
+    out.role.push_back(VertexRole::Free);
+    out.vertexPart.push_back(Part::None);
+    out.vertexBody.push_back(-1);
+    around.emplace_back();
+    for (const std::int32_t t : shared) {
+      // t keeps a (b -> mid); its copy keeps b (a -> mid).
+      Tet copy = m.tets[std::size_t(t)];
+      for (std::int32_t& x : m.tets[std::size_t(t)])
+        if (x == b) x = mid;
+      for (std::int32_t& x : copy)
+        if (x == a) x = mid;
+      const auto c = std::int32_t(m.tets.size());
+      m.tets.push_back(copy);
+      m.labels.push_back(m.labels[std::size_t(t)]);
+      auto& ofB = around[std::size_t(b)];
+      std::replace(ofB.begin(), ofB.end(), t, c);
+      around[std::size_t(mid)].push_back(t);
+      around[std::size_t(mid)].push_back(c);
+      for (const std::int32_t x : copy)
+        if (x != mid && x != b) around[std::size_t(x)].push_back(c);
+    }
+    ++out.splitEdges;
+  }
+}
+
+}  // namespace
+
+ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& organs, const skeleton::Skeleton& skeleton,
+                                     const ArticulatedMeshOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  ArticulatedMesh out;
+  const GridGeometry& g = grid.geometry();
+  const LabelGrid boneParts = bonePartGrid(grid, organs, skeleton);
+  out.bodies = articularBodies(grid, boneParts, skeleton, options);
+
+  // Tags: the bones that move against each other resolved, the rest soft;
+  // the distal parts (head, hands, feet) rigid whole but near their joint.
+  LabelGrid tags(g, 0);
+  const double reach2 = options.trunkBoneReachMm * options.trunkBoneReachMm;
+  const double clear2 = options.jointClearanceMm * options.jointClearanceMm;
+  const LabelGrid& parts = skeleton.parts.parts;
+  const auto wholePart = [&](Part part) {
+    return std::find(options.rigidWholeParts.begin(), options.rigidWholeParts.end(), part) != options.rigidWholeParts.end();
+  };
+  for (std::int64_t k = 0; k < g.dims[2]; ++k)
+    for (std::int64_t j = 0; j < g.dims[1]; ++j)
+      for (std::int64_t i = 0; i < g.dims[0]; ++i) {
+        const std::int64_t v = g.index(i, j, k);
+        if (grid.labels()[std::size_t(v)] == 0) continue;
+        const Eigen::Vector3d p = g.voxelCenter(i, j, k);
+        auto part = Part(boneParts.labels()[std::size_t(v)]);
+        const auto region = Part(parts.labels()[std::size_t(v)]);
+        if (wholePart(region)) {
+          const auto id = skeleton::jointMoving(region);
+          const skeleton::Joint* joint = id ? skeleton.joint(*id) : nullptr;
+          if (!joint || (p - joint->centre).squaredNorm() >= clear2) part = region;
+        }
+        bool resolved = part != Part::None && part != Part::Trunk && part != Part::Pelvis;
+        if (part == Part::Trunk || part == Part::Pelvis)
+          for (const skeleton::Joint& joint : skeleton.joints) resolved = resolved || (p - joint.centre).squaredNorm() < reach2;
+        tags.labels()[std::size_t(v)] = Label(resolved ? kBoneTag + std::int32_t(part) : kSoftTissueTag);
+        out.resolvedBoneVoxels += resolved && boneParts.labels()[std::size_t(v)] != 0;
+      }
+
+  // Sizing: fine at the interfaces between tags and at the bodies' surfaces,
+  // graded to coarse away from them.
+  std::vector<std::uint8_t> fine(std::size_t(g.voxelCount()), 0);
+  const double finest = g.spacing.minCoeff();
+  for (std::int64_t k = 0; k < g.dims[2]; ++k)
+    for (std::int64_t j = 0; j < g.dims[1]; ++j)
+      for (std::int64_t i = 0; i < g.dims[0]; ++i) {
+        const Label t = tags.at(i, j, k);
+        if (t == 0) continue;
+        bool interface = false;
+        for (int a = 0; a < 3 && !interface; ++a)
+          for (const int step : {-1, 1}) {
+            Index3 n{i, j, k};
+            n[std::size_t(a)] += step;
+            const Label u = tags.atOr(n[0], n[1], n[2], 0);
+            interface = interface || (u != 0 && u != t);
+          }
+        const Eigen::Vector3d p = g.voxelCenter(i, j, k);
+        for (const ArticularBody& b : out.bodies) interface = interface || (b.project(p) - p).norm() < finest;
+        fine[std::size_t(g.index(i, j, k))] = interface;
+      }
+  const double fineMm = options.fineSizeVoxels * finest;
+  ScalarGrid sizing(g, float(options.coarseSizeMm));
+  if (std::find(fine.begin(), fine.end(), 1) != fine.end()) {
+    const DistanceTransform dt = euclideanDistanceTransform(g, fine);
+    for (std::size_t v = 0; v < sizing.values.size(); ++v) {
+      const double t = std::min(1.0, double(dt.distance.values[v]) / options.gradingMm);
+      sizing.values[v] = float(fineMm + (options.coarseSizeMm - fineMm) * t);
+    }
+  }
+  const std::vector<ArticularBody>& bodies = out.bodies;
+  const TransferMeshRelabel relabel = [&bodies](const Eigen::Vector3d& p, int tag) {
+    for (const ArticularBody& b : bodies)
+      if (b.contains(p)) return int(b.tag());
+    return tag;
+  };
+  out.mesh = buildTransferMesh(tags, sizing, options.transferMesh, relabel);
+
+  // The sliding cuts.
+  for (const ArticularBody& b : out.bodies) {
+    CutSides sides;
+    const std::int32_t tag = b.tag();
+    sides.sideB = [tag](std::int32_t l) { return l == tag; };
+    sides.sideA = [tag](std::int32_t l) { return l != tag; };
+    sides.inRegion = [&b](const Eigen::Vector3d& p) { return b.cutAt(p); };
+    out.cuts.push_back(cutTransferMesh(out.mesh, sides));
+  }
+
+  // The cut's vertices onto the body's surface: the mesher puts them on
+  // some interface, but where a bone's surface runs within a tet of the
+  // body's, on that one. Every copy of a vertex moves together, and only
+  // where no tet around them degenerates.
+  {
+    const VertexTets around = vertexTets(out.mesh.tets, out.mesh.vertexCount());
+    const auto volume = [&](const Tet& t) {
+      const auto& p = out.mesh.positions;
+      return (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]).dot(p[t[3]] - p[t[0]]);
+    };
+    for (std::size_t b = 0; b < out.bodies.size(); ++b) {
+      std::vector<std::int32_t> split = out.cuts[b].splitVertices;
+      const auto key = [&](std::int32_t v) {
+        const Eigen::Vector3d& p = out.mesh.positions[std::size_t(v)];
+        return std::array<double, 3>{p.x(), p.y(), p.z()};
+      };
+      std::sort(split.begin(), split.end(), [&](std::int32_t a, std::int32_t c) { return key(a) < key(c) || (key(a) == key(c) && a < c); });
+      // Groups of copies (equal positions), then passes: a vertex refused
+      // may fit once its neighbours moved.
+      std::vector<std::pair<std::size_t, std::size_t>> groups;
+      for (std::size_t i = 0; i < split.size();) {
+        std::size_t j = i + 1;
+        while (j < split.size() && key(split[j]) == key(split[i])) ++j;
+        groups.emplace_back(i, j);
+        i = j;
+      }
+      std::vector<std::pair<std::size_t, std::size_t>> refused;
+      for (int pass = 0; pass < 4 && !groups.empty(); ++pass, groups.swap(refused), refused.clear())
+      for (const auto& [i, j] : groups) {
+        const Eigen::Vector3d from = out.mesh.positions[std::size_t(split[i])];
+        const Eigen::Vector3d to = out.bodies[b].project(from);
+        std::vector<std::pair<std::int32_t, double>> before;
+        for (std::size_t k = i; k < j; ++k)
+          for (const std::int32_t t : around.of(split[k])) before.emplace_back(t, volume(out.mesh.tets[std::size_t(t)]));
+        for (std::size_t k = i; k < j; ++k) out.mesh.positions[std::size_t(split[k])] = to;
+        bool valid = true;
+        for (const auto& [t, v0] : before) valid = valid && volume(out.mesh.tets[std::size_t(t)]) > 0.05 * v0;
+        if (valid) {
+          ++out.snappedVertices;
+        } else {
+          for (std::size_t k = i; k < j; ++k) out.mesh.positions[std::size_t(split[k])] = from;
+          refused.emplace_back(i, j);
+        }
+      }
+      out.unsnappedVertices += groups.size();
+    }
+  }
+
+  // Roles.
+  const std::size_t nv = out.mesh.vertexCount();
+  std::array<std::int32_t, skeleton::kJointCount> bodyOfJoint;
+  bodyOfJoint.fill(-1);
+  for (std::size_t b = 0; b < out.bodies.size(); ++b) bodyOfJoint[std::size_t(out.bodies[b].joint)] = std::int32_t(b);
+  const auto partOfTag = [&](std::int32_t tag) {
+    if (tag > kBoneTag && tag <= kBoneTag + skeleton::kPartCount) return Part(tag - kBoneTag);
+    if (tag >= kBodyTag && tag < kBodyTag + skeleton::kJointCount) {
+      const std::int32_t b = bodyOfJoint[std::size_t(tag - kBodyTag)];
+      if (b >= 0) return out.bodies[std::size_t(b)].owner;
+    }
+    return Part::None;
+  };
+  constexpr auto kConflict = Part(0xff);
+  std::vector<Part> part(nv, Part::None);
+  std::vector<std::int8_t> touchesBody(nv, -1);
+  for (std::size_t t = 0; t < out.mesh.tetCount(); ++t) {
+    const std::int32_t tag = out.mesh.labels[t];
+    const Part p = partOfTag(tag);
+    for (const std::int32_t v : out.mesh.tets[t]) {
+      if (tag >= kBodyTag) touchesBody[std::size_t(v)] = std::int8_t(bodyOfJoint[std::size_t(tag - kBodyTag)]);
+      if (p == Part::None) continue;
+      Part& q = part[std::size_t(v)];
+      q = q == Part::None || q == p ? p : kConflict;
+    }
+  }
+  out.role.assign(nv, VertexRole::Free);
+  out.vertexPart.assign(nv, Part::None);
+  out.vertexBody.assign(nv, -1);
+  for (std::size_t v = 0; v < nv; ++v) {
+    if (part[v] == kConflict) {
+      ++out.conflictVertices;
+    } else if (part[v] != Part::None) {
+      out.role[v] = VertexRole::Rigid;
+      out.vertexPart[v] = part[v];
+      ++out.rigidVertices[std::size_t(part[v])];
+    }
+  }
+  for (std::size_t b = 0; b < out.cuts.size(); ++b)
+    for (const std::int32_t v : out.cuts[b].splitVertices)
+      if (out.role[std::size_t(v)] == VertexRole::Free && part[std::size_t(v)] != kConflict && touchesBody[std::size_t(v)] < 0) {
+        out.role[std::size_t(v)] = VertexRole::Sliding;
+        out.vertexBody[std::size_t(v)] = std::int8_t(b);
+      }
+  splitBridgingEdges(out);
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+}  // namespace vox

@@ -1,0 +1,151 @@
+#pragma once
+// The articulated transfer mesh: a transfer mesh (transfer_mesh.h) that
+// resolves the skeleton, so that bones move rigidly by construction and the
+// large joints slide.
+//
+//  - Tags. Each tet carries what it holds: soft tissue, the bone of one body
+//    part (kBoneTag + part), or the articular body of one joint
+//    (kBodyTag + joint). Bones are resolved where they move against each
+//    other: every bone of a part that a joint turns, and the trunk's and
+//    pelvis' bones within reach of a joint (the scapula and clavicle at the
+//    shoulder, the hip bones at the hip); the trunk's other bones (ribs,
+//    spine) stay with the soft tissue there, which no joint moves. The head,
+//    the hands and the feet are rigid whole, tissue too, but near the joint
+//    that turns them. Tets are fine at the interfaces between tags and at
+//    the bodies' surfaces, coarse away from them.
+//  - Articular bodies. At each ball joint (shoulders, hips) the sphere about
+//    the joint centre that reaches up to, but not into, the socket's bone;
+//    at each hinge (elbows, knees) the cylinder about the flexion axis
+//    through the joint centre that reaches up to, not into, the child's bone
+//    (the humeral trochlea and the femoral condyles turn inside the ulna and
+//    on the tibia). The body belongs to its convex side, the owner: the
+//    child at a ball joint (the humeral and femoral heads), the parent at a
+//    hinge. The mesher resolves the analytic surface (buildTransferMesh's
+//    relabel), so its vertices lie on the sphere or cylinder, not on a voxel
+//    staircase.
+//  - Sliding cut. Each body's tets are cut from every other tet (cutTransferMesh
+//    with CutSides) across the body's surface except where the owner's shaft
+//    leaves it (the attachment: a cone about the owner's bone axis at a ball,
+//    an angular sector about the axis at a hinge). The joint's rotation maps
+//    the body's surface onto itself (a rotation about the sphere's centre,
+//    about the cylinder's axis), so the tissue on the other side of the cut
+//    slides along it without a gap or an overlap.
+//  - Vertex roles. A vertex of a bone or body tet of exactly one part is
+//    Rigid: its part's rigid motion places it (a hard constraint: a posed
+//    voxel that maps back into a bone copies that bone). A vertex on the
+//    outer side of a cut that is not Rigid is Sliding: it stays on the body's
+//    surface. A vertex where bones of two parts meet without a cut (wrist,
+//    ankle, neck) is Free and counted. An edge between vertices of two parts
+//    is split at its midpoint (a Free vertex), so no tet is held whole by
+//    two parts that move against each other. Free vertices are the soft
+//    tissue, placed by the injective solve.
+
+#include "geometry/deform/transfer_mesh.h"
+#include "geometry/label_grid.h"
+#include "geometry/organ_table.h"
+#include "geometry/skeleton/skeleton.h"
+#include "geometry/tet_mesh.h"
+
+#include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace vox {
+
+inline constexpr std::int32_t kSoftTissueTag = 1;
+inline constexpr std::int32_t kBoneTag = 1;   // + skeleton::Part: 2..17
+inline constexpr std::int32_t kBodyTag = 32;  // + skeleton::JointId: 32..45
+
+enum class ArticularShape : std::uint8_t { Sphere, Cylinder };
+
+struct ArticularBody {
+  skeleton::JointId joint = skeleton::JointId::RightShoulder;
+  ArticularShape shape = ArticularShape::Sphere;
+  skeleton::Part owner = skeleton::Part::None;  // carries the body (convex side)
+  skeleton::Part other = skeleton::Part::None;  // slides on it
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();  // grid frame, mm (on the axis for a cylinder)
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitX();   // cylinder axis (unit)
+  double radius = 0.0, halfLength = 0.0;             // mm; halfLength: cylinder only
+  Eigen::Vector3d attachment = -Eigen::Vector3d::UnitZ();  // unit: from the centre towards the owner's shaft
+  double attachmentHalfAngleDeg = 50.0;
+
+  std::int32_t tag() const { return kBodyTag + std::int32_t(joint); }
+  bool contains(const Eigen::Vector3d& p) const;
+  // The point of the body's surface nearest p.
+  Eigen::Vector3d project(const Eigen::Vector3d& p) const;
+  // Outside the attachment: where the body's surface is cut.
+  bool cutAt(const Eigen::Vector3d& p) const;
+};
+
+struct ArticulatedMeshOptions {
+  double fineSizeVoxels = 3.0;   // tet size near resolved bones and bodies, in the grid's finest spacing
+  double coarseSizeMm = 40.0;    // tet size far from them
+  double gradingMm = 60.0;       // the size grows from fine to coarse over this distance
+  double trunkBoneReachMm = 90.0;  // trunk and pelvis bones this near a joint centre are resolved
+  // Parts held rigid whole, bone and tissue (no pose bends them), except
+  // within jointClearanceMm of the joint that moves them, whose tissue the
+  // joint's turn bends.
+  std::vector<skeleton::Part> rigidWholeParts = {skeleton::Part::Head, skeleton::Part::RightHand, skeleton::Part::LeftHand,
+                                                 skeleton::Part::RightFoot, skeleton::Part::LeftFoot};
+  double jointClearanceMm = 30.0;
+  double bodyMarginVoxels = 0.5;   // a body stops this far (finest spacing) short of the other part's bone
+  double minBodyRadiusVoxels = 2.0;  // a smaller body is not built (the joint is not cut)
+  double attachmentHalfAngleDeg = 50.0;
+  TransferMeshOptions transferMesh;
+};
+
+enum class VertexRole : std::uint8_t { Free, Rigid, Sliding };
+
+struct ArticulatedMesh {
+  TetMesh mesh;  // rest, grid frame mm, labels: the tags above; cut at every body
+  std::vector<ArticularBody> bodies;
+  std::vector<CutReport> cuts;  // per body
+  std::vector<VertexRole> role;                 // per vertex
+  std::vector<skeleton::Part> vertexPart;       // per vertex: the part of a Rigid vertex, else None
+  std::vector<std::int8_t> vertexBody;          // per vertex: the body (index) a Sliding vertex stays on, else -1
+  std::size_t conflictVertices = 0;             // in bones of two parts without a cut: Free
+  std::array<std::size_t, skeleton::kPartCount + 1> rigidVertices{};  // per part
+  std::size_t resolvedBoneVoxels = 0;           // bone voxels whose part's bone is resolved
+  // Positions on the cuts (every copy of a vertex together) put onto their
+  // body's surface, and those left where that would degenerate a tet.
+  std::size_t snappedVertices = 0, unsnappedVertices = 0;
+  // Edges between vertices of two parts (tissue spanning the gap between
+  // two bones in one tet) split at their midpoints, free vertices.
+  std::size_t splitEdges = 0;
+  double seconds = 0.0;
+};
+
+// The bodies the skeleton's joints allow (a joint whose body would be
+// smaller than options.minBodyRadiusVoxels gets none).
+std::vector<ArticularBody> articularBodies(const LabelGrid& grid, const LabelGrid& boneParts,
+                                           const skeleton::Skeleton& skeleton, const ArticulatedMeshOptions& options = {});
+
+// The articulated transfer mesh of `grid` (the working grid) from its organ
+// table's bones and its skeleton (built on the same grid). Throws
+// InputError("grid", ...) for a grid without foreground.
+ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& organs, const skeleton::Skeleton& skeleton,
+                                     const ArticulatedMeshOptions& options = {});
+
+// Per voxel of `grid`: the body part of a bone voxel (organ table names,
+// bones.h, and the skeleton's part grid), 0 elsewhere.
+LabelGrid bonePartGrid(const LabelGrid& grid, const OrganTable& organs, const skeleton::Skeleton& skeleton);
+
+// The rigid vertices of `mesh` placed by their parts' motions (index =
+// Part; identity where a part has none), at `fraction` of each motion
+// (screw interpolation: the rotation's angle and the translation along its
+// axis scaled together); other vertices keep their entries of `positions`.
+void placeRigidVertices(const ArticulatedMesh& mesh, std::span<const Eigen::Isometry3d> motions, double fraction,
+                        std::span<Eigen::Vector3d> positions);
+
+// The sliding vertices put on their bodies' surfaces, the bodies moved by
+// their owners' motions at `fraction`.
+void projectSlidingVertices(const ArticulatedMesh& mesh, std::span<const Eigen::Isometry3d> motions, double fraction,
+                            std::span<Eigen::Vector3d> positions);
+
+// A rigid motion at `fraction` of the way from the identity (screw
+// interpolation about the motion's own axis).
+Eigen::Isometry3d partialMotion(const Eigen::Isometry3d& motion, double fraction);
+
+}  // namespace vox

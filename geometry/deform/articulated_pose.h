@@ -1,0 +1,80 @@
+#pragma once
+// Posing the articulated transfer mesh (articulated_mesh.h): the bones by
+// their parts' rigid motions (hard constraints), the tissue on the other
+// side of each sliding cut pulled onto its articular body's surface (soft
+// targets re-projected every step, so it can slide along it), and the soft
+// tissue by the injective solve (solve/injective_solve.h), the pose applied
+// in steps from rest so that no tet inverts on the way.
+//
+// Only the tets that can change are solved: a tet whose four vertices move
+// with one part is moved rigidly and left out of the solve.
+
+#include "geometry/deform/articulated_mesh.h"
+#include "geometry/deform/solve/injective_solve.h"
+
+#include <Eigen/Geometry>
+#include <array>
+#include <span>
+#include <vector>
+
+namespace vox {
+
+struct ArticulatedPoseOptions {
+  int steps = 8;               // pose steps from rest to the full motions
+  // Each step starts from a prediction: every vertex moved by its nearest
+  // part's step motion (nearest along the mesh's edges), blended with the
+  // second nearest part's where that is within blendMm of it too, as far
+  // as no tet inverts; the solve corrects it.
+  double blendMm = 40.0;
+  int finalIterations = 20;    // extra iterations at the full pose
+  double slidingWeight = 20.0;  // soft pull of a sliding vertex onto its body (w_k of the solve)
+  InjectiveSolveOptions solve;
+};
+
+struct ArticulatedPoseReport {
+  int steps = 0, iterations = 0;
+  std::size_t solvedVertices = 0, solvedTets = 0, constrainedVertices = 0, slidingVertices = 0;
+  // Tets whose four vertices are prescribed by two or more parts: the solve
+  // cannot change them (reported: they deform with their bones).
+  std::size_t bridgingTets = 0;
+  double minRelativeVolume = 1.0;         // smallest det J over every step's iterates
+  std::vector<double> stepMinRelativeVolume;  // per step
+  std::size_t invertedTets = 0;           // in the final positions (all tets)
+  bool reachedTargets = false;            // the bones reached their motions
+  double maxSlidingGapMm = 0.0;           // largest distance of a sliding vertex from its body's surface
+  double seconds = 0.0;
+};
+
+class ArticulatedPoser {
+public:
+  explicit ArticulatedPoser(const ArticulatedMesh& mesh, const ArticulatedPoseOptions& options = {});
+
+  // The pose from rest in options.steps steps: motions per part (index =
+  // skeleton::Part; identity where absent).
+  ArticulatedPoseReport pose(std::span<const Eigen::Isometry3d> motions);
+
+  // Every vertex of the mesh, posed.
+  const std::vector<Eigen::Vector3d>& positions() const { return positions_; }
+
+private:
+  void targets(std::span<const Eigen::Isometry3d> motions, double fraction);
+  // Moves the solve's positions towards the blended step motion from
+  // `from` to `to` of the pose, as far as no tet inverts.
+  void predict(std::span<const Eigen::Isometry3d> motions, double from, double to);
+  void nearestParts();
+  void gather();
+
+  const ArticulatedMesh& mesh_;
+  ArticulatedPoseOptions options_;
+  std::vector<std::int32_t> solved_;      // solve index -> mesh vertex
+  std::vector<std::int32_t> constrained_, sliding_;  // solve indices
+  std::vector<Eigen::Vector3d> constrainedTargets_, slidingTargets_;
+  std::vector<Eigen::Vector3d> positions_;
+  InjectiveSolver solver_;
+  std::size_t bridgingTets_ = 0, solvedTets_ = 0;
+  // Per solved vertex: its two nearest parts and their weights.
+  std::vector<std::array<skeleton::Part, 2>> nearPart_;
+  std::vector<double> nearWeight_;  // weight of the nearest; 1 - it of the second
+};
+
+}  // namespace vox

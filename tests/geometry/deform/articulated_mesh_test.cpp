@@ -1,0 +1,189 @@
+#include "geometry/deform/articulated_mesh.h"
+
+#include "geometry/deform/articulated_pose.h"
+#include "geometry/deform/pose/joint_pose.h"
+#include "geometry/synth.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <set>
+
+namespace vox {
+namespace {
+
+using skeleton::JointId;
+using skeleton::Part;
+
+constexpr int kFigureSize = 96;
+
+struct Figure {
+  LabelGrid grid;
+  OrganTable organs;
+  skeleton::Skeleton skeleton;
+  ArticulatedMesh mesh;
+};
+
+const Figure& figure() {
+  static const Figure f = [] {
+    Figure out{synthesize(SynthKind::SkeletonFigure, kFigureSize), synthOrganTable(SynthKind::SkeletonFigure), {}, {}};
+    out.skeleton = skeleton::buildSkeleton(out.grid, out.organs, {"figure", "figure organs", "figure parts"});
+    out.mesh = buildArticulatedMesh(out.grid, out.organs, out.skeleton);
+    return out;
+  }();
+  return f;
+}
+
+double signedVolume(const std::vector<Eigen::Vector3d>& p, const Tet& t) {
+  return (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]).dot(p[t[3]] - p[t[0]]) / 6.0;
+}
+
+const ArticularBody* bodyOf(const ArticulatedMesh& m, JointId id) {
+  for (const ArticularBody& b : m.bodies)
+    if (b.joint == id) return &b;
+  return nullptr;
+}
+
+TEST(ArticulatedMesh, BallJointsAndHingesGetTheirBodies) {
+  const Figure& f = figure();
+  const ArticularBody* shoulder = bodyOf(f.mesh, JointId::RightShoulder);
+  const ArticularBody* elbow = bodyOf(f.mesh, JointId::RightElbow);
+  const ArticularBody* hip = bodyOf(f.mesh, JointId::RightHip);
+  ASSERT_NE(shoulder, nullptr);
+  ASSERT_NE(elbow, nullptr);
+  ASSERT_NE(hip, nullptr);
+  EXPECT_EQ(shoulder->shape, ArticularShape::Sphere);
+  EXPECT_EQ(shoulder->owner, Part::RightUpperArm);
+  EXPECT_EQ(elbow->shape, ArticularShape::Cylinder);
+  EXPECT_EQ(elbow->owner, Part::RightUpperArm);
+  EXPECT_EQ(elbow->other, Part::RightForearm);
+  // The sphere holds no bone of another part than the head's.
+  const LabelGrid bones = bonePartGrid(f.grid, f.organs, f.skeleton);
+  const GridGeometry& g = f.grid.geometry();
+  for (const ArticularBody& b : f.mesh.bodies)
+    for (std::int64_t v = 0; v < g.voxelCount(); ++v) {
+      const Label part = bones.labels()[std::size_t(v)];
+      if (part == 0 || Part(part) == b.owner) continue;
+      const Index3 c = g.ijk(v);
+      EXPECT_FALSE(b.contains(g.voxelCenter(c[0], c[1], c[2]))) << "joint " << int(b.joint) << " holds a bone of part " << int(part);
+    }
+  EXPECT_NO_THROW(f.mesh.mesh.validate("articulated mesh"));
+}
+
+TEST(ArticulatedMesh, BonesAndBodiesAreResolvedAndTheirVerticesRigid) {
+  const ArticulatedMesh& m = figure().mesh;
+  std::set<std::int32_t> tags(m.mesh.labels.begin(), m.mesh.labels.end());
+  // Soft tissue, the limbs' bones and one body per joint.
+  EXPECT_TRUE(tags.count(kSoftTissueTag));
+  EXPECT_TRUE(tags.count(kBoneTag + std::int32_t(Part::RightUpperArm)));
+  EXPECT_TRUE(tags.count(kBoneTag + std::int32_t(Part::RightForearm)));
+  for (const ArticularBody& b : m.bodies) EXPECT_TRUE(tags.count(b.tag())) << "joint " << int(b.joint);
+  // Every vertex of a bone or body tet is rigid with that tet's part, or a
+  // counted conflict.
+  std::set<std::int32_t> free;
+  for (std::size_t t = 0; t < m.mesh.tetCount(); ++t) {
+    if (m.mesh.labels[t] == kSoftTissueTag) continue;
+    for (const std::int32_t v : m.mesh.tets[t])
+      if (m.role[std::size_t(v)] != VertexRole::Rigid) free.insert(v);
+  }
+  EXPECT_EQ(free.size(), m.conflictVertices);
+  EXPECT_GT(m.rigidVertices[std::size_t(Part::RightForearm)], 4u);
+}
+
+TEST(ArticulatedMesh, TheBodiesSurfaceIsCutOutsideTheAttachmentAndItsVerticesLieOnIt) {
+  const ArticulatedMesh& m = figure().mesh;
+  ASSERT_EQ(m.cuts.size(), m.bodies.size());
+  std::size_t offSurface = 0;
+  for (std::size_t b = 0; b < m.bodies.size(); ++b) {
+    const ArticularBody& body = m.bodies[b];
+    EXPECT_GT(m.cuts[b].cutFaces, 10u) << "joint " << int(body.joint);
+    // Sliding vertices sit on the body's surface (snapped there, all but a
+    // few the mesher put on a bone's surface close by).
+    std::size_t sliding = 0;
+    for (std::size_t v = 0; v < m.role.size(); ++v) {
+      if (m.role[v] != VertexRole::Sliding || std::size_t(m.vertexBody[v]) != b) continue;
+      ++sliding;
+      offSurface += (body.project(m.mesh.positions[v]) - m.mesh.positions[v]).norm() > 1e-9;
+    }
+    EXPECT_GT(sliding, 0u) << "joint " << int(body.joint);
+  }
+  EXPECT_LE(offSurface, m.unsnappedVertices);
+  EXPECT_LT(double(m.unsnappedVertices), 0.05 * double(m.snappedVertices));
+}
+
+// The joint turned with the body's owner moved rigidly, the other side
+// still: the body's tets keep their volume (rigid), and no face is shared
+// across the cut (the two sides can slide).
+TEST(ArticulatedMesh, TurningTheOwnerMovesTheBodyRigidlyAndApartFromTheOtherSide) {
+  const Figure& f = figure();
+  const ArticulatedMesh& m = f.mesh;
+  const ArticularBody* shoulder = bodyOf(m, JointId::RightShoulder);
+  ASSERT_NE(shoulder, nullptr);
+  const skeleton::Joint* joint = f.skeleton.joint(JointId::RightShoulder);
+  ASSERT_NE(joint, nullptr);
+  std::array<Eigen::Isometry3d, skeleton::kPartCount + 1> motions;
+  motions.fill(Eigen::Isometry3d::Identity());
+  Eigen::Isometry3d turn = Eigen::Isometry3d::Identity();
+  turn.rotate(Eigen::AngleAxisd(std::numbers::pi / 2, joint->axis(skeleton::Dof::Abduction)));
+  turn.pretranslate(joint->centre - turn.linear() * joint->centre);
+  for (const Part p : {Part::RightUpperArm, Part::RightForearm, Part::RightHand}) motions[std::size_t(p)] = turn;
+  std::vector<Eigen::Vector3d> posed = m.mesh.positions;
+  placeRigidVertices(m, motions, 1.0, posed);
+  projectSlidingVertices(m, motions, 1.0, posed);
+  for (std::size_t t = 0; t < m.mesh.tetCount(); ++t) {
+    if (m.mesh.labels[t] != shoulder->tag()) continue;
+    const double rest = signedVolume(m.mesh.positions, m.mesh.tets[t]);
+    EXPECT_NEAR(signedVolume(posed, m.mesh.tets[t]), rest, 1e-9 * std::max(1.0, rest));
+  }
+  // Halfway, the screw interpolation is the half turn about the same centre.
+  const Eigen::Isometry3d half = partialMotion(turn, 0.5);
+  EXPECT_LT((half * joint->centre - joint->centre).norm(), 1e-9);
+  EXPECT_NEAR(Eigen::AngleAxisd(Eigen::Matrix3d(half.linear())).angle(), std::numbers::pi / 4, 1e-12);
+  // Sliding vertices stay on the sphere the turn maps onto itself.
+  for (std::size_t v = 0; v < m.role.size(); ++v)
+    if (m.role[v] == VertexRole::Sliding && m.bodies[std::size_t(m.vertexBody[v])].joint == JointId::RightShoulder)
+      EXPECT_NEAR((posed[v] - shoulder->centre).norm(), shoulder->radius, 1e-9);
+}
+
+}  // namespace
+}  // namespace vox
+
+namespace vox {
+namespace {
+
+skeleton::PartMotions figureMotions(const skeleton::Skeleton& s, const std::vector<PoseJoint>& angles) {
+  return skeleton::partMotions(skeleton::posedJoints(s, angles, "pose"), angles);
+}
+
+PoseJoint jointAngles(JointId id, double flexion, double abduction = 0.0) {
+  PoseJoint j;
+  j.name = skeleton::jointKind(id).name;
+  j.degrees = {flexion, abduction, 0.0};
+  return j;
+}
+
+// A stride (one hip flexed, the other extended, that knee bent): the bones
+// move with their parts exactly, and no tet inverts on the way.
+TEST(ArticulatedPose, AStrideKeepsBonesRigidAndEveryTetPositive) {
+  const Figure& f = figure();
+  const std::vector<PoseJoint> angles = {jointAngles(JointId::RightHip, 30.0), jointAngles(JointId::LeftHip, -20.0),
+                                         jointAngles(JointId::LeftKnee, 45.0)};
+  const skeleton::PartMotions motions = figureMotions(f.skeleton, angles);
+  ArticulatedPoser poser(f.mesh);
+  const ArticulatedPoseReport r = poser.pose(motions);
+  EXPECT_EQ(r.bridgingTets, 0u);
+  ASSERT_EQ(r.stepMinRelativeVolume.size(), std::size_t(r.steps));
+  for (const double v : r.stepMinRelativeVolume) EXPECT_GT(v, 0.05);
+  EXPECT_EQ(r.invertedTets, 0u);
+  EXPECT_GT(r.minRelativeVolume, 0.05);
+  EXPECT_TRUE(r.reachedTargets);
+  EXPECT_LT(r.maxSlidingGapMm, 2.0 * f.grid.geometry().spacing.minCoeff());
+  const std::vector<Eigen::Vector3d>& p = poser.positions();
+  for (std::size_t v = 0; v < p.size(); ++v)
+    if (f.mesh.role[v] == VertexRole::Rigid)
+      EXPECT_LT((p[v] - motions[std::size_t(f.mesh.vertexPart[v])] * f.mesh.mesh.positions[v]).norm(), 1e-6);
+}
+
+}  // namespace
+}  // namespace vox
