@@ -46,7 +46,14 @@ ArticulatedPoser::ArticulatedPoser(const ArticulatedMesh& mesh, const Articulate
   }
   constrainedTargets_.resize(constrained_.size());
   slidingTargets_.resize(sliding_.size());
-  if (!tets.empty()) solver_.precompute(rest, tets, constrained_, sliding_, weights, options.solve, "articulated transfer mesh");
+  if (!tets.empty()) {
+    solver_.precompute(rest, tets, constrained_, sliding_, weights, options.solve, "articulated transfer mesh");
+    // The approach: the bones as stiff soft targets beside the sliding ones.
+    std::vector<std::int32_t> soft = sliding_;
+    soft.insert(soft.end(), constrained_.begin(), constrained_.end());
+    weights.resize(soft.size(), options.boneWeight);
+    approach_.precompute(rest, tets, {}, soft, weights, options.solve, "articulated transfer mesh");
+  }
   nearestParts();
 }
 
@@ -109,13 +116,13 @@ void ArticulatedPoser::nearestParts() {
   }
 }
 
-void ArticulatedPoser::predict(std::span<const Eigen::Isometry3d> motions, double from, double to) {
+void ArticulatedPoser::predict(InjectiveSolver& solver, std::span<const Eigen::Isometry3d> motions, double from, double to) {
   std::array<Eigen::Isometry3d, skeleton::kPartCount + 1> step;
   for (int p = 0; p <= skeleton::kPartCount; ++p) {
     const Eigen::Isometry3d m = std::size_t(p) < motions.size() ? motions[std::size_t(p)] : Eigen::Isometry3d::Identity();
     step[std::size_t(p)] = partialMotion(m, to) * partialMotion(m, from).inverse();
   }
-  const std::vector<Eigen::Vector3d>& current = solver_.positions();
+  const std::vector<Eigen::Vector3d>& current = solver.positions();
   std::vector<Eigen::Vector3d> predicted(current.size());
   for (std::size_t i = 0; i < current.size(); ++i) {
     const double w = nearWeight_[i];
@@ -126,27 +133,27 @@ void ArticulatedPoser::predict(std::span<const Eigen::Isometry3d> motions, doubl
   std::vector<Eigen::Vector3d> trial(current.size());
   for (double t = 1.0; t > 1.0 / 64.0; t *= 0.5) {
     for (std::size_t i = 0; i < current.size(); ++i) trial[i] = current[i] + t * (predicted[i] - current[i]);
-    const std::vector<double> volumes = solver_.relativeVolumes(trial);
+    const std::vector<double> volumes = solver.relativeVolumes(trial);
     if (*std::min_element(volumes.begin(), volumes.end()) > 0.05) {
-      solver_.setPositions(trial);
+      solver.setPositions(trial);
       return;
     }
   }
 }
 
-void ArticulatedPoser::targets(std::span<const Eigen::Isometry3d> motions, double fraction) {
+void ArticulatedPoser::targets(const InjectiveSolver& solver, std::span<const Eigen::Isometry3d> motions, double fraction) {
   placeRigidVertices(mesh_, motions, fraction, positions_);
   for (std::size_t c = 0; c < constrained_.size(); ++c) constrainedTargets_[c] = positions_[std::size_t(solved_[std::size_t(constrained_[c])])];
   // Sliding targets: where the current positions project onto the bodies
   // moved by this step.
-  const std::vector<Eigen::Vector3d>& current = solver_.positions();
+  const std::vector<Eigen::Vector3d>& current = solver.positions();
   for (std::size_t s = 0; s < sliding_.size(); ++s) positions_[std::size_t(solved_[std::size_t(sliding_[s])])] = current[std::size_t(sliding_[s])];
   projectSlidingVertices(mesh_, motions, fraction, positions_);
   for (std::size_t s = 0; s < sliding_.size(); ++s) slidingTargets_[s] = positions_[std::size_t(solved_[std::size_t(sliding_[s])])];
 }
 
-void ArticulatedPoser::gather() {
-  const std::vector<Eigen::Vector3d>& current = solver_.positions();
+void ArticulatedPoser::gather(const InjectiveSolver& solver) {
+  const std::vector<Eigen::Vector3d>& current = solver.positions();
   for (std::size_t i = 0; i < solved_.size(); ++i) positions_[std::size_t(solved_[i])] = current[i];
 }
 
@@ -160,22 +167,37 @@ ArticulatedPoseReport ArticulatedPoser::pose(std::span<const Eigen::Isometry3d> 
   report.bridgingTets = bridgingTets_;
   positions_ = mesh_.mesh.positions;
   if (solvedTets_ > 0) {
-    solver_.resetToRest();
+    // The approach: the pose in steps with the bones as stiff soft targets,
+    // so that one squeezed tet slows the bones near it, not every bone.
+    approach_.resetToRest();
     const int steps = std::max(1, options_.steps);
-    for (int s = 1; s <= steps + 1; ++s) {
-      const double fraction = std::min(1.0, double(s) / double(steps));
-      if (s <= steps) predict(motions, double(s - 1) / double(steps), fraction);
-      // The last round: again at the full pose, the sliding targets
-      // re-projected.
-      targets(motions, fraction);
-      const InjectiveStepReport r = solver_.solveStep(constrainedTargets_, slidingTargets_);
+    for (int s = 1; s <= steps; ++s) {
+      const double fraction = double(s) / double(steps);
+      predict(approach_, motions, double(s - 1) / double(steps), fraction);
+      targets(approach_, motions, fraction);
+      std::vector<Eigen::Vector3d> soft = slidingTargets_;
+      soft.insert(soft.end(), constrainedTargets_.begin(), constrainedTargets_.end());
+      const InjectiveStepReport r = approach_.solveStep({}, soft);
       report.iterations += r.iterations;
       report.minRelativeVolume = std::min(report.minRelativeVolume, r.minRelativeVolume);
       report.stepMinRelativeVolume.push_back(r.minRelativeVolume);
-      report.reachedTargets = r.reachedTargets;
       ++report.steps;
     }
-    gather();
+    // The bones onto their motions exactly: put there when no tet inverts,
+    // else chased from where the approach left them (hard constraints); then
+    // the tissue relaxes around them.
+    targets(approach_, motions, 1.0);
+    std::vector<Eigen::Vector3d> placed = approach_.positions();
+    for (std::size_t c = 0; c < constrained_.size(); ++c) placed[std::size_t(constrained_[c])] = constrainedTargets_[c];
+    const std::vector<double> volumes = solver_.relativeVolumes(placed);
+    solver_.setPositions(*std::min_element(volumes.begin(), volumes.end()) > 0.0 ? placed : approach_.positions());
+    const InjectiveStepReport r = solver_.solveStep(constrainedTargets_, slidingTargets_);
+    report.iterations += r.iterations;
+    report.minRelativeVolume = std::min(report.minRelativeVolume, r.minRelativeVolume);
+    report.stepMinRelativeVolume.push_back(r.minRelativeVolume);
+    report.reachedTargets = r.reachedTargets;
+    ++report.steps;
+    gather(solver_);
   }
   placeRigidVertices(mesh_, motions, 1.0, positions_);
   const TetMesh& m = mesh_.mesh;

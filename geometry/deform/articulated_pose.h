@@ -4,7 +4,10 @@
 // side of each sliding cut pulled onto its articular body's surface (soft
 // targets re-projected every step, so it can slide along it), and the soft
 // tissue by the injective solve (solve/injective_solve.h), the pose applied
-// in steps from rest so that no tet inverts on the way.
+// in steps from rest so that no tet inverts on the way: the steps hold the
+// bones by stiff soft targets (one squeezed tet then slows only the bones
+// near it), and a last step with the bones as hard constraints puts them on
+// their motions exactly.
 //
 // Only the tets that can change are solved: a tet whose four vertices move
 // with one part is moved rigidly and left out of the solve.
@@ -28,6 +31,9 @@ struct ArticulatedPoseOptions {
   double blendMm = 40.0;
   int finalIterations = 20;    // extra iterations at the full pose
   double slidingWeight = 20.0;  // soft pull of a sliding vertex onto its body (w_k of the solve)
+  // The steps hold the bones by stiff soft targets of this weight (w_k); a
+  // last step puts them on their motions exactly (hard constraints).
+  double boneWeight = 1e4;
   InjectiveSolveOptions solve;
 };
 
@@ -57,12 +63,12 @@ public:
   const std::vector<Eigen::Vector3d>& positions() const { return positions_; }
 
 private:
-  void targets(std::span<const Eigen::Isometry3d> motions, double fraction);
+  void targets(const InjectiveSolver& solver, std::span<const Eigen::Isometry3d> motions, double fraction);
   // Moves the solve's positions towards the blended step motion from
   // `from` to `to` of the pose, as far as no tet inverts.
-  void predict(std::span<const Eigen::Isometry3d> motions, double from, double to);
+  void predict(InjectiveSolver& solver, std::span<const Eigen::Isometry3d> motions, double from, double to);
   void nearestParts();
-  void gather();
+  void gather(const InjectiveSolver& solver);
 
   const ArticulatedMesh& mesh_;
   ArticulatedPoseOptions options_;
@@ -70,7 +76,8 @@ private:
   std::vector<std::int32_t> constrained_, sliding_;  // solve indices
   std::vector<Eigen::Vector3d> constrainedTargets_, slidingTargets_;
   std::vector<Eigen::Vector3d> positions_;
-  InjectiveSolver solver_;
+  InjectiveSolver solver_;    // bones hard (the last step)
+  InjectiveSolver approach_;  // bones soft (the steps)
   std::size_t bridgingTets_ = 0, solvedTets_ = 0;
   // Per solved vertex: its two nearest parts and their weights.
   std::vector<std::array<skeleton::Part, 2>> nearPart_;
