@@ -1,5 +1,6 @@
 #include "geometry/deform/articulated_mesh.h"
 
+#include "geometry/deform/solve/injective_solve.h"
 #include "geometry/distance_transform.h"
 #include "geometry/error.h"
 #include "geometry/scalar_grid.h"
@@ -156,31 +157,11 @@ std::vector<ArticularBody> articularBodies(const LabelGrid& grid, const LabelGri
   return bodies;
 }
 
-Eigen::Isometry3d partialMotion(const Eigen::Isometry3d& motion, double fraction) {
-  if (fraction == 1.0) return motion;
-  const Eigen::AngleAxisd aa(Eigen::Matrix3d(motion.linear()));
-  const Eigen::Vector3d t = motion.translation();
-  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
-  if (std::abs(aa.angle()) < 1e-12) {
-    out.translation() = fraction * t;
-    return out;
-  }
-  // Screw: x -> q + R (x - q) + d a, with q on the axis nearest the origin.
-  const Eigen::Vector3d a = aa.axis();
-  const double d = a.dot(t);
-  const Eigen::Matrix3d m = Eigen::Matrix3d::Identity() - aa.toRotationMatrix() + a * a.transpose();
-  const Eigen::Vector3d q = m.partialPivLu().solve(t - d * a);
-  const Eigen::Matrix3d r = Eigen::AngleAxisd(fraction * aa.angle(), a).toRotationMatrix();
-  out.linear() = r;
-  out.translation() = q - r * q + fraction * d * a;
-  return out;
-}
-
 namespace {
 
 Eigen::Isometry3d motionOf(std::span<const Eigen::Isometry3d> motions, Part part, double fraction) {
   const auto p = std::size_t(part);
-  return p < motions.size() ? partialMotion(motions[p], fraction) : Eigen::Isometry3d::Identity();
+  return p < motions.size() ? screwInterpolate(motions[p], fraction) : Eigen::Isometry3d::Identity();
 }
 
 }  // namespace
@@ -353,10 +334,7 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
   // where no tet around them degenerates.
   {
     const VertexTets around = vertexTets(out.mesh.tets, out.mesh.vertexCount());
-    const auto volume = [&](const Tet& t) {
-      const auto& p = out.mesh.positions;
-      return (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]).dot(p[t[3]] - p[t[0]]);
-    };
+    const auto volume = [&](const Tet& t) { return signedVolume(out.mesh.positions, t); };
     for (std::size_t b = 0; b < out.bodies.size(); ++b) {
       std::vector<std::int32_t> split = out.cuts[b].splitVertices;
       const auto key = [&](std::int32_t v) {

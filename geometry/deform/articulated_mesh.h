@@ -134,8 +134,8 @@ LabelGrid bonePartGrid(const LabelGrid& grid, const OrganTable& organs, const sk
 
 // The rigid vertices of `mesh` placed by their parts' motions (index =
 // Part; identity where a part has none), at `fraction` of each motion
-// (screw interpolation: the rotation's angle and the translation along its
-// axis scaled together); other vertices keep their entries of `positions`.
+// (screwInterpolate, solve/injective_solve.h); other vertices keep their
+// entries of `positions`.
 void placeRigidVertices(const ArticulatedMesh& mesh, std::span<const Eigen::Isometry3d> motions, double fraction,
                         std::span<Eigen::Vector3d> positions);
 
@@ -143,9 +143,5 @@ void placeRigidVertices(const ArticulatedMesh& mesh, std::span<const Eigen::Isom
 // their owners' motions at `fraction`.
 void projectSlidingVertices(const ArticulatedMesh& mesh, std::span<const Eigen::Isometry3d> motions, double fraction,
                             std::span<Eigen::Vector3d> positions);
-
-// A rigid motion at `fraction` of the way from the identity (screw
-// interpolation about the motion's own axis).
-Eigen::Isometry3d partialMotion(const Eigen::Isometry3d& motion, double fraction);
 
 }  // namespace vox

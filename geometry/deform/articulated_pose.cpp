@@ -120,7 +120,7 @@ void ArticulatedPoser::predict(InjectiveSolver& solver, std::span<const Eigen::I
   std::array<Eigen::Isometry3d, skeleton::kPartCount + 1> step;
   for (int p = 0; p <= skeleton::kPartCount; ++p) {
     const Eigen::Isometry3d m = std::size_t(p) < motions.size() ? motions[std::size_t(p)] : Eigen::Isometry3d::Identity();
-    step[std::size_t(p)] = partialMotion(m, to) * partialMotion(m, from).inverse();
+    step[std::size_t(p)] = screwInterpolate(m, to) * screwInterpolate(m, from).inverse();
   }
   const std::vector<Eigen::Vector3d>& current = solver.positions();
   std::vector<Eigen::Vector3d> predicted(current.size());
@@ -201,10 +201,7 @@ ArticulatedPoseReport ArticulatedPoser::pose(std::span<const Eigen::Isometry3d> 
   }
   placeRigidVertices(mesh_, motions, 1.0, positions_);
   const TetMesh& m = mesh_.mesh;
-  for (const Tet& t : m.tets) {
-    const auto& p = positions_;
-    report.invertedTets += (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]).dot(p[t[3]] - p[t[0]]) <= 0.0;
-  }
+  for (const Tet& t : m.tets) report.invertedTets += signedVolume(positions_, t) <= 0.0;
   std::vector<Eigen::Vector3d> projected = positions_;
   projectSlidingVertices(mesh_, motions, 1.0, projected);
   for (std::size_t v = 0; v < projected.size(); ++v)

@@ -35,10 +35,6 @@ const Figure& figure() {
   return f;
 }
 
-double signedVolume(const std::vector<Eigen::Vector3d>& p, const Tet& t) {
-  return (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]).dot(p[t[3]] - p[t[0]]) / 6.0;
-}
-
 const ArticularBody* bodyOf(const ArticulatedMesh& m, JointId id) {
   for (const ArticularBody& b : m.bodies)
     if (b.joint == id) return &b;
@@ -136,8 +132,9 @@ TEST(ArticulatedMesh, TurningTheOwnerMovesTheBodyRigidlyAndApartFromTheOtherSide
     const double rest = signedVolume(m.mesh.positions, m.mesh.tets[t]);
     EXPECT_NEAR(signedVolume(posed, m.mesh.tets[t]), rest, 1e-9 * std::max(1.0, rest));
   }
-  // Halfway, the screw interpolation is the half turn about the same centre.
-  const Eigen::Isometry3d half = partialMotion(turn, 0.5);
+  // Halfway, the screw interpolation the posing uses is the half turn about
+  // the same centre.
+  const Eigen::Isometry3d half = screwInterpolate(turn, 0.5);
   EXPECT_LT((half * joint->centre - joint->centre).norm(), 1e-9);
   EXPECT_NEAR(Eigen::AngleAxisd(Eigen::Matrix3d(half.linear())).angle(), std::numbers::pi / 4, 1e-12);
   // Sliding vertices stay on the sphere the turn maps onto itself.
