@@ -154,6 +154,10 @@ void addDeformCommand(CLI::App& app) {
                 "With body parts (a joint pose, --parts): hold each part's bones rigid (its forward-kinematics motion, else the rigid fit) "
                 "and turn the cage near each turned joint with the moving part (joint_options zone 'child' unless the pose sets it); "
                 "the tissue between bones turning against each other may fold (docs/POSES.md)");
+  cmd->add_flag("--articulated", o->run.articulated,
+                "A joint pose on the transfer mesh that resolves the skeleton: bones moved by their parts' motions exactly, "
+                "shoulders, hips, elbows and knees sliding, the soft tissue by an injective solve (no cage, no refinement); "
+                "a pose it cannot reach without inverting a tet is refused unless --force (docs/POSES.md)");
   cmd->add_option("--max-body-change", o->run.maxBodyChangePercent,
                   "Refuse (write nothing) when the whole body's volume changes by more than this, %")
       ->capture_default_str()

@@ -73,7 +73,7 @@ DeformGridRequest::VolumeTarget volumeTarget(const py::object& preserve, bool& o
 }
 
 py::tuple deform(const py::object& gridArgument, const py::object& pose, const py::object& organsArgument, const py::object& preserveVolumes,
-                 const py::object& prepared, const std::string& output, bool cpu, int samples, bool rigidBones, bool force,
+                 const py::object& prepared, const std::string& output, bool cpu, int samples, bool rigidBones, bool articulated, bool force,
                  double maxBodyChange, double maxBoneChange, bool allowGrowth, std::int64_t maxMemoryMb) {
   if (!prepared.is_none())
     throw py::value_error("prepared: prepared-state files are not available in this version of voxmorph; leave prepared=None");
@@ -85,6 +85,7 @@ py::tuple deform(const py::object& gridArgument, const py::object& pose, const p
   request.organsSource = organs.source;
   request.samples = samples;
   request.rigidBones = rigidBones;
+  request.articulated = articulated;
   request.force = force;
   request.maxBodyChangePercent = maxBodyChange;
   request.maxBoneChangePercent = maxBoneChange;
@@ -242,7 +243,7 @@ PoseArgument poseArgument(const py::object& pose, const GridGeometry& grid) {
 void bindDeform(py::module_& m) {
   m.def("deform", &deform, py::arg("grid"), py::arg("pose"), py::kw_only(), py::arg("organs") = py::none(),
         py::arg("preserve_volumes") = false, py::arg("prepared") = py::none(), py::arg("output") = "", py::arg("cpu") = false,
-        py::arg("samples") = 1, py::arg("rigid_bones") = false, py::arg("force") = false,
+        py::arg("samples") = 1, py::arg("rigid_bones") = false, py::arg("articulated") = false, py::arg("force") = false,
         py::arg("max_body_change") = DeformGridRequest{}.maxBodyChangePercent,
         py::arg("max_bone_change") = DeformGridRequest{}.maxBoneChangePercent, py::arg("allow_growth") = false,
         py::arg("max_memory") = 0, R"doc(
@@ -262,8 +263,8 @@ output: also write the posed grid to this file (atomically: nothing is left on e
 cpu: rasterize with the CPU reference instead of the GPU (the GPU falls back to the CPU
     with a RuntimeWarning when none is usable).
 samples: k, k^3 samples per output voxel (majority label).
-rigid_bones, force, max_body_change, max_bone_change, allow_growth, max_memory: as the
-    CLI's --rigid-bones, --force, --max-body-change (%), --max-bone-change (%),
+rigid_bones, articulated, force, max_body_change, max_bone_change, allow_growth, max_memory:
+    as the CLI's --rigid-bones, --articulated, --force, --max-body-change (%), --max-bone-change (%),
     --allow-growth and --max-memory (MB; 0: in core).
 
 The report dict is the CLI's JSON report (--report). Bad input raises ValueError (or

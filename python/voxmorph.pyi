@@ -74,6 +74,7 @@ def deform(
     cpu: bool = False,
     samples: int = 1,
     rigid_bones: bool = False,
+    articulated: bool = False,
     force: bool = False,
     max_body_change: float = 2.0,
     max_bone_change: float = 10.0,

@@ -241,6 +241,128 @@ void splitBridgingEdges(ArticulatedMesh& out) {
   }
 }
 
+// The part a tet of the mesh belongs to: its bone's or body's, else the
+// skeleton's part at its centroid.
+std::vector<Part> tetParts(const ArticulatedMesh& out, const skeleton::Skeleton& skeleton) {
+  const TetMesh& m = out.mesh;
+  const LabelGrid& parts = skeleton.parts.parts;
+  std::vector<Part> result(m.tetCount(), Part::None);
+  for (std::size_t t = 0; t < m.tetCount(); ++t) {
+    const std::int32_t tag = m.labels[t];
+    if (tag > kBoneTag && tag <= kBoneTag + skeleton::kPartCount) {
+      result[t] = Part(tag - kBoneTag);
+      continue;
+    }
+    if (tag >= kBodyTag) {
+      for (const ArticularBody& b : out.bodies)
+        if (b.tag() == tag) result[t] = b.owner;
+      continue;
+    }
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (const std::int32_t v : m.tets[t]) c += 0.25 * m.positions[std::size_t(v)];
+    if (Index3 ijk; parts.geometry().voxelAt(c, ijk)) result[t] = Part(parts.at(ijk[0], ijk[1], ijk[2]));
+  }
+  return result;
+}
+
+constexpr double kDefaultHeadRadiusMm = 24.0;  // where a joint has no fitted head
+
+// The limb cuts (see the header): tets relabelled by label group for the
+// cut, their tags restored after it (the cut keeps the tets' order).
+CutReport cutLimbs(ArticulatedMesh& out, const skeleton::Skeleton& skeleton, double marginRadii) {
+  
+  const std::vector<Part> part = tetParts(out, skeleton);
+  const std::vector<std::int32_t> tags = out.mesh.labels;
+  std::vector<std::int32_t>& group = out.mesh.labels;
+  for (std::size_t t = 0; t < part.size(); ++t) group[t] = part[t] == Part::None ? 0 : std::int32_t(skeleton::labelGroupOf(part[t]));
+  // Islands: a face-connected piece of one group that holds no bone of
+  // its group (a few tets the part grid gives a limb inside the trunk's
+  // tissue) joins the group it shares the most faces with, so no cut
+  // leaves tissue that nothing holds.
+  const TetMesh& m = out.mesh;
+  std::vector<std::pair<std::array<std::int32_t, 3>, std::int32_t>> faces;
+  faces.reserve(4 * m.tetCount());
+  for (std::size_t t = 0; t < m.tetCount(); ++t)
+    for (int f = 0; f < 4; ++f) {
+      std::array<std::int32_t, 3> k{};
+      for (int i = 0, n = 0; i < 4; ++i)
+        if (i != f) k[std::size_t(n++)] = m.tets[t][std::size_t(i)];
+      std::sort(k.begin(), k.end());
+      faces.emplace_back(k, std::int32_t(t));
+    }
+  std::sort(faces.begin(), faces.end());
+  std::vector<std::pair<std::int32_t, std::int32_t>> adjacent;
+  for (std::size_t i = 0; i + 1 < faces.size(); ++i)
+    if (faces[i].first == faces[i + 1].first) adjacent.emplace_back(faces[i].second, faces[i + 1].second);
+  std::vector<std::vector<std::int32_t>> neighbours(m.tetCount());
+  for (const auto& [a, b] : adjacent) {
+    neighbours[std::size_t(a)].push_back(b);
+    neighbours[std::size_t(b)].push_back(a);
+  }
+  for (bool changed = true; changed;) {
+    changed = false;
+    std::vector<std::int32_t> component(m.tetCount(), -1);
+    for (std::size_t seed = 0; seed < m.tetCount(); ++seed) {
+      if (component[seed] >= 0) continue;
+      std::vector<std::int32_t> members{std::int32_t(seed)}, stack{std::int32_t(seed)};
+      component[seed] = std::int32_t(seed);
+      bool holdsBone = tags[seed] != kSoftTissueTag;
+      while (!stack.empty()) {
+        const std::int32_t t = stack.back();
+        stack.pop_back();
+        for (const std::int32_t n : neighbours[std::size_t(t)])
+          if (component[std::size_t(n)] < 0 && group[std::size_t(n)] == group[seed]) {
+            component[std::size_t(n)] = std::int32_t(seed);
+            holdsBone = holdsBone || tags[std::size_t(n)] != kSoftTissueTag;
+            members.push_back(n);
+            stack.push_back(n);
+          }
+      }
+      if (holdsBone) continue;
+      std::array<std::size_t, kLabelGroupCount + 1> shared{};
+      for (const std::int32_t t : members)
+        for (const std::int32_t n : neighbours[std::size_t(t)])
+          if (group[std::size_t(n)] != group[seed]) ++shared[std::size_t(group[std::size_t(n)])];
+      const auto best = std::int32_t(std::max_element(shared.begin(), shared.end()) - shared.begin());
+      if (shared[std::size_t(best)] == 0) continue;
+      for (const std::int32_t t : members) group[std::size_t(t)] = best;
+      changed = true;
+    }
+  }
+  // The joint that carries each limb group.
+  std::array<const skeleton::Joint*, kLabelGroupCount + 1> top{};
+  top[std::size_t(LabelGroup::RightArm)] = skeleton.joint(JointId::RightShoulder);
+  top[std::size_t(LabelGroup::LeftArm)] = skeleton.joint(JointId::LeftShoulder);
+  top[std::size_t(LabelGroup::RightLeg)] = skeleton.joint(JointId::RightHip);
+  top[std::size_t(LabelGroup::LeftLeg)] = skeleton.joint(JointId::LeftHip);
+  const auto beyond = [&](std::int32_t group, const Eigen::Vector3d& p) {
+    const skeleton::Joint* j = group > 0 && group <= kLabelGroupCount ? top[std::size_t(group)] : nullptr;
+    return !j || (p - j->centre).dot(j->longAxis.normalized()) > marginRadii * (j->radius > 0 ? j->radius : kDefaultHeadRadiusMm);
+  };
+  CutReport total;
+  // One cut per limb against every other group (the limb's tets take the
+  // copies), each only where the face lies beyond the limb's joint (a pair
+  // of limbs once, beyond the first's: the hips lie level).
+  for (int limb = 1; limb <= kLabelGroupCount; ++limb) {
+    if (!top[std::size_t(limb)]) continue;
+    for (int other = 1; other <= kLabelGroupCount; ++other) {
+      if (other == limb || (top[std::size_t(other)] && other < limb)) continue;
+      CutSides sides;
+      sides.sideA = [other](std::int32_t l) { return l == other; };
+      sides.sideB = [limb](std::int32_t l) { return l == limb; };
+      sides.inRegion = [&, limb](const Eigen::Vector3d& p) { return beyond(limb, p); };
+      const CutReport r = cutTransferMesh(out.mesh, sides);
+      total.cutFaces += r.cutFaces;
+      total.duplicatedVertices += r.duplicatedVertices;
+      total.openedRimFaces += r.openedRimFaces;
+      total.contactVertices += r.contactVertices;
+      total.splitVertices.insert(total.splitVertices.end(), r.splitVertices.begin(), r.splitVertices.end());
+    }
+  }
+  out.mesh.labels = tags;
+  return total;
+}
+
 }  // namespace
 
 ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& organs, const skeleton::Skeleton& skeleton,
@@ -327,6 +449,8 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
     sides.inRegion = [&b](const Eigen::Vector3d& p) { return b.cutAt(p); };
     out.cuts.push_back(cutTransferMesh(out.mesh, sides));
   }
+
+  if (options.limbCutMarginRadii > 0) out.limbCut = cutLimbs(out, skeleton, options.limbCutMarginRadii);
 
   // The cut's vertices onto the body's surface: the mesher puts them on
   // some interface, but where a bone's surface runs within a tet of the

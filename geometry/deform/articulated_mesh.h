@@ -30,6 +30,13 @@
 //    the body's surface onto itself (a rotation about the sphere's centre,
 //    about the cylinder's axis), so the tissue on the other side of the cut
 //    slides along it without a gap or an overlap.
+//  - Limb cuts. Where a limb's tissue touches another label group's (an arm
+//    hanging against the trunk, the thighs against each other) beyond
+//    limbCutMarginRadii head radii down the limb from the joint that carries it (the
+//    shoulder, the hip), the mesh is cut between them (cutTransferMesh), so
+//    a turn parts them instead of tearing tets; at the joint the tissue stays
+//    joined. A tet's group is that of its part (the skeleton's part at its
+//    centroid for tissue, its bone's or body's part otherwise).
 //  - Vertex roles. A vertex of a bone or body tet of exactly one part is
 //    Rigid: its part's rigid motion places it (a hard constraint: a posed
 //    voxel that maps back into a bone copies that bone). A vertex on the
@@ -93,6 +100,9 @@ struct ArticulatedMeshOptions {
   double bodyMarginVoxels = 0.5;   // a body stops this far (finest spacing) short of the other part's bone
   double minBodyRadiusVoxels = 2.0;  // a smaller body is not built (the joint is not cut)
   double attachmentHalfAngleDeg = 50.0;
+  // Limb cuts start this many joint radii (the humeral or femoral head's)
+  // down the limb from its shoulder or hip (<= 0: no limb cuts).
+  double limbCutMarginRadii = 1.5;
   TransferMeshOptions transferMesh;
 };
 
@@ -102,6 +112,7 @@ struct ArticulatedMesh {
   TetMesh mesh;  // rest, grid frame mm, labels: the tags above; cut at every body
   std::vector<ArticularBody> bodies;
   std::vector<CutReport> cuts;  // per body
+  CutReport limbCut;            // between the limbs and the groups they touch
   std::vector<VertexRole> role;                 // per vertex
   std::vector<skeleton::Part> vertexPart;       // per vertex: the part of a Rigid vertex, else None
   std::vector<std::int8_t> vertexBody;          // per vertex: the body (index) a Sliding vertex stays on, else -1

@@ -1,5 +1,7 @@
 #include "geometry/deform/articulated_pose.h"
 
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -33,6 +35,7 @@ ArticulatedPoser::ArticulatedPoser(const ArticulatedMesh& mesh, const Articulate
     tets.push_back(local);
   }
   solvedTets_ = tets.size();
+  solveTets_ = tets;
   std::vector<Eigen::Vector3d> rest;
   std::vector<double> weights;
   for (std::size_t i = 0; i < solved_.size(); ++i) {
@@ -113,6 +116,11 @@ void ArticulatedPoser::nearestParts() {
     // Full weight to the nearest part unless the second is within blendMm
     // of it too; half and half where both are equally near.
     nearWeight_[i] = !std::isfinite(d1) || d1 - d0 >= options_.blendMm ? 1.0 : 0.5 + 0.5 * (d1 - d0) / options_.blendMm;
+    // A bone's vertex moves with its own part only.
+    if (mesh_.role[std::size_t(solved_[i])] == VertexRole::Rigid) {
+      nearPart_[i][0] = mesh_.vertexPart[std::size_t(solved_[i])];
+      nearWeight_[i] = 1.0;
+    }
   }
 }
 
@@ -129,26 +137,91 @@ void ArticulatedPoser::predict(InjectiveSolver& solver, std::span<const Eigen::I
     const Eigen::Vector3d a = step[std::size_t(nearPart_[i][0])] * current[i];
     predicted[i] = w >= 1.0 ? a : Eigen::Vector3d(w * a + (1.0 - w) * (step[std::size_t(nearPart_[i][1])] * current[i]));
   }
-  // As far along as no tet inverts (halving from the whole way).
+  // As far along as no tet inverts, vertex by vertex: the vertices of a tet
+  // the prediction would squeeze go half as far, again until none is (a
+  // squeezed tet at the shoulder does not hold back the hand).
+  std::vector<double> share(current.size(), 1.0);
   std::vector<Eigen::Vector3d> trial(current.size());
-  for (double t = 1.0; t > 1.0 / 64.0; t *= 0.5) {
-    for (std::size_t i = 0; i < current.size(); ++i) trial[i] = current[i] + t * (predicted[i] - current[i]);
+  std::vector<double> floor = solver.relativeVolumes(current);
+  for (double& f : floor) f = std::min(0.05, 0.5 * f);
+  // After six halvings such vertices stay where they are (every vertex
+  // staying is the current, valid configuration: the rounds end).
+  for (int round = 0;; ++round) {
+    for (std::size_t i = 0; i < current.size(); ++i) trial[i] = current[i] + share[i] * (predicted[i] - current[i]);
     const std::vector<double> volumes = solver.relativeVolumes(trial);
-    if (*std::min_element(volumes.begin(), volumes.end()) > 0.05) {
+    bool squeezed = false;
+    for (std::size_t t = 0; t < volumes.size(); ++t)
+      if (volumes[t] <= floor[t]) {
+        squeezed = true;
+        for (const std::int32_t v : solveTets_[t]) share[std::size_t(v)] = round < 6 ? 0.5 * share[std::size_t(v)] : 0.0;
+      }
+    if (!squeezed) {
       solver.setPositions(trial);
       return;
     }
   }
 }
 
+std::vector<Eigen::Vector3d> ArticulatedPoser::corrected(const std::vector<Eigen::Vector3d>& current,
+                                                        std::span<const Eigen::Isometry3d> motions) const {
+  // Per part: the rigid motion that takes its bones from where they are
+  // (the best fit of its vertices of the solve) onto its motion.
+  std::array<Eigen::Isometry3d, skeleton::kPartCount + 1> correction;
+  correction.fill(Eigen::Isometry3d::Identity());
+  std::array<std::vector<std::int32_t>, skeleton::kPartCount + 1> owned;
+  for (const std::int32_t c : constrained_) owned[std::size_t(mesh_.vertexPart[std::size_t(solved_[std::size_t(c)])])].push_back(c);
+  for (int p = 1; p <= skeleton::kPartCount; ++p) {
+    const std::vector<std::int32_t>& o = owned[std::size_t(p)];
+    if (o.size() < 3) continue;
+    Eigen::Matrix3Xd from(3, Eigen::Index(o.size())), to(3, Eigen::Index(o.size()));
+    for (std::size_t k = 0; k < o.size(); ++k) {
+      from.col(Eigen::Index(k)) = current[std::size_t(o[k])];
+      const Eigen::Isometry3d m = std::size_t(p) < motions.size() ? motions[std::size_t(p)] : Eigen::Isometry3d::Identity();
+      to.col(Eigen::Index(k)) = m * mesh_.mesh.positions[std::size_t(solved_[std::size_t(o[k])])];
+    }
+    correction[std::size_t(p)].matrix() = Eigen::umeyama(from, to, false);
+  }
+  std::vector<Eigen::Vector3d> out(current.size());
+  for (std::size_t i = 0; i < current.size(); ++i) {
+    const double w = nearWeight_[i];
+    const Eigen::Vector3d a = correction[std::size_t(nearPart_[i][0])] * current[i];
+    out[i] = w >= 1.0 ? a : Eigen::Vector3d(w * a + (1.0 - w) * (correction[std::size_t(nearPart_[i][1])] * current[i]));
+  }
+  return out;
+}
+
 void ArticulatedPoser::targets(const InjectiveSolver& solver, std::span<const Eigen::Isometry3d> motions, double fraction) {
   placeRigidVertices(mesh_, motions, fraction, positions_);
   for (std::size_t c = 0; c < constrained_.size(); ++c) constrainedTargets_[c] = positions_[std::size_t(solved_[std::size_t(constrained_[c])])];
-  // Sliding targets: where the current positions project onto the bodies
-  // moved by this step.
+  // Sliding targets in their bodies' frames: each vertex taken into its
+  // body's rest frame by where the owner's bone is now (the rigid motion
+  // that best fits the owner's vertices of the solve), put on the body's
+  // surface there, and carried to the step's pose by the owner's motion.
+  // Along the surface the vertex keeps where the solve put it (it slides);
+  // only its distance from the surface is corrected, whether the bones are
+  // ahead of the tissue or behind it.
   const std::vector<Eigen::Vector3d>& current = solver.positions();
-  for (std::size_t s = 0; s < sliding_.size(); ++s) positions_[std::size_t(solved_[std::size_t(sliding_[s])])] = current[std::size_t(sliding_[s])];
-  projectSlidingVertices(mesh_, motions, fraction, positions_);
+  const std::vector<Eigen::Vector3d>& rest = mesh_.mesh.positions;
+  std::vector<Eigen::Isometry3d> now(mesh_.bodies.size(), Eigen::Isometry3d::Identity());
+  for (std::size_t b = 0; b < mesh_.bodies.size(); ++b) {
+    std::vector<std::int32_t> owned;
+    for (const std::int32_t c : constrained_)
+      if (mesh_.vertexPart[std::size_t(solved_[std::size_t(c)])] == mesh_.bodies[b].owner) owned.push_back(c);
+    if (owned.size() < 3) continue;
+    Eigen::Matrix3Xd from(3, Eigen::Index(owned.size())), to(3, Eigen::Index(owned.size()));
+    for (std::size_t k = 0; k < owned.size(); ++k) {
+      from.col(Eigen::Index(k)) = rest[std::size_t(solved_[std::size_t(owned[k])])];
+      to.col(Eigen::Index(k)) = current[std::size_t(owned[k])];
+    }
+    now[b].matrix() = Eigen::umeyama(from, to, false);
+  }
+  for (const std::int32_t i : sliding_) {
+    const auto v = std::size_t(solved_[std::size_t(i)]);
+    const auto b = std::size_t(mesh_.vertexBody[v]);
+    const auto owner = std::size_t(mesh_.bodies[b].owner);
+    const Eigen::Isometry3d m = owner < motions.size() ? screwInterpolate(motions[owner], fraction) : Eigen::Isometry3d::Identity();
+    positions_[v] = m * mesh_.bodies[b].project(now[b].inverse() * current[std::size_t(i)]);
+  }
   for (std::size_t s = 0; s < sliding_.size(); ++s) slidingTargets_[s] = positions_[std::size_t(solved_[std::size_t(sliding_[s])])];
 }
 
@@ -183,11 +256,28 @@ ArticulatedPoseReport ArticulatedPoser::pose(std::span<const Eigen::Isometry3d> 
       report.stepMinRelativeVolume.push_back(r.minRelativeVolume);
       ++report.steps;
     }
+    // At the full pose the bones stiffen (their weight times 10, 100,
+    // 1000): they close on their motions as far as the tissue lets them.
+    {
+      targets(approach_, motions, 1.0);
+      std::vector<Eigen::Vector3d> soft = slidingTargets_;
+      soft.insert(soft.end(), constrainedTargets_.begin(), constrainedTargets_.end());
+      std::vector<double> scale(soft.size(), 1.0);
+      for (int round = 1; round <= options_.stiffeningRounds; ++round) {
+        std::fill(scale.begin() + std::ptrdiff_t(slidingTargets_.size()), scale.end(), std::pow(10.0, round));
+        approach_.scaleSoftWeights(scale);
+        const InjectiveStepReport r = approach_.solveStep({}, soft);
+        report.iterations += r.iterations;
+        report.minRelativeVolume = std::min(report.minRelativeVolume, r.minRelativeVolume);
+      }
+      std::fill(scale.begin(), scale.end(), 1.0);
+      approach_.scaleSoftWeights(scale);
+    }
     // The bones onto their motions exactly: put there when no tet inverts,
     // else chased from where the approach left them (hard constraints); then
     // the tissue relaxes around them.
     targets(approach_, motions, 1.0);
-    std::vector<Eigen::Vector3d> placed = approach_.positions();
+    std::vector<Eigen::Vector3d> placed = corrected(approach_.positions(), motions);
     for (std::size_t c = 0; c < constrained_.size(); ++c) placed[std::size_t(constrained_[c])] = constrainedTargets_[c];
     const std::vector<double> volumes = solver_.relativeVolumes(placed);
     solver_.setPositions(*std::min_element(volumes.begin(), volumes.end()) > 0.0 ? placed : approach_.positions());

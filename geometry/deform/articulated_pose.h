@@ -2,12 +2,22 @@
 // Posing the articulated transfer mesh (articulated_mesh.h): the bones by
 // their parts' rigid motions (hard constraints), the tissue on the other
 // side of each sliding cut pulled onto its articular body's surface (soft
-// targets re-projected every step, so it can slide along it), and the soft
-// tissue by the injective solve (solve/injective_solve.h), the pose applied
-// in steps from rest so that no tet inverts on the way: the steps hold the
-// bones by stiff soft targets (one squeezed tet then slows only the bones
-// near it), and a last step with the bones as hard constraints puts them on
-// their motions exactly.
+// targets, so it can slide along it), and the soft tissue by the injective
+// solve (solve/injective_solve.h), the pose applied in steps from rest so
+// that no tet inverts on the way:
+//  - each step starts from a prediction (every vertex moved by its nearest
+//    parts' step motions; a bone's vertex by its own part's), taken vertex
+//    by vertex as far as no tet is squeezed, so a tight spot at one joint
+//    does not hold back the rest of the body;
+//  - the steps hold the bones by stiff soft targets (one squeezed tet then
+//    slows only the bones near it), stiffened at the full pose;
+//  - a sliding vertex's target is taken in its body's frame: where the
+//    owner's bones are now (their best rigid fit), put on the surface there,
+//    and carried to the step's pose, so it may slide along the surface
+//    whether the bones lead or lag;
+//  - a last step puts the bones on their motions exactly: every vertex is
+//    moved by its parts' remaining corrections, and where that inverts a
+//    tet the bones are chased as hard constraints from where they are.
 //
 // Only the tets that can change are solved: a tet whose four vertices move
 // with one part is moved rigidly and left out of the solve.
@@ -24,16 +34,17 @@ namespace vox {
 
 struct ArticulatedPoseOptions {
   int steps = 8;               // pose steps from rest to the full motions
-  // Each step starts from a prediction: every vertex moved by its nearest
-  // part's step motion (nearest along the mesh's edges), blended with the
-  // second nearest part's where that is within blendMm of it too, as far
-  // as no tet inverts; the solve corrects it.
+  // The prediction blends a vertex's nearest part's step motion (nearest
+  // along the mesh's edges) with the second nearest part's where that is
+  // within blendMm of it too.
   double blendMm = 40.0;
-  int finalIterations = 20;    // extra iterations at the full pose
   double slidingWeight = 20.0;  // soft pull of a sliding vertex onto its body (w_k of the solve)
   // The steps hold the bones by stiff soft targets of this weight (w_k); a
   // last step puts them on their motions exactly (hard constraints).
   double boneWeight = 1e4;
+  // Then, at the full pose, rounds with the bones' weight times 10, 100, ...
+  // before they are put on their motions exactly.
+  int stiffeningRounds = 3;
   InjectiveSolveOptions solve;
 };
 
@@ -67,12 +78,17 @@ private:
   // Moves the solve's positions towards the blended step motion from
   // `from` to `to` of the pose, as far as no tet inverts.
   void predict(InjectiveSolver& solver, std::span<const Eigen::Isometry3d> motions, double from, double to);
+  // `current` (solve positions) moved so that every part's bones land on
+  // its motion: each vertex by its nearest parts' corrections, blended as
+  // the prediction is.
+  std::vector<Eigen::Vector3d> corrected(const std::vector<Eigen::Vector3d>& current, std::span<const Eigen::Isometry3d> motions) const;
   void nearestParts();
   void gather(const InjectiveSolver& solver);
 
   const ArticulatedMesh& mesh_;
   ArticulatedPoseOptions options_;
   std::vector<std::int32_t> solved_;      // solve index -> mesh vertex
+  std::vector<Tet> solveTets_;            // the solved tets (solve indices)
   std::vector<std::int32_t> constrained_, sliding_;  // solve indices
   std::vector<Eigen::Vector3d> constrainedTargets_, slidingTargets_;
   std::vector<Eigen::Vector3d> positions_;

@@ -134,14 +134,11 @@ void describePipeline(DeformationReport& report, const DeformationPipeline& pipe
   report.envelopeFaces = pipeline.envelope().faceCount();
   report.envelopeOutside = pipeline.deformer().stats().envelopeOutside;
   const TetMesh& tm = pipeline.transferMesh();
-  report.tmVertices = tm.vertexCount();
-  report.tmTets = tm.tetCount();
   report.tmInside = pipeline.deformer().stats().transferMeshInside;
   report.tmOutside = pipeline.deformer().stats().transferMeshOutside;
   report.uncoveredVoxels = s.uncoveredVoxels;
   report.cuts = s.cuts;
   const auto& deformed = pipeline.deformedTransferMesh();
-  report.distortion = distortionHistograms(tm, deformed);
   report.outlierDistortion = outlierEdgeDistortion(tm, deformed, pipeline.transferMeshInside());
   const RigidBoneGroups& rigid = pipeline.rigidBones();
   report.rigidGroups = pipeline.deformer().stats().rigidGroups;
@@ -149,6 +146,13 @@ void describePipeline(DeformationReport& report, const DeformationPipeline& pipe
   report.sharedBoneVertices = rigid.sharedVertices;
   report.uncoveredBoneVoxels = rigid.uncoveredVoxels;
   report.bones = measureBoneRigidity(rigid, tm, deformed);
+  describeTransferMesh(report, tm, deformed);
+}
+
+void describeTransferMesh(DeformationReport& report, const TetMesh& tm, const std::vector<Eigen::Vector3d>& deformed) {
+  report.tmVertices = tm.vertexCount();
+  report.tmTets = tm.tetCount();
+  report.distortion = distortionHistograms(tm, deformed);
   report.tmInverted = 0;
   double inverted = 0.0, total = 0.0;
   for (const Tet& t : tm.tets) {

@@ -110,6 +110,18 @@ struct DeformationReport {
   std::vector<std::pair<std::string, Eigen::Matrix4d>> partTransforms;
   // With body parts: tissue of two parts overlapping in the posed body.
   std::optional<Collisions> collisions;
+  // With --articulated: the transfer mesh that resolves the skeleton
+  // (articulated_mesh.h) and its posing (articulated_pose.h).
+  struct Articulated {
+    std::size_t vertices = 0, tets = 0, bodies = 0, bodyCutFaces = 0, limbCutFaces = 0;
+    std::size_t rigidVertices = 0, slidingVertices = 0, solvedVertices = 0, solvedTets = 0;
+    int steps = 0, iterations = 0;
+    double minRelativeVolume = 1.0;  // smallest det J over every step
+    std::size_t invertedTets = 0;    // in the final positions
+    bool reachedTargets = false;     // the bones sit on their parts' motions
+    double maxSlidingGapMm = 0.0;
+  };
+  std::optional<Articulated> articulated;
   RefinementResult refinement;
   DistortionHistograms distortion;
   OutlierDistortion outlierDistortion;
@@ -130,6 +142,8 @@ struct DeformationReport {
 // Fills the mesh sizes, outliers, cuts and distortion from a deformed
 // pipeline.
 void describePipeline(DeformationReport& report, const DeformationPipeline& pipeline);
+// The transfer mesh's part of it: sizes, distortion histograms, inverted tets.
+void describeTransferMesh(DeformationReport& report, const TetMesh& tm, const std::vector<Eigen::Vector3d>& deformed);
 
 // The report as JSON text (indented) and as a short human summary.
 std::string deformationReportJson(const DeformationReport& report);

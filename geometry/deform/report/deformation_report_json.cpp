@@ -177,6 +177,22 @@ std::string deformationReportJson(const DeformationReport& r) {
     }
     root["part_transforms"] = parts;
   }
+  if (const auto& a = r.articulated)
+    root["articulated"] = {{"vertices", a->vertices},
+                           {"tets", a->tets},
+                           {"articular_bodies", a->bodies},
+                           {"body_cut_faces", a->bodyCutFaces},
+                           {"limb_cut_faces", a->limbCutFaces},
+                           {"rigid_vertices", a->rigidVertices},
+                           {"sliding_vertices", a->slidingVertices},
+                           {"solved_vertices", a->solvedVertices},
+                           {"solved_tets", a->solvedTets},
+                           {"steps", a->steps},
+                           {"iterations", a->iterations},
+                           {"min_relative_volume", a->minRelativeVolume},
+                           {"inverted_tets", a->invertedTets},
+                           {"bones_on_their_motions", a->reachedTargets},
+                           {"max_sliding_gap_mm", a->maxSlidingGapMm}};
   if (const auto& c = r.collisions) {
     json pairs = json::array();
     for (const CollisionPair& p : c->pairs)

@@ -1,6 +1,7 @@
 #include "geometry/deform/run/deform_run.h"
 
 #include "geometry/ascii_text.h"
+#include "geometry/deform/articulated_pose.h"
 #include "geometry/deform/pipeline.h"
 #include "geometry/deform/pose/joint_pose.h"
 #include "geometry/deform/pose/posed_extent.h"
@@ -147,19 +148,147 @@ PipelineOptions pipelineOptions(const DeformGridRequest& o, const Source& source
   return options;
 }
 
-// Each part's forward-kinematics motion (grid frame, PoseTransform) as a
-// 4 x 4 matrix in the world frame (world = direction * grid).
-std::vector<std::pair<std::string, Eigen::Matrix4d>> partTransformsInWorld(const std::vector<PoseTransform>& motions,
+// Each part's forward-kinematics motion (grid frame) as a 4 x 4 matrix in
+// the world frame (world = direction * grid).
+std::vector<std::pair<std::string, Eigen::Matrix4d>> partTransformsInWorld(std::span<const Eigen::Isometry3d> motions,
                                                                              const GridGeometry& g) {
   std::vector<std::pair<std::string, Eigen::Matrix4d>> out;
   for (std::size_t p = 1; p < motions.size(); ++p) {
-    const PoseTransform& t = motions[p];
-    const Eigen::Matrix3d r = Eigen::AngleAxisd(t.angleDeg * std::numbers::pi / 180.0, t.axis).toRotationMatrix();
     Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
-    m.topLeftCorner<3, 3>() = g.direction * r * g.direction.transpose();
-    m.topRightCorner<3, 1>() = g.direction * (t.center - r * t.center + t.translation);
+    m.topLeftCorner<3, 3>() = g.direction * motions[p].linear() * g.direction.transpose();
+    m.topRightCorner<3, 1>() = g.direction * motions[p].translation();
     out.emplace_back(skeleton::partName(skeleton::Part(p)), m);
   }
+  return out;
+}
+std::vector<std::pair<std::string, Eigen::Matrix4d>> partTransformsInWorld(const std::vector<PoseTransform>& motions,
+                                                                             const GridGeometry& g) {
+  std::vector<Eigen::Isometry3d> m(motions.size(), Eigen::Isometry3d::Identity());
+  for (std::size_t p = 0; p < motions.size(); ++p) {
+    const PoseTransform& t = motions[p];
+    m[p].linear() = Eigen::AngleAxisd(t.angleDeg * std::numbers::pi / 180.0, t.axis).toRotationMatrix();
+    m[p].translation() = t.center - m[p].linear() * t.center + t.translation;
+  }
+  return partTransformsInWorld(m, g);
+}
+
+// The rest transfer mesh, its posed positions and what the posing adds to
+// the outputs.
+struct PosedMesh {
+  TetMesh rest;
+  std::vector<Eigen::Vector3d> deformed;
+  LabelGrid collisionMask;
+  std::optional<TriMesh> posedCage;
+};
+
+// Collisions of the posed body parts on the working grid's spacing.
+Collisions collisionsOf(const DeformGridRequest& o, const Source& source, const TetMesh& rest, const std::vector<Eigen::Vector3d>& deformed,
+                        const LabelGrid& parts, LabelGrid& mask) {
+  GridGeometry lattice = deformedGridGeometry(source.geometry(), deformed);
+  if (source.factor > 1) {
+    for (int a = 0; a < 3; ++a) lattice.dims[std::size_t(a)] = (lattice.dims[std::size_t(a)] + source.factor - 1) / source.factor;
+    lattice.spacing *= double(source.factor);
+  }
+  Collisions collisions = findCollisions(rest, deformed, parts, lattice, !o.collisionMask.empty());
+  if (!o.collisionMask.empty()) mask = std::move(collisions.mask);
+  collisions.mask = {};
+  return collisions;
+}
+
+// The cage pipeline: cage, transfer mesh, embedding, deformation,
+// refinement, collisions.
+PosedMesh poseByCage(const DeformGridRequest& o, const Source& source, RasterEngines& engines, DeformationReport& report) {
+  PosedMesh out;
+  StageTimer skeletonTimer("skeleton");
+  const PipelineOptions options = pipelineOptions(o, source);
+  if (options.bodyParts) report.stages.push_back(skeletonTimer.stop());
+  const bool separated = !options.cage.separations.empty();
+  auto pipeline = std::make_unique<DeformationPipeline>(source.workingGrid(), options);
+  if (pipeline->stats().foregroundOutsideCage > 0 && !separated)
+    warn(o, std::to_string(pipeline->stats().foregroundOutsideCage) +
+                " foreground voxels lie outside the cage without limb separation; the propagation solve places them, but a "
+                "larger --dilation (or --separate where limbs touch) keeps them inside");
+  pipeline->deform();
+  checkPosedGrowth(source.geometry(), pipeline->deformedTransferMesh(), o.poseSource,
+                   selectionMovingFarthest(pipeline->pose(), pipeline->handles(), pipeline->deformedCage(), source.geometry()),
+                   o.allowGrowth);
+
+  report.refinement = pipeline->refine({.maxIterations = o.refineIterations, .maxTets = o.maxTets}, engines.interpolation());
+  describePipeline(report, *pipeline);
+  report.rigidBonesRequested = o.rigidBones;
+  report.partTransforms = partTransformsInWorld(options.partMotions, source.geometry());
+  // A bone the pose crushes or swells is refused before anything is written.
+  if (const std::optional<std::string> fault = boneChangeFault(report, o.maxBoneChangePercent)) refuseOrForce(o, report, *fault);
+  std::optional<StageTime> collisionTime;
+  if (const std::optional<LabelGrid>& parts = pipeline->bodyParts()) {
+    StageTimer collisionTimer("collisions");
+    report.collisions = collisionsOf(o, source, pipeline->transferMesh(), pipeline->deformedTransferMesh(), *parts, out.collisionMask);
+    collisionTime = collisionTimer.stop();
+  }
+  // The extra outputs are written with G', once the whole body is measured
+  // (the posed mesh from `rest` and `deformed` below).
+  if (!o.posedCage.empty()) {
+    out.posedCage = pipeline->cage();
+    out.posedCage->positions = pipeline->deformedCage();
+    surfaceGridToWorld(*out.posedCage, source.geometry());
+  }
+  for (const StageTime& t : pipeline->stats().stages) report.stages.push_back(t);
+  if (collisionTime) report.stages.push_back(*collisionTime);
+
+  // The pipeline's grids and coordinates go before the rasterization buffers.
+  out.rest = pipeline->transferMesh();
+  out.deformed = pipeline->deformedTransferMesh();
+  pipeline.reset();
+  engines.releaseInterpolation();
+  return out;
+}
+
+// The joint pose on the transfer mesh that resolves the skeleton.
+PosedMesh poseArticulated(const DeformGridRequest& o, const Source& source, DeformationReport& report) {
+  PosedMesh out;
+  const LabelGrid& grid = source.workingGrid();
+  StageTimer skeletonTimer("skeleton");
+  const skeleton::Skeleton sk = skeleton::buildSkeleton(grid, *o.organs, {o.input, o.organsSource, o.parts});
+  const skeleton::PartMotions motions = skeleton::partMotions(skeleton::posedJoints(sk, o.pose.joints, o.poseSource), o.pose.joints);
+  report.stages.push_back(skeletonTimer.stop());
+  StageTimer meshTimer("articulated transfer mesh");
+  ArticulatedMesh mesh = buildArticulatedMesh(grid, *o.organs, sk);
+  report.stages.push_back(meshTimer.stop());
+  StageTimer poseTimer("articulated pose");
+  ArticulatedPoser poser(mesh);
+  const ArticulatedPoseReport r = poser.pose(motions);
+  report.stages.push_back(poseTimer.stop());
+  DeformationReport::Articulated a;
+  a.vertices = mesh.mesh.vertexCount();
+  a.tets = mesh.mesh.tetCount();
+  a.bodies = mesh.bodies.size();
+  for (const CutReport& c : mesh.cuts) a.bodyCutFaces += c.cutFaces;
+  a.limbCutFaces = mesh.limbCut.cutFaces;
+  for (const std::size_t n : mesh.rigidVertices) a.rigidVertices += n;
+  a.slidingVertices = r.slidingVertices;
+  a.solvedVertices = r.solvedVertices;
+  a.solvedTets = r.solvedTets;
+  a.steps = r.steps;
+  a.iterations = r.iterations;
+  a.minRelativeVolume = r.minRelativeVolume;
+  a.invertedTets = r.invertedTets;
+  a.reachedTargets = r.reachedTargets;
+  a.maxSlidingGapMm = r.maxSlidingGapMm;
+  report.articulated = a;
+  out.rest = std::move(mesh.mesh);
+  out.deformed = poser.positions();
+  describeTransferMesh(report, out.rest, out.deformed);
+  report.partTransforms = partTransformsInWorld(motions, source.geometry());
+  const RigidBoneGroups groups = rigidBoneGroups(out.rest, boneKeyGrid(grid, *o.organs, sk.parts.parts));
+  report.rigidVertices = a.rigidVertices;
+  report.uncoveredBoneVoxels = groups.uncoveredVoxels;
+  report.bones = measureBoneRigidity(groups, out.rest, out.deformed);
+  if (r.invertedTets > 0)
+    refuseOrForce(o, report, "the pose inverts " + std::to_string(r.invertedTets) + " tets of the articulated transfer mesh");
+  if (const std::optional<std::string> fault = boneChangeFault(report, o.maxBoneChangePercent)) refuseOrForce(o, report, *fault);
+  StageTimer collisionTimer("collisions");
+  report.collisions = collisionsOf(o, source, out.rest, out.deformed, sk.parts.parts, out.collisionMask);
+  report.stages.push_back(collisionTimer.stop());
   return out;
 }
 
@@ -178,6 +307,14 @@ void checkDeformGridRequest(const DeformGridRequest& o) {
   if (!o.pose.separations.empty() || !o.extraSeparations.empty())
     requireOrganTable(o.organs.has_value(), OrganTableNeed::Separation, o.poseSource);
   if (usesLabelGroups(o.pose)) requireOrganTable(o.organs.has_value(), OrganTableNeed::LabelGroup, o.poseSource);
+  if (o.articulated) {
+    if (o.pose.joints.empty()) throw InputError(o.poseSource, "--articulated poses joints: the pose has no \"joints\"");
+    if (!o.pose.selections.empty() || !o.pose.separations.empty())
+      throw InputError(o.poseSource, "--articulated poses joints only: the pose's selections and separations have no place there");
+    if (o.maxMemoryMb > 0) throw UsageError("--articulated", "cannot be combined with --max-memory");
+    if (o.cage || !o.posedCage.empty() || !o.extraSeparations.empty() || o.rigidBones || !o.parts.empty())
+      throw UsageError("--articulated", "has no cage: it cannot be combined with --cage, --posed-cage, --separate, --rigid-bones or --parts");
+  }
   const bool skeletal = !o.pose.joints.empty() || usesBodyParts(o.pose) || !o.parts.empty();
   if (skeletal) {
     requireOrganTable(o.organs.has_value(), OrganTableNeed::Bones, o.poseSource);
@@ -204,63 +341,16 @@ DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines)
   StageTimer readTimer("read source");
   Source source = openSource(o);
   report.stages.push_back(readTimer.stop());
-  StageTimer skeletonTimer("skeleton");
-  const PipelineOptions options = pipelineOptions(o, source);
-  if (options.bodyParts) report.stages.push_back(skeletonTimer.stop());
-  const bool separated = !options.cage.separations.empty();
   report.source = source.geometry();
   report.restProjection = source.grid ? bodyProjection(*source.grid) : source.outOfCore->bodyProjection();
   report.workingFactor = source.factor;
   report.workingVoxels = source.workingGrid().voxelCount();
 
-  auto pipeline = std::make_unique<DeformationPipeline>(source.workingGrid(), options);
-  if (pipeline->stats().foregroundOutsideCage > 0 && !separated)
-    warn(o, std::to_string(pipeline->stats().foregroundOutsideCage) +
-                " foreground voxels lie outside the cage without limb separation; the propagation solve places them, but a "
-                "larger --dilation (or --separate where limbs touch) keeps them inside");
-  pipeline->deform();
-  checkPosedGrowth(source.geometry(), pipeline->deformedTransferMesh(), o.poseSource,
-                   selectionMovingFarthest(pipeline->pose(), pipeline->handles(), pipeline->deformedCage(), source.geometry()),
-                   o.allowGrowth);
-
-  report.refinement = pipeline->refine({.maxIterations = o.refineIterations, .maxTets = o.maxTets}, engines.interpolation());
-  describePipeline(report, *pipeline);
-  report.rigidBonesRequested = o.rigidBones;
-  report.partTransforms = partTransformsInWorld(options.partMotions, source.geometry());
-  // A bone the pose crushes or swells is refused before anything is written.
-  if (const std::optional<std::string> fault = boneChangeFault(report, o.maxBoneChangePercent)) refuseOrForce(o, report, *fault);
-  std::optional<StageTime> collisionTime;
-  LabelGrid collisionMask;
-  if (const std::optional<LabelGrid>& parts = pipeline->bodyParts()) {
-    StageTimer collisionTimer("collisions");
-    GridGeometry lattice = deformedGridGeometry(source.geometry(), pipeline->deformedTransferMesh());
-    if (source.factor > 1) {
-      for (int a = 0; a < 3; ++a) lattice.dims[std::size_t(a)] = (lattice.dims[std::size_t(a)] + source.factor - 1) / source.factor;
-      lattice.spacing *= double(source.factor);
-    }
-    Collisions collisions = findCollisions(pipeline->transferMesh(), pipeline->deformedTransferMesh(), *parts, lattice,
-                                           !o.collisionMask.empty());
-    if (!o.collisionMask.empty()) collisionMask = std::move(collisions.mask);
-    collisions.mask = {};
-    report.collisions = std::move(collisions);
-    collisionTime = collisionTimer.stop();
-  }
-  // The extra outputs are written with G', once the whole body is measured
-  // (the posed mesh from `rest` and `deformed` below).
-  std::optional<TriMesh> posedCage;
-  if (!o.posedCage.empty()) {
-    posedCage = pipeline->cage();
-    posedCage->positions = pipeline->deformedCage();
-    surfaceGridToWorld(*posedCage, source.geometry());
-  }
-  for (const StageTime& t : pipeline->stats().stages) report.stages.push_back(t);
-  if (collisionTime) report.stages.push_back(*collisionTime);
-
-  // The pipeline's grids and coordinates go before the rasterization buffers.
-  const TetMesh rest = pipeline->transferMesh();
-  const std::vector<Eigen::Vector3d> deformed = pipeline->deformedTransferMesh();
-  pipeline.reset();
-  engines.releaseInterpolation();
+  PosedMesh posedMesh = o.articulated ? poseArticulated(o, source, report) : poseByCage(o, source, engines, report);
+  const TetMesh& rest = posedMesh.rest;
+  const std::vector<Eigen::Vector3d>& deformed = posedMesh.deformed;
+  LabelGrid& collisionMask = posedMesh.collisionMask;
+  std::optional<TriMesh>& posedCage = posedMesh.posedCage;
 
   StageTimer rasterTimer("rasterization");
   std::int64_t rasterBudget = 0;
@@ -300,7 +390,7 @@ DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines)
   report.engine = engines.name();
 
   const std::vector<std::uint64_t> before = source.grid ? computeLabelStats(*source.grid).counts : source.outOfCore->labelCounts();
-  const OrganTable* organs = options.organs ? &*options.organs : nullptr;
+  const OrganTable* organs = o.organs ? &*o.organs : nullptr;
   report.labels = labelChanges(before, after.counts, source.geometry().voxelVolume(), organs);
   report.posedProjection = after.projection;
   for (LabelChange& c : report.labels)

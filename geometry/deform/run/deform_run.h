@@ -53,6 +53,12 @@ struct DeformGridRequest {
   // source's voxels), so organ masses are kept whatever the deformation does.
   enum class VolumeTarget { Deformed, Rest } volumeTarget = VolumeTarget::Deformed;
   bool rigidBones = false;   // with body parts: bones held rigid (rigid_bones.h)
+  // A joint pose on the transfer mesh that resolves the skeleton
+  // (articulated_mesh.h, articulated_pose.h) instead of the cage pipeline:
+  // bones on their parts' motions, sliding shoulders, hips, elbows and knees,
+  // the soft tissue by the injective solve; no cage, no refinement. A pose
+  // the solve cannot reach without inverting a tet is refused (unless force).
+  bool articulated = false;
   bool allowGrowth = false;  // accept a posed grid of more than 8x the source's voxels (posed_extent.h)
   // Physically wrong results are refused with nothing written: a bone whose
   // volume (through the transfer mesh, report.bones) changes by more than

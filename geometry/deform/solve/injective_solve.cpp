@@ -275,6 +275,7 @@ void InjectiveSolver::precompute(std::span<const Eigen::Vector3d> rest, std::spa
     }
   softVertices_.assign(softVertices.begin(), softVertices.end());
   softCoefficient_.resize(softVertices_.size());
+  softBaseCoefficient_.resize(softVertices_.size());
   std::vector<std::uint8_t> isSoft(std::size_t(n), 0);
   for (std::size_t k = 0; k < softVertices_.size(); ++k) {
     const std::int32_t v = softVertices_[k];
@@ -286,7 +287,7 @@ void InjectiveSolver::precompute(std::span<const Eigen::Vector3d> rest, std::spa
     isSoft[std::size_t(v)] = 1;
     double share = 0.0;
     for (const std::int32_t t : vertexTets_.of(v)) share += 0.25 * tetWeight_[std::size_t(t)];
-    softCoefficient_[k] = softWeights[k] * share / (meanEdge * meanEdge);
+    softCoefficient_[k] = softBaseCoefficient_[k] = softWeights[k] * share / (meanEdge * meanEdge);
   }
 
   penaltyCoefficient_.resize(constrained_.size());
@@ -768,6 +769,15 @@ InjectiveStepReport InjectiveSolver::iterate(std::span<const Eigen::Vector3d> co
   report.reachedTargets = atTargets(constrainedTargets);
   report.converged = report.converged && report.reachedTargets;
   return report;
+}
+
+void InjectiveSolver::scaleSoftWeights(std::span<const double> scale) {
+  if (scale.size() != softVertices_.size())
+    throw InputError(source_, std::to_string(scale.size()) + " weight scales for " + std::to_string(softVertices_.size()) + " soft vertices");
+  for (std::size_t k = 0; k < scale.size(); ++k) softCoefficient_[k] = softBaseCoefficient_[k] * scale[k];
+  for (std::size_t f = 0; f < freeSoftSlot_.size(); ++f)
+    if (freeSoftSlot_[f] >= 0) freeSoftCoefficient_[f] = softCoefficient_[std::size_t(freeSoftSlot_[f])];
+  restFactorized_ = false;
 }
 
 InjectiveStepReport InjectiveSolver::solveStep(std::span<const Eigen::Vector3d> constrainedTargets,

@@ -126,6 +126,10 @@ public:
   InjectiveStepReport frame(std::span<const Eigen::Vector3d> constrainedTargets,
                             std::span<const Eigen::Vector3d> softTargets = {}, int iterations = 0);
 
+  // The soft vertices' weights w_k times scale[k] (#S; 1: as given to
+  // precompute), for a continuation that stiffens some targets.
+  void scaleSoftWeights(std::span<const double> scale);
+
   const std::vector<Eigen::Vector3d>& positions() const { return current_; }
   // Replaces the current positions (#V); throws InputError(source, ...) when
   // a tet is not positively oriented in them.
@@ -203,6 +207,7 @@ private:
   std::vector<std::int32_t> freeVertices_;
   std::vector<std::int32_t> softVertices_;
   std::vector<double> softCoefficient_;        // #S: w_k m_k / (|Omega| h^2)
+  std::vector<double> softBaseCoefficient_;    // #S: the same with the weights precompute was given
   std::vector<double> penaltyCoefficient_;     // #constrained: mu m_k / (|Omega| h^2)
   std::vector<double> freeSoftCoefficient_;    // #free: its soft coefficient, or 0
   std::vector<std::int32_t> freeSoftSlot_;     // #free: index into softVertices_, or -1

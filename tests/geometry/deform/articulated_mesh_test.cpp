@@ -139,8 +139,9 @@ TEST(ArticulatedMesh, TurningTheOwnerMovesTheBodyRigidlyAndApartFromTheOtherSide
   EXPECT_NEAR(Eigen::AngleAxisd(Eigen::Matrix3d(half.linear())).angle(), std::numbers::pi / 4, 1e-12);
   // Sliding vertices stay on the sphere the turn maps onto itself.
   for (std::size_t v = 0; v < m.role.size(); ++v)
-    if (m.role[v] == VertexRole::Sliding && m.bodies[std::size_t(m.vertexBody[v])].joint == JointId::RightShoulder)
+    if (m.role[v] == VertexRole::Sliding && m.bodies[std::size_t(m.vertexBody[v])].joint == JointId::RightShoulder) {
       EXPECT_NEAR((posed[v] - shoulder->centre).norm(), shoulder->radius, 1e-9);
+    }
 }
 
 }  // namespace
@@ -178,8 +179,29 @@ TEST(ArticulatedPose, AStrideKeepsBonesRigidAndEveryTetPositive) {
   EXPECT_LT(r.maxSlidingGapMm, 2.0 * f.grid.geometry().spacing.minCoeff());
   const std::vector<Eigen::Vector3d>& p = poser.positions();
   for (std::size_t v = 0; v < p.size(); ++v)
-    if (f.mesh.role[v] == VertexRole::Rigid)
+    if (f.mesh.role[v] == VertexRole::Rigid) {
       EXPECT_LT((p[v] - motions[std::size_t(f.mesh.vertexPart[v])] * f.mesh.mesh.positions[v]).norm(), 1e-6);
+    }
+}
+
+// The figure's arms hang against its trunk: the limb cut parts them below
+// the shoulder, and an elbow turned 90 degrees swings the forearm and hand
+// away from the trunk without a tet inverted on the way.
+TEST(ArticulatedPose, AnElbowAt90PartsTheForearmFromTheTrunk) {
+  const Figure& f = figure();
+  EXPECT_GT(f.mesh.limbCut.cutFaces, 0u);
+  EXPECT_GT(f.mesh.limbCut.duplicatedVertices, 0u);
+  const skeleton::PartMotions motions = figureMotions(f.skeleton, {jointAngles(JointId::RightElbow, 90.0)});
+  ArticulatedPoser poser(f.mesh);
+  const ArticulatedPoseReport r = poser.pose(motions);
+  for (const double v : r.stepMinRelativeVolume) EXPECT_GT(v, 0.05);
+  EXPECT_EQ(r.invertedTets, 0u);
+  EXPECT_TRUE(r.reachedTargets);
+  const std::vector<Eigen::Vector3d>& p = poser.positions();
+  for (std::size_t v = 0; v < p.size(); ++v)
+    if (f.mesh.role[v] == VertexRole::Rigid) {
+      EXPECT_LT((p[v] - motions[std::size_t(f.mesh.vertexPart[v])] * f.mesh.mesh.positions[v]).norm(), 1e-6);
+    }
 }
 
 }  // namespace
