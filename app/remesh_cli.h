@@ -52,6 +52,11 @@ inline void addRemeshOptions(CLI::App& cmd, RemeshCliOptions& o) {
       ->check(CLI::IsMember({"hpss", "pss", "none"}));
   cmd.add_option("--mls-radius", o.remesh.mlsRadius, "Width of the interface model's kernel (mm; default automatic)")
       ->check(numberIn(0, 100000, "mm"));
+  cmd.add_option("--steiner-angle", o.remesh.steiner.angle,
+                 "Sliver removal: split an edge of each tet still under this dihedral angle (degrees) where a new vertex "
+                 "lifts the worst angle around it; 0 skips it")
+      ->capture_default_str()
+      ->check(numberIn(0, 60, "degrees"));
   cmd.add_option("--threads", o.remesh.threads, "Threads")->capture_default_str()->check(integerIn(1, 64));
   cmd.add_option("--organs", o.organs,
                  "Organ table (ID name tissue density): label names in the report, the .msh physical names and the "

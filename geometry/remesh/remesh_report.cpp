@@ -115,8 +115,10 @@ std::string reportText(const RemeshReport& r) {
   add("topology             %s: %zu labels, 1-junctions of %zu label sets, 0-junctions of %zu label sets\n",
       r.topologyDifferences.empty() ? "preserved" : "CHANGED", r.labels.size(), r.junctionCurveSets, r.junctionPointSets);
   for (std::size_t i = 0; i < r.topologyDifferences.size() && i < 20; ++i) s += "  " + r.topologyDifferences[i] + "\n";
-  add("time                 %.2f s remeshing (%.2f s reading and preparing the input; polish %zu vertices, %.2f s)\n",
-      r.stats.seconds, r.setupSeconds, r.stats.polished, r.stats.polishSeconds);
+  add("time                 %.2f s remeshing (%.2f s reading and preparing the input; polish %zu vertices, %.2f s; "
+      "%zu Steiner points and %zu flips, %.2f s)\n",
+      r.stats.seconds, r.setupSeconds, r.stats.polished, r.stats.polishSeconds, r.stats.inserted, r.stats.sliverFlips,
+      r.stats.insertSeconds);
   if (!r.unnamedLabels.empty()) {
     s += "unnamed labels      ";
     for (std::size_t i = 0; i < r.unnamedLabels.size(); ++i) s += (i ? ", " : " ") + std::to_string(r.unnamedLabels[i]);
@@ -206,6 +208,7 @@ std::string reportJson(const RemeshReport& r) {
                                   {"smooth", s.smoothSeconds}, {"total", s.seconds}}}});
   j["steps"] = steps;
   j["polish"] = {{"vertices_moved", r.stats.polished}, {"seconds", r.stats.polishSeconds}};
+  j["steiner_points"] = {{"inserted", r.stats.inserted}, {"flips_after", r.stats.sliverFlips}, {"seconds", r.stats.insertSeconds}};
   j["remesh_seconds"] = r.stats.seconds;
   j["setup_seconds"] = r.setupSeconds;
   j["provenance"] = nlohmann::json::parse(provenanceJson(r.provenance));
