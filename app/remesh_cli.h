@@ -5,6 +5,7 @@
 #include "app/command_line.h"
 #include "geometry/atomic_file.h"
 #include "geometry/io/mesh_io.h"
+#include "geometry/io/png_io.h"
 #include "geometry/io/output_path.h"
 #include "geometry/error.h"
 #include "geometry/organ_table.h"
@@ -51,17 +52,32 @@ inline void addRemeshOptions(CLI::App& cmd, RemeshCliOptions& o) {
       ->check(CLI::IsMember({"hpss", "pss", "none"}));
   cmd.add_option("--mls-radius", o.remesh.mlsRadius, "Width of the interface model's kernel (mm; default automatic)")
       ->check(numberIn(0, 100000, "mm"));
+  cmd.add_option("--steiner-angle", o.remesh.steiner.angle,
+                 "Sliver removal: split an edge of each tet still under this dihedral angle (degrees) where a new vertex "
+                 "lifts the worst angle around it; 0 skips it")
+      ->capture_default_str()
+      ->check(numberIn(0, 60, "degrees"));
   cmd.add_option("--threads", o.remesh.threads, "Threads")->capture_default_str()->check(integerIn(1, 64));
   cmd.add_option("--organs", o.organs,
                  "Organ table (ID name tissue density): label names in the report, the .msh physical names and the "
                  ".vtu field data");
-  cmd.add_option("--report", o.report, "Also write the quality report as JSON (- for stdout instead of the text)");
+  cmd.add_option("--report", o.report,
+                 "Also write the quality report as JSON, and its dihedral-angle histogram as a PNG beside it "
+                 "(report.json: report_dihedral.png); - prints the JSON on stdout instead of the text");
   cmd.add_option("--max-memory", o.maxMemoryMb,
                  "Refuse a run whose estimated peak memory exceeds this budget (MB; default the machine's memory)")
       ->check(integerIn(64, std::int64_t(1) << 30, "MB"));
   cmd.add_flag("--keep-imaginary", o.keepImaginary, "Also write the imaginary layer around the domain (label 0)");
   cmd.add_flag("--no-distance", o.noDistances, "Skip the interface Hausdorff distances of the report");
   cmd.add_flag("-q,--quiet", o.quiet, "No progress on stderr");
+}
+
+// Where the dihedral-angle histogram of the report at `reportPath` goes: its
+// name without a .json extension, followed by "_dihedral.png".
+inline std::string dihedralHistogramPath(const std::string& reportPath) {
+  const std::string ext = ".json";
+  const bool json = reportPath.size() > ext.size() && reportPath.compare(reportPath.size() - ext.size(), ext.size(), ext) == 0;
+  return (json ? reportPath.substr(0, reportPath.size() - ext.size()) : reportPath) + "_dihedral.png";
 }
 
 // Checks the output and report paths and reads the organ table, before the
@@ -139,7 +155,10 @@ inline void runRemesh(RemeshCliOptions& o, const TetMesh& initial, const std::fu
     return;
   }
   std::printf("%s -> %s\n%s", o.input.c_str(), o.output.c_str(), remesh::reportText(report).c_str());
-  if (!o.report.empty()) writeFileAtomic(o.report, remesh::reportJson(report));
+  if (!o.report.empty()) {
+    writeFileAtomic(o.report, remesh::reportJson(report));
+    writePng(dihedralHistogramPath(o.report), remesh::dihedralHistogramImage(report));
+  }
 }
 
 }  // namespace vox::app

@@ -94,11 +94,29 @@ void remeshComplex(RemeshComplex& complex, const RemeshOptions& options, RemeshS
     step.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (stats) stats->steps.push_back(step);
   }
+  // Sliver removal: flips on the poor tets ran in the cycles above; then the
+  // vertices of the worst tets move, and Steiner points go where no flip or
+  // move helps. The new vertices open room for one more round of flips,
+  // moves and insertions.
   const auto polishStart = std::chrono::steady_clock::now();
-  const std::size_t polished = polishWorstTets(complex, surfaces.get(), hull, options.polishAngle, options.threads);
+  std::size_t polished = polishWorstTets(complex, surfaces.get(), hull, options.polishAngle, options.threads);
+  const auto insertStart = std::chrono::steady_clock::now();
+  std::size_t inserted = insertSteinerPoints(complex, options.steiner);
+  std::size_t sliverFlips = 0;
+  if (inserted > 0) {
+    FlipOptions flipOptions = options.flip;
+    flipOptions.threads = options.threads;
+    const FlipCounts flips = flipEdges(complex, flipOptions);
+    sliverFlips = flips.surface + flips.inner + flips.face;
+    polished += polishWorstTets(complex, surfaces.get(), hull, options.steiner.angle, options.threads);
+    inserted += insertSteinerPoints(complex, options.steiner);
+  }
   if (stats) {
     stats->polished = polished;
-    stats->polishSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - polishStart).count();
+    stats->polishSeconds = std::chrono::duration<double>(insertStart - polishStart).count();
+    stats->inserted = inserted;
+    stats->sliverFlips = sliverFlips;
+    stats->insertSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - insertStart).count();
     stats->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
 }

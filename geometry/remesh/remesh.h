@@ -7,10 +7,14 @@
 //                               flip edges, smooth vertices
 //   repeat `flipSmoothCycles`:  flip edges, smooth vertices
 //   polish the vertices of the worst tets
+//   insert Steiner points at the tets still poor; if any: flip, polish and
+//   insert once more
+//   insert Steiner points at the tets still poor
 //
 // with e_max = 4/3 l and e_min = 4/5 l for the target length l.
 
 #include "geometry/remesh/flip_edges.h"
+#include "geometry/remesh/insert_steiner_points.h"
 #include "geometry/remesh/remesh_complex.h"
 #include "geometry/tet_mesh.h"
 
@@ -40,6 +44,10 @@ struct RemeshOptions {
   // this (degrees) are moved to lift the smallest angle (polishWorstTets,
   // smooth_vertices.h); 0 skips it.
   double polishAngle = 12.0;
+  // Then edges of the domain tets still under steiner.angle are split where
+  // a new vertex lifts their worst angle (insertSteinerPoints); angle 0
+  // skips it.
+  SteinerOptions steiner;
 };
 
 struct RemeshStep {
@@ -53,8 +61,11 @@ struct RemeshStep {
 
 struct RemeshStats {
   std::vector<RemeshStep> steps;
-  std::size_t polished = 0;  // vertices the polish moved
-  double polishSeconds = 0.0;
+  std::size_t polished = 0;  // vertices the polish moved (both polishes)
+  double polishSeconds = 0.0;  // the first polish
+  std::size_t inserted = 0;     // Steiner points
+  std::size_t sliverFlips = 0;  // flips of the round after the first insertion
+  double insertSeconds = 0.0;   // insertion and the round after it
   double seconds = 0.0;
 };
 

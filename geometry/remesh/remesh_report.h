@@ -2,17 +2,21 @@
 // The remesher's quality report (DESIGN.md): dihedral angles, slivers,
 // boundary facet angles, edge lengths against the target, and per label the
 // volume change, components, Euler characteristic and the distance between
-// the input and output interfaces; plus the topology check of the labels and
-// junctions; and the run's provenance (provenance.h). Printed as text and
-// written as JSON.
+// the input and output interfaces (both one-sided distances, in mm and in
+// units of the target length l); a histogram of the dihedral angles; plus the
+// topology check of the labels and junctions; and the run's provenance
+// (provenance.h). Printed as text and written as JSON; the histogram also
+// as a PNG chart (dihedralHistogramImage).
 
 #include "geometry/mesh_quality.h"
 #include "geometry/provenance.h"
 #include "geometry/remesh/interface_distance.h"
 #include "geometry/remesh/mesh_topology.h"
 #include "geometry/remesh/remesh.h"
+#include "geometry/rgb_image.h"
 #include "geometry/tet_mesh.h"
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -34,6 +38,10 @@ struct RemeshReport {
   std::size_t inputTets = 0;  // domain tets of the input
   std::size_t outputTets = 0, outputVertices = 0;
   TetQualitySummary quality;
+  std::size_t under10 = 0;  // domain tets with a dihedral angle under 10 degrees
+  // All six dihedral angles of every domain tet, in bins of one degree:
+  // bin i counts the angles in [i, i + 1) degrees (180 in the last bin).
+  std::array<std::size_t, 180> dihedralHistogram{};
   BoundaryFacetSummary boundaryFacets;
   EdgeLengthSummary edgeLengths;
   std::vector<LabelReport> labels;
@@ -63,5 +71,12 @@ RemeshReport buildRemeshReport(const TetMesh& input, const MeshTopology& inputTo
 
 std::string reportText(const RemeshReport& report);
 std::string reportJson(const RemeshReport& report);
+
+// The dihedral-angle histogram as a bar chart: one bar of 4 pixels per
+// degree from 0 to 180, heights relative to the fullest bin, grid lines every
+// 10 degrees (darker every 30), the ideal 70.5 degrees in green; bins under
+// 15 degrees that hold any angle are drawn in red at least 4 pixels high, so
+// that a single sliver shows.
+RgbImage dihedralHistogramImage(const RemeshReport& report);
 
 }  // namespace vox::remesh

@@ -45,13 +45,7 @@ std::int32_t splitEdge(RemeshComplex& complex, std::int32_t a, std::int32_t b, s
   return m;
 }
 
-namespace {
-
-// Whether splitting the edge of `ring` would change where parts of the input
-// touch: a contact edge (both ends pinned, on the outer boundary) is kept by
-// both sides, and the new vertex may not be adjacent to two copies of one
-// pinched vertex (see RemeshComplex::pinchOf).
-bool changesAContact(const RemeshComplex& complex, const EdgeRing& ring) {
+bool splitChangesAContact(const RemeshComplex& complex, const EdgeRing& ring) {
   if (complex.isPinned(ring.a) && complex.isPinned(ring.b) &&
       std::any_of(ring.tets.begin(), ring.tets.end(), [&](std::int32_t q) { return complex.isDummyTet(q); }))
     return true;
@@ -63,8 +57,6 @@ bool changesAContact(const RemeshComplex& complex, const EdgeRing& ring) {
   std::sort(pinches.begin(), pinches.end());
   return std::adjacent_find(pinches.begin(), pinches.end()) != pinches.end();
 }
-
-}  // namespace
 
 std::size_t splitLongEdges(RemeshComplex& complex, const EdgeLengthBounds& bounds, int threads) {
   const double emax2 = bounds.emax * bounds.emax;
@@ -94,7 +86,7 @@ std::size_t splitLongEdges(RemeshComplex& complex, const EdgeLengthBounds& bound
     if (t < 0) continue;
     if (complex.hasPinches() || (complex.isPinned(e.a) && complex.isPinned(e.b))) {
       complex.edgeRing(e.a, e.b, t, contactRing);
-      if (changesAContact(complex, contactRing)) continue;
+      if (splitChangesAContact(complex, contactRing)) continue;
     }
     const std::int32_t m = splitEdge(complex, e.a, e.b, t);
     ++splits;

@@ -16,6 +16,12 @@ namespace vox::remesh {
 // dummy tets too (an outer edge). Returns the new vertex.
 std::int32_t splitEdge(RemeshComplex& complex, std::int32_t a, std::int32_t b, std::int32_t t);
 
+// Whether splitting the edge of `ring` would change where parts of the input
+// touch: a contact edge (both ends pinned, on the outer boundary) is kept by
+// both sides, and the new vertex may not be adjacent to two copies of one
+// pinched vertex (see RemeshComplex::pinchOf).
+bool splitChangesAContact(const RemeshComplex& complex, const EdgeRing& ring);
+
 // Splits, longest first, every edge longer than e_max, and again the halves
 // that are still too long. Returns the number of splits.
 std::size_t splitLongEdges(RemeshComplex& complex, const EdgeLengthBounds& bounds, int threads = 2);

@@ -2,6 +2,7 @@
 // by meshio, byte-identical on a second run, the JSON report, bad input.
 
 #include "geometry/io/mesh_io.h"
+#include "geometry/io/png_io.h"
 #include "geometry/remesh/mesh_topology.h"
 #include "tests/support/test_environment.h"
 
@@ -47,6 +48,29 @@ TEST(RemeshCli, MeshesAGridDeterministicallyWithAReport) {
   EXPECT_EQ(report["inverted_tets"].get<int>(), 0);
   EXPECT_GT(report["dihedral_degrees"]["min"].get<double>(), 10.0);
   EXPECT_EQ(report["labels"].size(), 5u);
+  EXPECT_LE(report["tets_under_10_degrees"].get<std::size_t>(), report["tets_under_15_degrees"].get<std::size_t>());
+  for (const auto& l : report["labels"]) {
+    const auto& mm = l["interface_distance_mm"];
+    const auto& rel = l["interface_distance_over_l"];
+    for (const char* way : {"output_to_input", "input_to_output"}) {
+      EXPECT_GT(mm[way].get<double>(), 0.0) << l["label"] << " " << way;
+      EXPECT_NEAR(rel[way].get<double>(), mm[way].get<double>() / 2.5, 1e-12) << l["label"] << " " << way;
+    }
+  }
+  // Six angles per output tet in the histogram, and its chart beside the JSON.
+  std::size_t angles = 0, under10 = 0;
+  const auto& counts = report["dihedral_histogram"]["counts"];
+  ASSERT_EQ(counts.size(), 180u);
+  for (std::size_t i = 0; i < counts.size(); ++i) {
+    angles += counts[i].get<std::size_t>();
+    if (i < 10) under10 += counts[i].get<std::size_t>();
+  }
+  EXPECT_EQ(angles, 6 * report["tets"]["output"].get<std::size_t>());
+  EXPECT_EQ(under10, 0u) << "the report's minimum is over 10 degrees";
+  const RgbImage chart = readPng(dir + "/a.mesh_dihedral.png");
+  EXPECT_EQ(chart.width, 736);
+  EXPECT_EQ(chart.height, 216);
+  EXPECT_GT(countNotBackground(chart, Rgb{255, 255, 255}), 1000u);
 
   // The written mesh holds what the report says, and only domain tets.
   const TetMesh mesh = readTetMesh(dir + "/a.mesh");

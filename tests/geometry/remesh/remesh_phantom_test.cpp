@@ -89,6 +89,30 @@ TEST(RemeshPhantom, AdultMaleCropKeepsEveryLabelAndJunction) {
   EXPECT_NEAR(summarizeEdgeLengths(output, l).meanLength, l, 0.3 * l);
 }
 
+TEST(RemeshPhantom, SteinerPointsLiftTheSliversOfAdultMaleCrop) {
+  // The head crop at l = 8 mm, almost four in-plane voxels: junction corners
+  // one voxel apart that no operation may move hold slivers between them.
+  const LabelGrid grid = cropAdultMale(128, 54, 186, 32, 28, 10);
+  const MeshTopology input = computeGridTopology(grid);
+  const double l = 8.0;
+  const TetMesh initial = tetrahedralizeVoxelsAdaptive(grid, adaptiveOptionsForTarget(grid.geometry(), l));
+  RemeshOptions options;
+  options.targetLength = l;
+  RemeshOptions without = options;
+  without.steiner.angle = 0.0;
+  RemeshStats stats, statsWithout;
+  const TetMesh output = remeshTetMesh(initial, options, &stats);
+  const TetMesh outputWithout = remeshTetMesh(initial, without, &statsWithout);
+  EXPECT_EQ(statsWithout.inserted, 0u);
+  EXPECT_GT(stats.inserted, 0u);
+  const CheckedOutput a = expectTopologyAndPositiveTets(input, output);
+  const CheckedOutput b = expectTopologyAndPositiveTets(input, outputWithout);
+  ASSERT_GT(b.quality.under15, 0u);
+  EXPECT_LT(a.quality.under15, b.quality.under15 / 20);
+  EXPECT_GE(a.quality.minDihedral, b.quality.minDihedral);
+  EXPECT_GT(a.quality.minDihedral, 12.0);
+}
+
 TEST(RemeshPhantom, AdultMaleTorsoKeepsEveryLabelAndJunction) {
   // A slab through the chest and upper abdomen, the full default schedule
   // (5 rounds and 3 flip-smooth cycles): lungs, heart, liver, stomach,
