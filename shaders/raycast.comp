@@ -408,20 +408,33 @@ Hit trace(vec3 e, vec3 d, uint pixel) {
 // geometry/render/surface_normals.h: the equations and the choices at
 // cutting planes and flat occupancy.
 
+// Occupancy (1 where the label is visible) of the voxels (x, y), (x + 1, y),
+// (x, y + 1), (x + 1, y + 1) of slice z, v = (x, y, z): one slab lookup for
+// the four.
+vec4 quadOccupancy(ivec3 v) {
+  const ivec3 dims = ivec3(P.sourceDims[0], P.sourceDims[1], P.sourceDims[2]);
+  vec4 o = vec4(0.0);
+  if (v.z < 0 || v.z >= dims.z) return o;
+  const uint slab = uint(v.z) / P.slabSlices;
+  const uint sliceBase = P.sliceVoxels * (uint(v.z) - slab * P.slabSlices);
+  for (int c = 0; c < 4; ++c) {
+    const ivec2 xy = v.xy + ivec2(c & 1, c >> 1);
+    if (any(lessThan(xy, ivec2(0))) || any(greaterThanEqual(xy, dims.xy))) continue;
+    const uint local = sliceBase + uint(xy.x) + uint(dims.x) * uint(xy.y);
+    const uint word = slabWord(slab, local >> 1);
+    o[c] = visible((local & 1u) == 0u ? (word & 0xFFFFu) : (word >> 16)) ? 1.0 : 0.0;
+  }
+  return o;
+}
+
 // S(s): the occupancy of the visible labels interpolated trilinearly
 // between voxel centres.
 float smoothedOccupancy(vec3 s) {
   const vec3 base = floor(s);
   const vec3 f = s - base;
   const ivec3 v0 = ivec3(base) + sourceShift();
-  float sum = 0.0;
-  for (int corner = 0; corner < 8; ++corner) {
-    const ivec3 o = ivec3(corner & 1, (corner >> 1) & 1, corner >> 2);
-    if (!visible(labelAt(v0 + o))) continue;
-    const vec3 w = mix(1.0 - f, f, vec3(o));
-    sum += w.x * w.y * w.z;
-  }
-  return sum;
+  const vec4 xy = vec4((1.0 - f.x) * (1.0 - f.y), f.x * (1.0 - f.y), (1.0 - f.x) * f.y, f.x * f.y);
+  return (1.0 - f.z) * dot(quadOccupancy(v0), xy) + f.z * dot(quadOccupancy(v0 + ivec3(0, 0, 1)), xy);
 }
 
 // Gradient of the smoothed occupancy at rest point s: 3x3x3 samples of S
