@@ -15,10 +15,11 @@
 // axis, kOccupancyDifferenceStep of the widest spacing: on a grid of 8 mm
 // slices and 2 mm pixels, a skin that steps back a few pixels per slice
 // leans by its mean slope instead of alternating between facing the camera
-// and facing up or down (the thin dark lines of face shading), while shells
-// a few mm thick, seen with what lies under them hidden, keep normals from
-// their own two sides. 26 samples of 8 voxels each, from the label grid on
-// the fly: no normal volume, no memory beyond the labels the ray caster holds.
+// and facing up or down (the thin dark lines of face shading), and short
+// enough that a shell a few mm thick over hidden organs still takes its
+// normal from its own outer surface, not from the space behind it. 26
+// samples of 8 voxels each, read from the label grid on the fly: no normal
+// volume, no memory beyond the labels the ray caster holds.
 //
 // The rest coordinate of the render-frame point p in tet T is
 // s(p) = r0 + R lambda(p), R = [r1 - r0, r2 - r0, r3 - r0] (RaycastMesh::
