@@ -15,11 +15,10 @@
 // axis, kOccupancyDifferenceStep of the widest spacing: on a grid of 8 mm
 // slices and 2 mm pixels, a skin that steps back a few pixels per slice
 // leans by its mean slope instead of alternating between facing the camera
-// and facing up or down (the thin dark lines of face shading), and short
-// enough that a shell a few mm thick over hidden organs still takes its
-// normal from its own outer surface, not from the space behind it. 26
-// samples of 8 voxels each, read from the label grid on the fly: no normal
-// volume, no memory beyond the labels the ray caster holds.
+// and facing up or down (the thin dark lines of face shading), and with taps
+// a slice apart the normal turns across a whole slice rather than in a band
+// at each step. 26 samples of 8 voxels each, read from the label grid on
+// the fly: no normal volume, no memory beyond the labels the ray caster holds.
 //
 // The rest coordinate of the render-frame point p in tet T is
 // s(p) = r0 + R lambda(p), R = [r1 - r0, r2 - r0, r3 - r0] (RaycastMesh::
@@ -48,9 +47,10 @@
 namespace vox {
 
 // Length of the Sobel steps h, in widest voxel spacings (the same mm along
-// every axis). Measured in docs/BENCHMARKS.md ("Smooth shading"): shorter
-// steps leave more of the slices' steps dark, longer ones blur thin shells.
-inline constexpr double kOccupancyDifferenceStep = 0.6;
+// every axis): one slice across the slices. Measured in docs/BENCHMARKS.md
+// ("Smooth shading"): shorter steps shade each slice's step as a band,
+// longer ones blur shells a few mm thick over hidden organs.
+inline constexpr double kOccupancyDifferenceStep = 1.0;
 
 // The Sobel steps h along each axis, in voxels of `source`.
 Eigen::Vector3d occupancyDifferenceSteps(const GridGeometry& source);
