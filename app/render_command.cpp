@@ -54,6 +54,7 @@ struct RenderOptions {
   std::string pose;
   std::int64_t maxMemoryMb = 0;  // 0: the machine's memory
   std::string parts;
+  std::string shading = surfaceNormalsName(RaycastShading{}.normals);
   bool cpu = false;
   bool verify = false;
   bool legend = false;
@@ -134,6 +135,8 @@ void render(const RenderOptions& o) {
   const RaycastFrame frame = prepareRaycastFrame(mesh, posed);
   const Camera camera = parseCamera(o.camera, frame.toGrid(frame.cellsLo), frame.toGrid(frame.cellsHi), width, height);
   const RaycastView view = makeRaycastView(frame, camera, cuts);
+  RaycastShading shading;
+  shading.normals = parseSurfaceNormals(o.shading, "--shading");
 
   RgbImage image;
   std::string engine;
@@ -142,7 +145,7 @@ void render(const RenderOptions& o) {
     try {
       gpu::Context context;
       gpu::RaycastKernel kernel(context, grid, mesh);
-      image = kernel.render(frame, view, palette);
+      image = kernel.render(frame, view, palette, shading);
       ms = kernel.lastTimes().totalMs;
       engine = "GPU (" + context.info().name + ")";
     } catch (const RuntimeFailure& e) {
@@ -152,7 +155,7 @@ void render(const RenderOptions& o) {
   }
   if (engine.empty() || o.verify) {
     const auto t0 = std::chrono::steady_clock::now();
-    RgbImage cpu = raycastReference(grid, mesh, frame, view, palette);
+    RgbImage cpu = raycastReference(grid, mesh, frame, view, palette, shading);
     const double cpuMs = msSince(t0);
     if (engine.empty()) {
       image = std::move(cpu);
@@ -178,7 +181,7 @@ void render(const RenderOptions& o) {
 
 void addRenderCommand(CLI::App& app) {
   auto o = std::make_shared<RenderOptions>();
-  CLI::App* cmd = addGridSubcommand(app, "render", "Ray-cast a label grid to a PNG image, voxel faces visible (at rest: identity TM)", o->input);
+  CLI::App* cmd = addGridSubcommand(app, "render", "Ray-cast a label grid to a PNG image, smoothly shaded or voxel faces visible (at rest: identity TM)", o->input);
   cmd->add_option("-o,--output", o->output, "Output image (.png)")->required();
   cmd->add_option("--camera", o->camera,
                   "Camera: \"azimuth=30,elevation=10,distance=2.5,fov=35\" (degrees; distance in scene diagonals or "
@@ -197,6 +200,11 @@ void addRenderCommand(CLI::App& app) {
   cmd->add_option("--max-memory", o->maxMemoryMb,
                   "Refuse a grid whose in-core work exceeds this budget (MB; default the machine's memory)")
       ->check(integerIn(64, std::int64_t(1) << 30, "MB"));
+  cmd->add_option("--shading", o->shading,
+                  "Surface normals: \"smooth\" (gradient of the smoothed occupancy of the visible labels; cut faces flat) or "
+                  "\"faces\" (each voxel face's own normal, voxel faces visible)")
+      ->check(CLI::IsMember({"smooth", "faces"}))
+      ->capture_default_str();
   cmd->add_flag("--legend", o->legend, "List the organs the image shows, with their colours (names from --organs)");
   cmd->add_flag("--scale-bar", o->scaleBar, "Draw a scale bar (mm, at the depth of the camera's target)");
   cmd->add_flag("--cpu", o->cpu, "Render with the CPU reference instead of the GPU");

@@ -27,8 +27,10 @@ namespace {
 
 py::array_t<std::uint8_t> render(const GridHandle& gridHandle, const py::object& poseArgumentValue, const py::object& organsArgument,
                                  const std::string& cameraText, const std::vector<std::string>& cutTexts, const std::pair<int, int>& size,
-                                 const std::string& hide, bool cpu) {
+                                 const std::string& hide, const std::string& shadingName, bool cpu) {
   const LabelGrid& grid = gridHandle->grid;
+  RaycastShading shading;
+  shading.normals = parseSurfaceNormals(shadingName, "shading");
   int width = 0, height = 0;
   parseImageSize(std::to_string(size.first) + "x" + std::to_string(size.second), width, height);
   CuttingPlanes cuts;
@@ -63,12 +65,12 @@ py::array_t<std::uint8_t> render(const GridHandle& gridHandle, const py::object&
       try {
         gpu::Context context;
         gpu::RaycastKernel kernel(context, grid, mesh);
-        return kernel.render(frame, view, palette);
+        return kernel.render(frame, view, palette, shading);
       } catch (const RuntimeFailure& e) {
         warnings.push_back(std::string(e.what()) + "; using the CPU");
       }
     }
-    return raycastReference(grid, mesh, frame, view, palette);
+    return raycastReference(grid, mesh, frame, view, palette, shading);
   });
   for (const std::string& w : warnings) PyErr_WarnEx(PyExc_RuntimeWarning, w.c_str(), 1);
   py::array_t<std::uint8_t> rgb({py::ssize_t(image.height), py::ssize_t(image.width), py::ssize_t(3)});
@@ -82,8 +84,8 @@ py::array_t<std::uint8_t> render(const GridHandle& gridHandle, const py::object&
 void bindRender(py::module_& m) {
   m.def("render", &render, py::arg("grid"), py::kw_only(), py::arg("pose") = py::none(), py::arg("organs") = py::none(),
         py::arg("camera") = "", py::arg("cuts") = std::vector<std::string>{}, py::arg("size") = std::pair<int, int>(640, 480),
-        py::arg("hide") = "", py::arg("cpu") = false, R"doc(
-Ray-casts a label grid, voxel faces visible, as `voxmorph render`, and returns the image
+        py::arg("hide") = "", py::arg("shading") = surfaceNormalsName(RaycastShading{}.normals), py::arg("cpu") = false, R"doc(
+Ray-casts a label grid as `voxmorph render`, and returns the image
 as a (height, width, 3) uint8 RGB array (PIL.Image.fromarray takes it).
 
 pose: a pose (dict or path): the grid is shown posed through its transfer mesh (the
@@ -95,6 +97,8 @@ camera: "azimuth=30,elevation=10,distance=2.5,fov=35" (degrees; distance in scen
 cuts: cutting planes as the CLI's --cut takes them: "x>120mm", "z<400", "plane=nx,ny,nz,d".
 size: (width, height) in pixels.
 hide: labels to hide, "5,7,10-20", or organ-name substrings with organs ("skin,adipose").
+shading: "smooth" (normals from the smoothed occupancy of the visible labels; cut faces
+    flat) or "faces" (each voxel face's own normal, voxel faces visible).
 cpu: render with the CPU reference instead of the GPU (the GPU falls back to the CPU with
     a RuntimeWarning when none is usable).)doc");
 }

@@ -147,6 +147,7 @@ def render(
     cuts: Sequence[str] = (),
     size: tuple[int, int] = (640, 480),
     hide: str = "",
+    shading: Literal["smooth", "faces"] = "smooth",
     cpu: bool = False,
 ) -> npt.NDArray[np.uint8]:
     """Ray-casts the grid (posed through its transfer mesh with a pose): a (height, width, 3) uint8 RGB array."""

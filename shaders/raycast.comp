@@ -147,17 +147,26 @@ uint slabWord(uint slab, uint word) {
   }
 }
 
-// Label of the source voxel the barycentric map sends the point to.
-uint fetchLabel(int tet, vec4 lambda) {
-  const vec4 a = rest[3 * tet + 0], b = rest[3 * tet + 1], c = rest[3 * tet + 2];
-  const vec3 s = vec3(a.w, b.w, c.w) + lambda.y * a.xyz + lambda.z * b.xyz + lambda.w * c.xyz;
-  const ivec3 v = ivec3(floor(s + 0.5)) + ivec3(P.sourceShift[0], P.sourceShift[1], P.sourceShift[2]);
+// Label of source voxel v; 0 outside the grid.
+uint labelAt(ivec3 v) {
   if (any(lessThan(v, ivec3(0))) || any(greaterThanEqual(v, ivec3(P.sourceDims[0], P.sourceDims[1], P.sourceDims[2])))) return 0u;
   const uint slab = uint(v.z) / P.slabSlices;
   const uint local = uint(v.x) + uint(P.sourceDims[0]) * uint(v.y) + P.sliceVoxels * (uint(v.z) - slab * P.slabSlices);
   const uint word = slabWord(slab, local >> 1);
   return (local & 1u) == 0u ? (word & 0xFFFFu) : (word >> 16);
 }
+
+ivec3 sourceShift() { return ivec3(P.sourceShift[0], P.sourceShift[1], P.sourceShift[2]); }
+
+// Rest coordinate (shifted source index space) of the point with barycentric
+// coordinates lambda in `tet`.
+vec3 restPoint(int tet, vec3 lambda) {
+  const vec4 a = rest[3 * tet + 0], b = rest[3 * tet + 1], c = rest[3 * tet + 2];
+  return vec3(a.w, b.w, c.w) + lambda.x * a.xyz + lambda.y * b.xyz + lambda.z * c.xyz;
+}
+
+// Label of the source voxel the barycentric map sends the point to.
+uint fetchLabel(int tet, vec4 lambda) { return labelAt(ivec3(floor(restPoint(tet, lambda.yzw) + 0.5)) + sourceShift()); }
 
 bool visible(uint label) { return label != 0u && label < P.labelCount && (palette[label] >> 24) != 0u; }
 
@@ -229,11 +238,14 @@ struct Hit {
   uint label;
   int axis;
   int step;
-  float t;  // ray parameter of the visible cell's entry (depth along the view axis, mm)
+  float t;     // ray parameter of the visible cell's entry (depth along the view axis, mm)
+  vec3 cell;   // the visible cell
+  vec3 point;  // where the ray enters it
+  int tet;     // the tet containing its centre
 };
 
 Hit trace(vec3 e, vec3 d, uint pixel) {
-  Hit res = Hit(false, 0u, 0, 0, 0.0);
+  Hit res = Hit(false, 0u, 0, 0, 0.0, vec3(0.0), vec3(0.0), -1);
   // 1. Clip to the cells of G' and to the kept side of the cutting planes.
   float tLo = 0.0, tHi = kInf;
   const vec3 lo = vec3Of(P.cellsLo), hi = vec3Of(P.cellsHi);
@@ -352,6 +364,9 @@ Hit trace(vec3 e, vec3 d, uint pixel) {
             res.axis = dda.axis;
             res.step = int(dda.step[dda.axis]);
             res.t = dda.tEnter;
+            res.cell = c;
+            res.point = e + dda.tEnter * d;
+            res.tet = tet;
             return res;
           }
         } else if (rayInside) {
@@ -389,10 +404,87 @@ Hit trace(vec3 e, vec3 d, uint pixel) {
   return res;
 }
 
+// ------------------------------------------------------------------ normals
+// geometry/render/surface_normals.h: the equations and the choices at
+// cutting planes and flat occupancy.
+
+// Occupancy (1 where the label is visible) of the voxels (x, y), (x + 1, y),
+// (x, y + 1), (x + 1, y + 1) of slice z, v = (x, y, z): one slab lookup for
+// the four.
+vec4 quadOccupancy(ivec3 v) {
+  const ivec3 dims = ivec3(P.sourceDims[0], P.sourceDims[1], P.sourceDims[2]);
+  vec4 o = vec4(0.0);
+  if (v.z < 0 || v.z >= dims.z) return o;
+  const uint slab = uint(v.z) / P.slabSlices;
+  const uint sliceBase = P.sliceVoxels * (uint(v.z) - slab * P.slabSlices);
+  for (int c = 0; c < 4; ++c) {
+    const ivec2 xy = v.xy + ivec2(c & 1, c >> 1);
+    if (any(lessThan(xy, ivec2(0))) || any(greaterThanEqual(xy, dims.xy))) continue;
+    const uint local = sliceBase + uint(xy.x) + uint(dims.x) * uint(xy.y);
+    const uint word = slabWord(slab, local >> 1);
+    o[c] = visible((local & 1u) == 0u ? (word & 0xFFFFu) : (word >> 16)) ? 1.0 : 0.0;
+  }
+  return o;
+}
+
+// S(s): the occupancy of the visible labels interpolated trilinearly
+// between voxel centres.
+float smoothedOccupancy(vec3 s) {
+  const vec3 base = floor(s);
+  const vec3 f = s - base;
+  const ivec3 v0 = ivec3(base) + sourceShift();
+  const vec4 xy = vec4((1.0 - f.x) * (1.0 - f.y), f.x * (1.0 - f.y), (1.0 - f.x) * f.y, f.x * f.y);
+  return (1.0 - f.z) * dot(quadOccupancy(v0), xy) + f.z * dot(quadOccupancy(v0 + ivec3(0, 0, 1)), xy);
+}
+
+// Gradient of the smoothed occupancy at rest point s: 3x3x3 samples of S
+// P.differenceSteps apart, Sobel weights.
+vec3 occupancyGradient(vec3 s) {
+  const vec3 h = vec3Of(P.differenceSteps);
+  vec3 g = vec3(0.0);
+  for (int k = -1; k <= 1; ++k)
+    for (int j = -1; j <= 1; ++j)
+      for (int i = -1; i <= 1; ++i) {
+        if (i == 0 && j == 0 && k == 0) continue;
+        const vec3 o = vec3(i, j, k);
+        const vec3 w = 2.0 - abs(o);
+        g += smoothedOccupancy(s + o * h) * vec3(o.x * w.y * w.z, w.x * o.y * w.z, w.x * w.y * o.z);
+      }
+  return g / (32.0 * h);
+}
+
+// Unit normal (grid-frame axes, facing the camera) of the surface h shows.
+vec3 surfaceNormal(Hit h) {
+  vec3 face = vec3(0.0);
+  face[h.axis] = -float(h.step);
+  if (P.smoothNormals == 0u || h.tet < 0) return face;
+  const vec3 spacing = vec3Of(P.cellSize);
+  // The ray came through a removed cell: the cut face is flat.
+  vec3 before = h.cell;
+  before[h.axis] -= float(h.step);
+  for (uint k = 0u; k < VOX_RAYCAST_MAX_CUTS; ++k) {
+    if (k >= P.cutCount) break;
+    const vec3 n = vec3(P.cuts[4 * k], P.cuts[4 * k + 1], P.cuts[4 * k + 2]);
+    if (dot(n, before) > P.cuts[4 * k + 3]) return normalize(n / spacing);
+  }
+  const vec4 f1 = factors[4 * h.tet + 0], f2 = factors[4 * h.tet + 1], f3 = factors[4 * h.tet + 2];
+  const vec3 q = h.point - factors[4 * h.tet + 3].xyz;
+  const vec3 lambda = vec3(dot(f1.xyz, q) + f1.w, dot(f2.xyz, q) + f2.w, dot(f3.xyz, q) + f3.w);
+  const vec3 gs = occupancyGradient(restPoint(h.tet, lambda));
+  if (!(length(gs) >= VOX_RAYCAST_FLAT_OCCUPANCY_GRADIENT)) return face;
+  // grad_p = L^T R^T grad_s: R's columns are the rest edges, L's rows the planes.
+  const vec3 rg = vec3(dot(rest[3 * h.tet + 0].xyz, gs), dot(rest[3 * h.tet + 1].xyz, gs), dot(rest[3 * h.tet + 2].xyz, gs));
+  const vec3 gx = (rg.x * f1.xyz + rg.y * f2.xyz + rg.z * f3.xyz) / spacing;
+  if (!(length(gx) > 0.0)) return face;
+  vec3 n = -normalize(gx);
+  if (dot(n, (h.point - vec3Of(P.eye)) * spacing) > 0.0) n = -n;
+  return n;
+}
+
 uint shade(Hit h) {
   if (!h.hit) return P.background;
   const float depth = P.depthFar > P.depthNear ? (h.t - P.depthNear) / (P.depthFar - P.depthNear) : 0.0;
-  const float s = faceShade(h.axis, h.step, vec3Of(P.headlight), vec3Of(P.light), P.ambient, depth);
+  const float s = surfaceShade(surfaceNormal(h), vec3Of(P.headlight), vec3Of(P.light), P.ambient, depth);
   const uint albedo = palette[h.label];
   const vec3 c = vec3(float(albedo & 0xFFu), float((albedo >> 8) & 0xFFu), float((albedo >> 16) & 0xFFu));
   const uvec3 q = uvec3(min(vec3(255.0), floor(c * s + 0.5)));

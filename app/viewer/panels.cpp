@@ -110,6 +110,8 @@ void Panels::viewPanel(Viewer& viewer) {
   if (ImGui::Button("Reset (R)")) viewer.resetCamera();
   ImGui::SetNextItemWidth(120);
   ImGui::SliderFloat("drag resolution", &interactiveScale_, 0.25f, 1.0f, "%.2f");
+  if (ImGui::Checkbox("smooth shading", &smoothShading_)) viewer.redraw();
+  if (ImGui::IsItemHovered()) ImGui::SetTooltip("off: each voxel face lit with its own normal");
   CutControls& cuts = viewer.cuts();
   bool cutChanged = false;
   const char* names[3] = {"x cut", "y cut", "z cut"};

@@ -1,12 +1,13 @@
 #pragma once
 // The viewer's Dear ImGui panels: the column on the left (pose: picking,
 // selections, rotation steps, ARAP, pose files; joints (joints_panel.h):
-// the skeleton's joint angles; view: overlays, camera,
+// the skeleton's joint angles; view: overlays, camera, shading,
 // cutting planes; live figures; organs: visibility, masses, changes) and
 // the export and status box at the bottom right. They act through the
 // Viewer's public members.
 
 #include "app/viewer/joints_panel.h"
+#include "geometry/render/raycast_scene.h"
 
 namespace vox::app {
 
@@ -24,6 +25,9 @@ public:
   }
   // Share of the view's resolution rendered while dragging.
   float interactiveScale() const { return interactiveScale_; }
+  // The view's normals: smooth, or each voxel face's own (for inspecting
+  // the voxels).
+  SurfaceNormals surfaceNormals() const { return smoothShading_ ? SurfaceNormals::Smooth : SurfaceNormals::Faces; }
 
 private:
   void posePanel(Viewer& viewer);
@@ -42,6 +46,7 @@ private:
   float rotateStep_ = 15.0f;
   int groupChoice_ = 2;
   float interactiveScale_ = 0.5f;
+  bool smoothShading_ = RaycastShading{}.normals == SurfaceNormals::Smooth;
 };
 
 }  // namespace vox::app

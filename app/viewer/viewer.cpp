@@ -122,7 +122,9 @@ void Viewer::renderView(bool interactive) {
   const CuttingPlanes& cuts = cuts_.planes(editor_->state().cuts);
   const RaycastFrame frame = prepareRaycastFrame(*mesh_, editor_->transferMeshPositions());
   const RaycastView view = makeRaycastView(frame, orbit_.camera(w, h), cuts);
-  kernel_->renderTo(view_, frame, view, palette_);
+  RaycastShading shading;
+  shading.normals = panels_->surfaceNormals();
+  kernel_->renderTo(view_, frame, view, palette_, shading);
   frame_.raycastMs = msSince(t0);
   frame_.renderWidth = w;
   frame_.renderHeight = h;

@@ -1,6 +1,7 @@
 #include "geometry/render/raycast_reference.h"
 
 #include "geometry/parallel.h"
+#include "geometry/render/surface_normals.h"
 #include "shaders/shared/interface.h"
 
 #include <Eigen/Geometry>
@@ -218,6 +219,7 @@ struct Tracer {
             res.axis = dda.axis;
             res.step = dda.step[dda.axis];
             res.t = dda.tEnter;
+            res.point = e + dda.tEnter * d;
             res.tet = tet;
             ++stats.hits;
             return res;
@@ -257,12 +259,13 @@ RayResult traceRayReference(const LabelGrid& source, const RaycastMesh& mesh, co
   return tracer.trace(origin, direction);
 }
 
-Rgb shadeRay(const RayResult& r, const RaycastView& view, const Palette& palette, const RaycastShading& shading) {
+Rgb shadeRay(const RayResult& r, const Eigen::Vector3d& normal, const RaycastView& view, const Palette& palette,
+             const RaycastShading& shading) {
   if (!r.hit) return shading.background;
-  // shaders/shared/shading.glsl's faceShade: the crossed face's normal faces
-  // the camera (-step along the axis), under the headlight and the fill light.
-  const double head = std::max(0.0, -double(r.step) * view.headlight[r.axis]);
-  const double side = std::max(0.0, -double(r.step) * view.light[r.axis]);
+  // shaders/shared/shading.glsl's surfaceShade: the normal under the
+  // headlight and the fill light.
+  const double head = std::max(0.0, normal.dot(view.headlight));
+  const double side = std::max(0.0, normal.dot(view.light));
   const double light =
       std::min(1.0, shading.ambient + (1.0 - shading.ambient) * (VOX_SHADE_HEADLIGHT * head + VOX_SHADE_FILL * side));
   const double depth = view.depthFar > view.depthNear ? (r.t - view.depthNear) / (view.depthFar - view.depthNear) : 0.0;
@@ -282,8 +285,12 @@ RgbImage raycastReference(const LabelGrid& source, const RaycastMesh& mesh, cons
   std::vector<RaycastStats> perRow(static_cast<std::size_t>(h));
   parallelFor(h, 0, [&](std::int64_t y) {
     const Tracer tracer{source, mesh, frame, factors, view, palette, limits, perRow[std::size_t(y)]};
-    for (int x = 0; x < w; ++x)
-      image.at(x, int(y)) = shadeRay(tracer.trace(view.eye, view.direction(x, int(y))), view, palette, shading);
+    for (int x = 0; x < w; ++x) {
+      const RayResult r = tracer.trace(view.eye, view.direction(x, int(y)));
+      const Eigen::Vector3d normal = r.hit ? surfaceNormal(r, source, mesh, frame, factors, view, palette, shading.normals)
+                                           : Eigen::Vector3d::Zero();
+      image.at(x, int(y)) = shadeRay(r, normal, view, palette, shading);
+    }
   });
   if (stats) {
     for (const RaycastStats& s : perRow) {

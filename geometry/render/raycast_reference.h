@@ -19,8 +19,9 @@
 //     with the most negative barycentric coordinate (eq. 5.1-5.2) among those
 //     with a neighbour; map it to the source grid by barycentric
 //     interpolation of the rest coordinates, and fetch the label. The first
-//     visible label is shaded with the normal of the cell face the ray
-//     crossed.
+//     visible label is shaded with the normal RaycastShading::normals picks
+//     (geometry/render/surface_normals.h): the smoothed occupancy's, or the
+//     crossed cell face's.
 //  4. When a centre cannot be located, the walk left the mesh. If the ray's
 //     own point in that cell (the middle of its stretch in the cell) is inside
 //     the mesh, the centre is outside (the ray grazes the surface) or across a
@@ -69,6 +70,7 @@ struct RayResult {
   int axis = 0;             // axis of the crossed cell face
   int step = 0;             // +-1: the ray's direction along that axis
   double t = 0.0;           // ray parameter of the cell's entry: depth along the view axis, mm
+  Eigen::Vector3d point{0, 0, 0};  // render frame: where the ray enters the cell (ray parameter t)
   std::int32_t tet = -1;    // tet containing the cell centre
 };
 
@@ -77,8 +79,11 @@ RayResult traceRayReference(const LabelGrid& source, const RaycastMesh& mesh, co
                             const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, const RaycastLimits& limits,
                             RaycastStats* stats = nullptr);
 
-// Shades a ray result: label colour times faceShade (shaders/shared/shading.glsl).
-Rgb shadeRay(const RayResult& r, const RaycastView& view, const Palette& palette, const RaycastShading& shading);
+// Shades a ray result lit with `normal` (unit, grid-frame axes, facing the
+// camera; surfaceNormal in surface_normals.h): label colour times
+// surfaceShade (shaders/shared/shading.glsl).
+Rgb shadeRay(const RayResult& r, const Eigen::Vector3d& normal, const RaycastView& view, const Palette& palette,
+             const RaycastShading& shading);
 
 // Per label (indexed by label), the pixels of every stride-th row and column
 // whose ray shows it: what a legend lists as visible.

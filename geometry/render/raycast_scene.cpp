@@ -122,4 +122,12 @@ RaycastView makeRaycastView(const RaycastFrame& frame, const Camera& camera, con
   return v;
 }
 
+SurfaceNormals parseSurfaceNormals(const std::string& text, const std::string& what) {
+  if (text == "smooth") return SurfaceNormals::Smooth;
+  if (text == "faces") return SurfaceNormals::Faces;
+  throw InputError(what, "\"" + text + "\" is neither smooth nor faces");
+}
+
+const char* surfaceNormalsName(SurfaceNormals normals) { return normals == SurfaceNormals::Smooth ? "smooth" : "faces"; }
+
 }  // namespace vox

@@ -23,6 +23,7 @@
 
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace vox {
@@ -93,13 +94,29 @@ struct RaycastView {
 };
 RaycastView makeRaycastView(const RaycastFrame& frame, const Camera& camera, const CuttingPlanes& cuts);
 
-// How a visible voxel is shaded: the crossed voxel face under a headlight
+// The normal a visible voxel is lit with (geometry/render/surface_normals.h
+// gives the equations, shaders/shared/shading.glsl the lighting).
+//  Smooth: the surface of the visible labels: minus the gradient of the
+//    smoothed occupancy of the rest grid (1 where a voxel's label is visible,
+//    0 elsewhere), at the point where the ray enters the visible cell,
+//    carried to the posed frame by the containing tet's linear map; cut
+//    faces flat; turned towards the camera.
+//  Faces: the crossed voxel face's own normal, voxel faces visible.
+enum class SurfaceNormals { Smooth, Faces };
+inline constexpr double kFlatOccupancyGradient = 1e-3;  // per source voxel
+
+// How a visible voxel is shaded: its normal (`normals`) under a headlight
 // and a fill light plus ambient (shaders/shared/shading.glsl), times the
-// label colour; misses get the background.
+// label colour and a depth cue; misses get the background.
 struct RaycastShading {
   Rgb background{22, 24, 29};
   double ambient = 0.35;
+  SurfaceNormals normals = SurfaceNormals::Smooth;
 };
+
+// "smooth" or "faces"; anything else is an InputError naming `what`.
+SurfaceNormals parseSurfaceNormals(const std::string& text, const std::string& what = "shading");
+const char* surfaceNormalsName(SurfaceNormals normals);
 
 // Bounds that keep every ray finite on any mesh (thesis: "a given number of
 // iterations").

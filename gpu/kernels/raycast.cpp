@@ -1,6 +1,7 @@
 #include "gpu/kernels/raycast.h"
 
 #include "geometry/error.h"
+#include "geometry/render/surface_normals.h"
 #include "shaders/shared/interface.h"
 
 #include <Eigen/LU>
@@ -26,6 +27,7 @@ static_assert(VOX_RAYCAST_FACE_HIT_TOLERANCE == kFaceHitTolerance);
 static_assert(VOX_RAYCAST_INSIDE_TOLERANCE == kInsideTolerance);
 static_assert(VOX_RAYCAST_DEGENERATE_TET_RATIO == kDegenerateTetRatio);
 static_assert(VOX_RAYCAST_MAX_ENTRY_MARGIN_CELLS == kMaxEntryMarginCells);
+static_assert(VOX_RAYCAST_FLAT_OCCUPANCY_GRADIENT == kFlatOccupancyGradient);
 
 PipelineDesc raycastPipeline() {
   PipelineDesc d;
@@ -230,6 +232,7 @@ void RaycastKernel::castRays(const RaycastFrame& frame, const RaycastView& view,
   auto* nodes = static_cast<RaycastNode*>(nodesStaging_.mapped());
   for (std::size_t n = 0; n < nodeCount_; ++n) storeNode(frame.bvh[n], nodes[n]);
 
+  const Eigen::Vector3d steps = occupancyDifferenceSteps(source_);
   RaycastParams p{};
   for (int a = 0; a < 3; ++a) {
     p.eye[a] = float(view.eye[a]);
@@ -240,6 +243,8 @@ void RaycastKernel::castRays(const RaycastFrame& frame, const RaycastView& view,
     p.cellsHi[a] = float(frame.cellsHi[a]);
     p.light[a] = float(view.light[a]);
     p.headlight[a] = float(view.headlight[a]);
+    p.cellSize[a] = float(frame.output.spacing[a]);
+    p.differenceSteps[a] = float(steps[a]);
     p.sourceShift[a] = std::int32_t(sourceShift_[a]);
     p.sourceDims[a] = std::int32_t(source_.dims[a]);
   }
@@ -255,6 +260,7 @@ void RaycastKernel::castRays(const RaycastFrame& frame, const RaycastView& view,
   p.tanHalfFovY = float(view.camera.tanHalfFovY);
   p.aspect = float(view.camera.aspect);
   p.ambient = float(shading.ambient);
+  p.smoothNormals = shading.normals == SurfaceNormals::Smooth ? 1u : 0u;
   p.depthNear = float(view.depthNear);
   p.depthFar = float(view.depthFar);
   p.width = std::uint32_t(w);

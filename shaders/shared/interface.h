@@ -172,11 +172,12 @@ static_assert(sizeof(RasterReducePush) == 32);
 #define VOX_RAYCAST_BVH_STACK 64    // 2 * kBvhMaxDepth (geometry/render/boundary_bvh.h)
 // Tolerances shared with the CPU reference (gpu/kernels/raycast.cpp checks
 // that they equal geometry/render's kFaceHitTolerance, kInsideTolerance,
-// kDegenerateTetRatio and kMaxEntryMarginCells).
+// kDegenerateTetRatio, kMaxEntryMarginCells and kFlatOccupancyGradient).
 #define VOX_RAYCAST_FACE_HIT_TOLERANCE 1e-4
 #define VOX_RAYCAST_INSIDE_TOLERANCE 1e-5
 #define VOX_RAYCAST_DEGENERATE_TET_RATIO 1e-7
 #define VOX_RAYCAST_MAX_ENTRY_MARGIN_CELLS 16.0
+#define VOX_RAYCAST_FLAT_OCCUPANCY_GRADIENT 1e-3  // per source voxel: smooth normals fall back to the face's below
 
 // raycast_prepare.comp: per-tet factors of eq. 5.1-5.2 from the deformed positions.
 #define VOX_RAYCAST_PREPARE_BINDING_TETS 0       // uvec4[tetCount]: vertex indices
@@ -278,6 +279,9 @@ struct RaycastParams {
   uint maxCells;
   float depthNear;     // depth along the view axis (mm, = ray t) of the scene box's
   float depthFar;      // nearest and farthest corners: the depth cue's range (none if far <= near)
+  float cellSize[4];   // spacing of the deformed grid (mm): render-frame gradients to grid-frame axes
+  float differenceSteps[4];  // occupancyDifferenceSteps of the source grid (voxels)
+  uint smoothNormals;  // 1: SurfaceNormals::Smooth, 0: Faces (geometry/render/surface_normals.h)
 };
 
 #ifdef __cplusplus
@@ -285,7 +289,7 @@ static_assert(sizeof(RaycastPreparePush) == 16);
 static_assert(sizeof(RaycastNode) == 32);
 static_assert(sizeof(RaycastEntriesPush) == 16);
 static_assert(sizeof(RaycastPush) == 16);
-static_assert(sizeof(RaycastParams) == 332);
+static_assert(sizeof(RaycastParams) == 368);
 #endif
 
 #ifdef __cplusplus

@@ -18,6 +18,9 @@
 // the grid downsampled by kTmFactor), whose air layer around the body makes
 // every ray longer.
 //
+// VOXMORPH_BENCH_SHADING=faces lights each voxel face with its own normal
+// instead of the smooth normals (RaycastShading's default).
+//
 //   build/release/bench/raycast_bench [--benchmark_filter=...]
 //   VOXMORPH_BENCH_SIZE=1920x1080 build/release/bench/raycast_bench
 
@@ -132,10 +135,17 @@ void imageSize(int& w, int& h) {
   if (const char* size = std::getenv("VOXMORPH_BENCH_SIZE")) parseImageSize(size, w, h);
 }
 
+RaycastShading benchShading() {
+  RaycastShading shading;
+  if (const char* normals = std::getenv("VOXMORPH_BENCH_SHADING")) shading.normals = parseSurfaceNormals(normals, "VOXMORPH_BENCH_SHADING");
+  return shading;
+}
+
 void BM_RaycastFrame(benchmark::State& state, std::string name, test::Deformation pose, std::string cut) {
   Scene& s = scene(name);
   int w = 0, h = 0;
   imageSize(w, h);
+  const RaycastShading shading = benchShading();
   const std::vector<Eigen::Vector3d> posed = test::deform(s.rest.positions, s.restGrid, pose);
   CuttingPlanes cuts;
   if (!cut.empty()) cuts.add(cut);
@@ -143,14 +153,14 @@ void BM_RaycastFrame(benchmark::State& state, std::string name, test::Deformatio
   const RaycastFrame restFrame = prepareRaycastFrame(s.mesh, s.rest.positions);
   const Camera camera =
       parseCamera("azimuth=20,elevation=10", restFrame.toGrid(restFrame.cellsLo), restFrame.toGrid(restFrame.cellsHi), w, h);
-  s.kernel->render(restFrame, makeRaycastView(restFrame, camera, cuts), s.palette);  // pipelines compiled
+  s.kernel->render(restFrame, makeRaycastView(restFrame, camera, cuts), s.palette, shading);  // pipelines compiled
   double cpu = 0.0, gpu = 0.0, frameCpu = 0.0;
   std::size_t visible = 0;
   for (auto _ : state) {
     const double c0 = cpuMs();
     const RaycastFrame frame = prepareRaycastFrame(s.mesh, posed);
     frameCpu += cpuMs() - c0;
-    const RgbImage image = s.kernel->render(frame, makeRaycastView(frame, camera, cuts), s.palette);
+    const RgbImage image = s.kernel->render(frame, makeRaycastView(frame, camera, cuts), s.palette, shading);
     cpu += cpuMs() - c0;
     const gpu::RaycastFrameTimes& t = s.kernel->lastTimes();
     gpu += t.prepareGpuMs + t.entriesGpuMs + t.raycastGpuMs;

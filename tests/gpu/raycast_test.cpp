@@ -57,7 +57,8 @@ Frame makeFrame(const RaycastMesh& mesh, const std::vector<Eigen::Vector3d>& pos
 }
 
 TEST(RaycastGpu, SyntheticPosesCutsAndHiddenLabelsEqualTheCpuReference) {
-  // Through a coarse voxel TM and through the pipeline's transfer mesh.
+  // Through a coarse voxel TM and through the pipeline's transfer mesh, with
+  // smooth and face normals.
   const LabelGrid grid = stickFigure();
   const Palette palette(grid.maxLabel());
   for (const TetMesh& rest : {coarseVoxelTransferMesh(grid, 3),
@@ -66,17 +67,21 @@ TEST(RaycastGpu, SyntheticPosesCutsAndHiddenLabelsEqualTheCpuReference) {
     gpu::RaycastKernel kernel(context(), grid, mesh);
     for (test::Deformation d : {test::Deformation::Rest, test::Deformation::Twist, test::Deformation::Bend})
       for (const char* cut : {"", "y<14", "plane=1,0.2,-0.5,-50"})
-        for (const char* hide : {"", "1"}) {
-          Palette p = palette;
-          if (*hide) p.hide(hide);
-          const Frame f = makeFrame(mesh, test::deform(rest.positions, grid.geometry(), d), "azimuth=-30,elevation=15", cut, 160, 120);
-          const RgbImage gpuImage = kernel.render(f.frame, f.view, p);
-          const RgbImage cpuImage = raycastReference(grid, mesh, f.frame, f.view, p);
-          const ImageDifference diff = compareImages(gpuImage, cpuImage, kThreshold);
-          EXPECT_LE(diff.differingFraction(), kFraction) << rest.tetCount() << " tets, " << test::deformationName(d) << " cut '"
-                                                         << cut << "' hide '" << hide << "': " << diff.differing << " pixels differ";
-          EXPECT_GT(countNotBackground(cpuImage, RaycastShading{}.background), 300u);
-        }
+        for (const char* hide : {"", "1"})
+          for (SurfaceNormals normals : {SurfaceNormals::Smooth, SurfaceNormals::Faces}) {
+            Palette p = palette;
+            if (*hide) p.hide(hide);
+            RaycastShading shading;
+            shading.normals = normals;
+            const Frame f = makeFrame(mesh, test::deform(rest.positions, grid.geometry(), d), "azimuth=-30,elevation=15", cut, 160, 120);
+            const RgbImage gpuImage = kernel.render(f.frame, f.view, p, shading);
+            const RgbImage cpuImage = raycastReference(grid, mesh, f.frame, f.view, p, shading);
+            const ImageDifference diff = compareImages(gpuImage, cpuImage, kThreshold);
+            EXPECT_LE(diff.differingFraction(), kFraction) << rest.tetCount() << " tets, " << test::deformationName(d) << " cut '"
+                                                           << cut << "' hide '" << hide << "' " << surfaceNormalsName(normals) << ": "
+                                                           << diff.differing << " pixels differ";
+            EXPECT_GT(countNotBackground(cpuImage, RaycastShading{}.background), 300u);
+          }
   }
 }
 

@@ -187,6 +187,10 @@ def test_render_gives_an_rgb_array(figure, tmp_path):
     Image.fromarray(image).save(tmp_path / "figure.png")
     posed = voxmorph.render(grid, pose=figure["pose"], organs=figure["organs"], size=(64, 48), cuts=["x>0mm"], cpu=True)
     assert posed.shape == (48, 64, 3)
+    faces = voxmorph.render(grid, organs=figure["organs"], camera="azimuth=20,elevation=10", size=(64, 48), shading="faces", cpu=True)
+    assert faces.shape == image.shape and (faces != image).any()
+    with pytest.raises(ValueError):
+        voxmorph.render(grid, size=(64, 48), shading="flat", cpu=True)
 
 
 # --- the GIL, help ----------------------------------------------------------------------------

@@ -54,11 +54,11 @@ struct Rendered {
 };
 
 Rendered renderReference(const LabelGrid& grid, const RaycastMesh& mesh, const std::vector<Eigen::Vector3d>& positions,
-                         const Camera& camera, const CuttingPlanes& cuts, const Palette& palette) {
+                         const Camera& camera, const CuttingPlanes& cuts, const Palette& palette, const RaycastShading& shading = {}) {
   Rendered r;
   r.frame = prepareRaycastFrame(mesh, positions);
   r.view = makeRaycastView(r.frame, camera, cuts);
-  r.image = raycastReference(grid, mesh, r.frame, r.view, palette, {}, {}, &r.stats);
+  r.image = raycastReference(grid, mesh, r.frame, r.view, palette, shading, {}, &r.stats);
   return r;
 }
 
@@ -100,7 +100,9 @@ private:
 
 // Renders `grid` through `rest` deformed by `d`, and the grid G' that the
 // rasterizer produces for that pose through an identity box TM, with the
-// same camera and cuts. Returns the number of differing pixels, after checking that each is a
+// same camera and cuts, lit with face normals (smooth normals of G' and of
+// the rest grid mapped through the TM differ by the resampling; the question
+// here is which voxel each ray shows). Returns the number of differing pixels, after checking that each is a
 // voxel the TM rendering missed, never one it invented: G' shows a voxel
 // there, and the TM rendering shows nothing or a voxel of G' farther along
 // the ray. Prints how many of the missed voxels the ray crosses only outside
@@ -115,14 +117,16 @@ std::size_t poseVersusRasterizedGrid(const LabelGrid& grid, const TetMesh& rest,
   const std::vector<Eigen::Vector3d> posed = test::deform(rest.positions, grid.geometry(), d);
   RaycastFrame frame = prepareRaycastFrame(mesh, posed);
   const Camera camera = sceneCamera(frame, cameraSpec, w, h);
-  const Rendered tm = renderReference(grid, mesh, posed, camera, cuts, palette);
+  RaycastShading faces;
+  faces.normals = SurfaceNormals::Faces;
+  const Rendered tm = renderReference(grid, mesh, posed, camera, cuts, palette, faces);
 
   const LabelGrid rasterized = rasterizeDeformedGrid(grid, rest, posed);
   EXPECT_EQ(rasterized.geometry().dims, tm.frame.output.dims);
   EXPECT_TRUE(rasterized.geometry().origin.isApprox(tm.frame.output.origin));
   const TetMesh box = boxTransferMesh(rasterized);
   const RaycastMesh boxMesh = buildRaycastMesh(box, rasterized.geometry());
-  const Rendered identity = renderReference(rasterized, boxMesh, box.positions, camera, cuts, palette);
+  const Rendered identity = renderReference(rasterized, boxMesh, box.positions, camera, cuts, palette, faces);
 
   const ImageDifference diff = compareImages(tm.image, identity.image, 0);
   if (diff.differing == 0) return 0;
