@@ -283,8 +283,23 @@ PosedMesh poseArticulated(const DeformGridRequest& o, const Source& source, Defo
   report.rigidVertices = a.rigidVertices;
   report.uncoveredBoneVoxels = groups.uncoveredVoxels;
   report.bones = measureBoneRigidity(groups, out.rest, out.deformed);
-  if (r.invertedTets > 0)
-    refuseOrForce(o, report, "the pose inverts " + std::to_string(r.invertedTets) + " tets of the articulated transfer mesh");
+  if (r.invertedTets > 0) {
+    // Named by the joint nearest most of them (rest centroids).
+    std::vector<std::size_t> near(sk.joints.size(), 0);
+    for (const Tet& t : out.rest.tets) {
+      if (signedVolume(out.deformed, t) > 0.0) continue;
+      Eigen::Vector3d c = Eigen::Vector3d::Zero();
+      for (const std::int32_t v : t) c += 0.25 * out.rest.positions[std::size_t(v)];
+      std::size_t best = 0;
+      for (std::size_t j = 1; j < sk.joints.size(); ++j)
+        if ((sk.joints[j].centre - c).squaredNorm() < (sk.joints[best].centre - c).squaredNorm()) best = j;
+      if (!near.empty()) ++near[best];
+    }
+    const auto most = std::size_t(std::max_element(near.begin(), near.end()) - near.begin());
+    refuseOrForce(o, report,
+                  "the pose inverts " + std::to_string(r.invertedTets) + " tets of the articulated transfer mesh" +
+                      (near.empty() ? std::string() : " (" + std::to_string(near[most]) + " nearest " + sk.joints[most].kind().name + ")"));
+  }
   if (const std::optional<std::string> fault = boneChangeFault(report, o.maxBoneChangePercent)) refuseOrForce(o, report, *fault);
   StageTimer collisionTimer("collisions");
   report.collisions = collisionsOf(o, source, out.rest, out.deformed, sk.parts.parts, out.collisionMask);
