@@ -157,19 +157,15 @@ std::vector<ArticularBody> articularBodies(const LabelGrid& grid, const LabelGri
   return bodies;
 }
 
-namespace {
-
-Eigen::Isometry3d motionOf(std::span<const Eigen::Isometry3d> motions, Part part, double fraction) {
+Eigen::Isometry3d partMotionAt(std::span<const Eigen::Isometry3d> motions, Part part, double fraction) {
   const auto p = std::size_t(part);
   return p < motions.size() ? screwInterpolate(motions[p], fraction) : Eigen::Isometry3d::Identity();
 }
 
-}  // namespace
-
 void placeRigidVertices(const ArticulatedMesh& mesh, std::span<const Eigen::Isometry3d> motions, double fraction,
                         std::span<Eigen::Vector3d> positions) {
   std::array<Eigen::Isometry3d, skeleton::kPartCount + 1> m;
-  for (int p = 0; p <= skeleton::kPartCount; ++p) m[std::size_t(p)] = motionOf(motions, Part(p), fraction);
+  for (int p = 0; p <= skeleton::kPartCount; ++p) m[std::size_t(p)] = partMotionAt(motions, Part(p), fraction);
   for (std::size_t v = 0; v < mesh.role.size(); ++v)
     if (mesh.role[v] == VertexRole::Rigid) positions[v] = m[std::size_t(mesh.vertexPart[v])] * mesh.mesh.positions[v];
 }
@@ -177,7 +173,7 @@ void placeRigidVertices(const ArticulatedMesh& mesh, std::span<const Eigen::Isom
 void projectSlidingVertices(const ArticulatedMesh& mesh, std::span<const Eigen::Isometry3d> motions, double fraction,
                             std::span<Eigen::Vector3d> positions) {
   std::vector<Eigen::Isometry3d> m;
-  for (const ArticularBody& b : mesh.bodies) m.push_back(motionOf(motions, b.owner, fraction));
+  for (const ArticularBody& b : mesh.bodies) m.push_back(partMotionAt(motions, b.owner, fraction));
   for (std::size_t v = 0; v < mesh.role.size(); ++v) {
     if (mesh.role[v] != VertexRole::Sliding) continue;
     const auto b = std::size_t(mesh.vertexBody[v]);
@@ -270,7 +266,6 @@ constexpr double kDefaultHeadRadiusMm = 24.0;  // where a joint has no fitted he
 // The limb cuts (see the header): tets relabelled by label group for the
 // cut, their tags restored after it (the cut keeps the tets' order).
 CutReport cutLimbs(ArticulatedMesh& out, const skeleton::Skeleton& skeleton, double marginRadii) {
-  
   const std::vector<Part> part = tetParts(out, skeleton);
   const std::vector<std::int32_t> tags = out.mesh.labels;
   std::vector<std::int32_t>& group = out.mesh.labels;
@@ -280,25 +275,7 @@ CutReport cutLimbs(ArticulatedMesh& out, const skeleton::Skeleton& skeleton, dou
   // tissue) joins the group it shares the most faces with, so no cut
   // leaves tissue that nothing holds.
   const TetMesh& m = out.mesh;
-  std::vector<std::pair<std::array<std::int32_t, 3>, std::int32_t>> faces;
-  faces.reserve(4 * m.tetCount());
-  for (std::size_t t = 0; t < m.tetCount(); ++t)
-    for (int f = 0; f < 4; ++f) {
-      std::array<std::int32_t, 3> k{};
-      for (int i = 0, n = 0; i < 4; ++i)
-        if (i != f) k[std::size_t(n++)] = m.tets[t][std::size_t(i)];
-      std::sort(k.begin(), k.end());
-      faces.emplace_back(k, std::int32_t(t));
-    }
-  std::sort(faces.begin(), faces.end());
-  std::vector<std::pair<std::int32_t, std::int32_t>> adjacent;
-  for (std::size_t i = 0; i + 1 < faces.size(); ++i)
-    if (faces[i].first == faces[i + 1].first) adjacent.emplace_back(faces[i].second, faces[i + 1].second);
-  std::vector<std::vector<std::int32_t>> neighbours(m.tetCount());
-  for (const auto& [a, b] : adjacent) {
-    neighbours[std::size_t(a)].push_back(b);
-    neighbours[std::size_t(b)].push_back(a);
-  }
+  const std::vector<std::array<std::int32_t, 4>> neighbours = faceNeighbors(m, "articulated transfer mesh");
   for (bool changed = true; changed;) {
     changed = false;
     std::vector<std::int32_t> component(m.tetCount(), -1);
@@ -311,7 +288,7 @@ CutReport cutLimbs(ArticulatedMesh& out, const skeleton::Skeleton& skeleton, dou
         const std::int32_t t = stack.back();
         stack.pop_back();
         for (const std::int32_t n : neighbours[std::size_t(t)])
-          if (component[std::size_t(n)] < 0 && group[std::size_t(n)] == group[seed]) {
+          if (n >= 0 && component[std::size_t(n)] < 0 && group[std::size_t(n)] == group[seed]) {
             component[std::size_t(n)] = std::int32_t(seed);
             holdsBone = holdsBone || tags[std::size_t(n)] != kSoftTissueTag;
             members.push_back(n);
@@ -322,7 +299,7 @@ CutReport cutLimbs(ArticulatedMesh& out, const skeleton::Skeleton& skeleton, dou
       std::array<std::size_t, kLabelGroupCount + 1> shared{};
       for (const std::int32_t t : members)
         for (const std::int32_t n : neighbours[std::size_t(t)])
-          if (group[std::size_t(n)] != group[seed]) ++shared[std::size_t(group[std::size_t(n)])];
+          if (n >= 0 && group[std::size_t(n)] != group[seed]) ++shared[std::size_t(group[std::size_t(n)])];
       const auto best = std::int32_t(std::max_element(shared.begin(), shared.end()) - shared.begin());
       if (shared[std::size_t(best)] == 0) continue;
       for (const std::int32_t t : members) group[std::size_t(t)] = best;

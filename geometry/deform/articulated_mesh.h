@@ -143,6 +143,10 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
 // bones.h, and the skeleton's part grid), 0 elsewhere.
 LabelGrid bonePartGrid(const LabelGrid& grid, const OrganTable& organs, const skeleton::Skeleton& skeleton);
 
+// Part `part`'s motion (index = Part; identity where absent) at `fraction`
+// of it (screwInterpolate, solve/injective_solve.h).
+Eigen::Isometry3d partMotionAt(std::span<const Eigen::Isometry3d> motions, skeleton::Part part, double fraction);
+
 // The rigid vertices of `mesh` placed by their parts' motions (index =
 // Part; identity where a part has none), at `fraction` of each motion
 // (screwInterpolate, solve/injective_solve.h); other vertices keep their

@@ -10,6 +10,24 @@
 
 namespace vox {
 
+namespace {
+
+// The rigid motion that best takes from(k) to to(k) over the solve indices
+// `ids` (at least three).
+template <class From, class To>
+Eigen::Isometry3d rigidFit(std::span<const std::int32_t> ids, From&& from, To&& to) {
+  Eigen::Matrix3Xd a(3, Eigen::Index(ids.size())), b(3, Eigen::Index(ids.size()));
+  for (std::size_t k = 0; k < ids.size(); ++k) {
+    a.col(Eigen::Index(k)) = from(ids[k]);
+    b.col(Eigen::Index(k)) = to(ids[k]);
+  }
+  Eigen::Isometry3d fit;
+  fit.matrix() = Eigen::umeyama(a, b, false);
+  return fit;
+}
+
+}  // namespace
+
 ArticulatedPoser::ArticulatedPoser(const ArticulatedMesh& mesh, const ArticulatedPoseOptions& options)
     : mesh_(mesh), options_(options), positions_(mesh.mesh.positions) {
   const TetMesh& m = mesh.mesh;
@@ -41,7 +59,10 @@ ArticulatedPoser::ArticulatedPoser(const ArticulatedMesh& mesh, const Articulate
   for (std::size_t i = 0; i < solved_.size(); ++i) {
     const auto v = std::size_t(solved_[i]);
     rest.push_back(m.positions[v]);
-    if (mesh.role[v] == VertexRole::Rigid) constrained_.push_back(std::int32_t(i));
+    if (mesh.role[v] == VertexRole::Rigid) {
+      constrained_.push_back(std::int32_t(i));
+      partConstrained_[std::size_t(mesh.vertexPart[v])].push_back(std::int32_t(i));
+    }
     if (mesh.role[v] == VertexRole::Sliding) {
       sliding_.push_back(std::int32_t(i));
       weights.push_back(options.slidingWeight);
@@ -125,18 +146,12 @@ void ArticulatedPoser::nearestParts() {
 }
 
 void ArticulatedPoser::predict(InjectiveSolver& solver, std::span<const Eigen::Isometry3d> motions, double from, double to) {
-  std::array<Eigen::Isometry3d, skeleton::kPartCount + 1> step;
-  for (int p = 0; p <= skeleton::kPartCount; ++p) {
-    const Eigen::Isometry3d m = std::size_t(p) < motions.size() ? motions[std::size_t(p)] : Eigen::Isometry3d::Identity();
-    step[std::size_t(p)] = screwInterpolate(m, to) * screwInterpolate(m, from).inverse();
-  }
+  PartTransforms step;
+  for (int p = 0; p <= skeleton::kPartCount; ++p)
+    step[std::size_t(p)] = partMotionAt(motions, skeleton::Part(p), to) * partMotionAt(motions, skeleton::Part(p), from).inverse();
   const std::vector<Eigen::Vector3d>& current = solver.positions();
   std::vector<Eigen::Vector3d> predicted(current.size());
-  for (std::size_t i = 0; i < current.size(); ++i) {
-    const double w = nearWeight_[i];
-    const Eigen::Vector3d a = step[std::size_t(nearPart_[i][0])] * current[i];
-    predicted[i] = w >= 1.0 ? a : Eigen::Vector3d(w * a + (1.0 - w) * (step[std::size_t(nearPart_[i][1])] * current[i]));
-  }
+  for (std::size_t i = 0; i < current.size(); ++i) predicted[i] = blended(i, step, current[i]);
   // As far along as no tet inverts, vertex by vertex: the vertices of a tet
   // the prediction would squeeze go half as far, again until none is (a
   // squeezed tet at the shoulder does not hold back the hand).
@@ -166,28 +181,25 @@ std::vector<Eigen::Vector3d> ArticulatedPoser::corrected(const std::vector<Eigen
                                                         std::span<const Eigen::Isometry3d> motions) const {
   // Per part: the rigid motion that takes its bones from where they are
   // (the best fit of its vertices of the solve) onto its motion.
-  std::array<Eigen::Isometry3d, skeleton::kPartCount + 1> correction;
+  PartTransforms correction;
   correction.fill(Eigen::Isometry3d::Identity());
-  std::array<std::vector<std::int32_t>, skeleton::kPartCount + 1> owned;
-  for (const std::int32_t c : constrained_) owned[std::size_t(mesh_.vertexPart[std::size_t(solved_[std::size_t(c)])])].push_back(c);
   for (int p = 1; p <= skeleton::kPartCount; ++p) {
-    const std::vector<std::int32_t>& o = owned[std::size_t(p)];
-    if (o.size() < 3) continue;
-    Eigen::Matrix3Xd from(3, Eigen::Index(o.size())), to(3, Eigen::Index(o.size()));
-    for (std::size_t k = 0; k < o.size(); ++k) {
-      from.col(Eigen::Index(k)) = current[std::size_t(o[k])];
-      const Eigen::Isometry3d m = std::size_t(p) < motions.size() ? motions[std::size_t(p)] : Eigen::Isometry3d::Identity();
-      to.col(Eigen::Index(k)) = m * mesh_.mesh.positions[std::size_t(solved_[std::size_t(o[k])])];
-    }
-    correction[std::size_t(p)].matrix() = Eigen::umeyama(from, to, false);
+    const std::vector<std::int32_t>& owned = partConstrained_[std::size_t(p)];
+    if (owned.size() < 3) continue;
+    const Eigen::Isometry3d m = std::size_t(p) < motions.size() ? motions[std::size_t(p)] : Eigen::Isometry3d::Identity();
+    correction[std::size_t(p)] = rigidFit(
+        owned, [&](std::int32_t c) { return current[std::size_t(c)]; },
+        [&](std::int32_t c) -> Eigen::Vector3d { return m * mesh_.mesh.positions[std::size_t(solved_[std::size_t(c)])]; });
   }
   std::vector<Eigen::Vector3d> out(current.size());
-  for (std::size_t i = 0; i < current.size(); ++i) {
-    const double w = nearWeight_[i];
-    const Eigen::Vector3d a = correction[std::size_t(nearPart_[i][0])] * current[i];
-    out[i] = w >= 1.0 ? a : Eigen::Vector3d(w * a + (1.0 - w) * (correction[std::size_t(nearPart_[i][1])] * current[i]));
-  }
+  for (std::size_t i = 0; i < current.size(); ++i) out[i] = blended(i, correction, current[i]);
   return out;
+}
+
+Eigen::Vector3d ArticulatedPoser::blended(std::size_t i, const PartTransforms& transforms, const Eigen::Vector3d& p) const {
+  const double w = nearWeight_[i];
+  const Eigen::Vector3d a = transforms[std::size_t(nearPart_[i][0])] * p;
+  return w >= 1.0 ? a : Eigen::Vector3d(w * a + (1.0 - w) * (transforms[std::size_t(nearPart_[i][1])] * p));
 }
 
 void ArticulatedPoser::targets(const InjectiveSolver& solver, std::span<const Eigen::Isometry3d> motions, double fraction) {
@@ -204,23 +216,16 @@ void ArticulatedPoser::targets(const InjectiveSolver& solver, std::span<const Ei
   const std::vector<Eigen::Vector3d>& rest = mesh_.mesh.positions;
   std::vector<Eigen::Isometry3d> now(mesh_.bodies.size(), Eigen::Isometry3d::Identity());
   for (std::size_t b = 0; b < mesh_.bodies.size(); ++b) {
-    std::vector<std::int32_t> owned;
-    for (const std::int32_t c : constrained_)
-      if (mesh_.vertexPart[std::size_t(solved_[std::size_t(c)])] == mesh_.bodies[b].owner) owned.push_back(c);
+    const std::vector<std::int32_t>& owned = partConstrained_[std::size_t(mesh_.bodies[b].owner)];
     if (owned.size() < 3) continue;
-    Eigen::Matrix3Xd from(3, Eigen::Index(owned.size())), to(3, Eigen::Index(owned.size()));
-    for (std::size_t k = 0; k < owned.size(); ++k) {
-      from.col(Eigen::Index(k)) = rest[std::size_t(solved_[std::size_t(owned[k])])];
-      to.col(Eigen::Index(k)) = current[std::size_t(owned[k])];
-    }
-    now[b].matrix() = Eigen::umeyama(from, to, false);
+    now[b] = rigidFit(
+        owned, [&](std::int32_t c) { return rest[std::size_t(solved_[std::size_t(c)])]; },
+        [&](std::int32_t c) { return current[std::size_t(c)]; });
   }
   for (const std::int32_t i : sliding_) {
     const auto v = std::size_t(solved_[std::size_t(i)]);
     const auto b = std::size_t(mesh_.vertexBody[v]);
-    const auto owner = std::size_t(mesh_.bodies[b].owner);
-    const Eigen::Isometry3d m = owner < motions.size() ? screwInterpolate(motions[owner], fraction) : Eigen::Isometry3d::Identity();
-    positions_[v] = m * mesh_.bodies[b].project(now[b].inverse() * current[std::size_t(i)]);
+    positions_[v] = partMotionAt(motions, mesh_.bodies[b].owner, fraction) * mesh_.bodies[b].project(now[b].inverse() * current[std::size_t(i)]);
   }
   for (std::size_t s = 0; s < sliding_.size(); ++s) slidingTargets_[s] = positions_[std::size_t(solved_[std::size_t(sliding_[s])])];
 }
