@@ -157,6 +157,56 @@ std::vector<ArticularBody> articularBodies(const LabelGrid& grid, const LabelGri
   return bodies;
 }
 
+const char* segmentName(int segment) {
+  if (segment == kRightScapula) return "right_scapula";
+  if (segment == kLeftScapula) return "left_scapula";
+  return skeleton::partName(Part(segment));
+}
+
+std::vector<Eigen::Isometry3d> segmentMotions(std::span<const Eigen::Isometry3d> partMotions, const skeleton::Skeleton& skeleton,
+                                              const ArticulatedMesh& mesh, const ScapularRhythm& rhythm) {
+  std::vector<Eigen::Isometry3d> out(kSegmentCount + 1, Eigen::Isometry3d::Identity());
+  for (std::size_t p = 0; p < partMotions.size() && p <= std::size_t(skeleton::kPartCount); ++p) out[p] = partMotions[p];
+  struct Side {
+    JointId shoulder;
+    int scapula;
+    std::array<Part, 3> arm;
+  };
+  const std::array<Side, 2> sides = {Side{JointId::RightShoulder, kRightScapula, {Part::RightUpperArm, Part::RightForearm, Part::RightHand}},
+                                     Side{JointId::LeftShoulder, kLeftScapula, {Part::LeftUpperArm, Part::LeftForearm, Part::LeftHand}}};
+  for (const Side& side : sides) {
+    const skeleton::Joint* joint = skeleton.joint(side.shoulder);
+    if (!joint || mesh.rigidVertices[std::size_t(side.scapula)] == 0) continue;
+    const Eigen::Isometry3d arm = out[std::size_t(side.arm[0])];
+    const Eigen::Vector3d d = joint->longAxis.normalized(), posed = arm.linear() * d;
+    const double elevation = std::acos(std::clamp(d.dot(posed), -1.0, 1.0));
+    const double turn = rhythm.ratio * (elevation - rhythm.thresholdDeg * std::numbers::pi / 180.0);
+    const Eigen::Vector3d axis = d.cross(posed);
+    if (turn <= 0.0 || axis.norm() < 1e-9) continue;
+    // The acromion: the scapula's most superior rigid vertex.
+    Eigen::Vector3d pivot = joint->centre;
+    double top = -std::numeric_limits<double>::infinity();
+    for (std::size_t v = 0; v < mesh.role.size(); ++v)
+      if (mesh.role[v] == VertexRole::Rigid && int(mesh.vertexPart[v]) == side.scapula &&
+          mesh.mesh.positions[v].dot(joint->superior) > top) {
+        top = mesh.mesh.positions[v].dot(joint->superior);
+        pivot = mesh.mesh.positions[v];
+      }
+    Eigen::Isometry3d scapula = Eigen::Isometry3d::Identity();
+    scapula.linear() = Eigen::AngleAxisd(turn, axis.normalized()).toRotationMatrix();
+    scapula.translation() = pivot - scapula.linear() * pivot;
+    // The glenohumeral turn about the joint centre that, after the
+    // scapula's, gives the humerus its posed orientation.
+    Eigen::Isometry3d glenohumeral = Eigen::Isometry3d::Identity();
+    glenohumeral.linear() = scapula.linear().transpose() * arm.linear();
+    glenohumeral.translation() = joint->centre - glenohumeral.linear() * joint->centre;
+    const Eigen::Isometry3d carry = scapula * glenohumeral * arm.inverse();
+    out[std::size_t(side.scapula)] = scapula;
+    for (const Part p : side.arm) out[std::size_t(p)] = carry * out[std::size_t(p)];
+  }
+  return out;
+}
+
 Eigen::Isometry3d partMotionAt(std::span<const Eigen::Isometry3d> motions, Part part, double fraction) {
   const auto p = std::size_t(part);
   return p < motions.size() ? screwInterpolate(motions[p], fraction) : Eigen::Isometry3d::Identity();
@@ -164,8 +214,8 @@ Eigen::Isometry3d partMotionAt(std::span<const Eigen::Isometry3d> motions, Part 
 
 void placeRigidVertices(const ArticulatedMesh& mesh, std::span<const Eigen::Isometry3d> motions, double fraction,
                         std::span<Eigen::Vector3d> positions) {
-  std::array<Eigen::Isometry3d, skeleton::kPartCount + 1> m;
-  for (int p = 0; p <= skeleton::kPartCount; ++p) m[std::size_t(p)] = partMotionAt(motions, Part(p), fraction);
+  std::array<Eigen::Isometry3d, kSegmentCount + 1> m;
+  for (int p = 0; p <= kSegmentCount; ++p) m[std::size_t(p)] = partMotionAt(motions, Part(p), fraction);
   for (std::size_t v = 0; v < mesh.role.size(); ++v)
     if (mesh.role[v] == VertexRole::Rigid) positions[v] = m[std::size_t(mesh.vertexPart[v])] * mesh.mesh.positions[v];
 }
@@ -245,8 +295,9 @@ std::vector<Part> tetParts(const ArticulatedMesh& out, const skeleton::Skeleton&
   std::vector<Part> result(m.tetCount(), Part::None);
   for (std::size_t t = 0; t < m.tetCount(); ++t) {
     const std::int32_t tag = m.labels[t];
-    if (tag > kBoneTag && tag <= kBoneTag + skeleton::kPartCount) {
-      result[t] = Part(tag - kBoneTag);
+    if (tag > kBoneTag && tag <= kBoneTag + kSegmentCount) {
+      // A scapula goes with the trunk's group.
+      result[t] = tag - kBoneTag > skeleton::kPartCount ? Part::Trunk : Part(tag - kBoneTag);
       continue;
     }
     if (tag >= kBodyTag) {
@@ -356,6 +407,8 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
   const double reach2 = options.trunkBoneReachMm * options.trunkBoneReachMm;
   const double clear2 = options.jointClearanceMm * options.jointClearanceMm;
   const LabelGrid& parts = skeleton.parts.parts;
+  const bool scapula = options.movingScapulae;
+  const std::vector<skeleton::Bone> boneOf = skeleton::boneOfLabels(organs, grid.maxLabel());
   const auto wholePart = [&](Part part) {
     return std::find(options.rigidWholeParts.begin(), options.rigidWholeParts.end(), part) != options.rigidWholeParts.end();
   };
@@ -371,6 +424,16 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
           const auto id = skeleton::jointMoving(region);
           const skeleton::Joint* joint = id ? skeleton.joint(*id) : nullptr;
           if (!joint || (p - joint->centre).squaredNorm() >= clear2) part = region;
+        }
+        if (scapula && part == Part::Trunk) {
+          const Label l = grid.labels()[std::size_t(v)];
+          if (l < boneOf.size() && boneOf[l] == skeleton::Bone::Scapula) {
+            const skeleton::Joint* right = skeleton.joint(JointId::RightShoulder);
+            const skeleton::Joint* left = skeleton.joint(JointId::LeftShoulder);
+            const double dr = right ? (p - right->centre).squaredNorm() : std::numeric_limits<double>::infinity();
+            const double dl = left ? (p - left->centre).squaredNorm() : std::numeric_limits<double>::infinity();
+            if (right || left) part = Part(dr <= dl ? kRightScapula : kLeftScapula);
+          }
         }
         bool resolved = part != Part::None && part != Part::Trunk && part != Part::Pelvis;
         if (part == Part::Trunk || part == Part::Pelvis)
@@ -480,7 +543,7 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
   bodyOfJoint.fill(-1);
   for (std::size_t b = 0; b < out.bodies.size(); ++b) bodyOfJoint[std::size_t(out.bodies[b].joint)] = std::int32_t(b);
   const auto partOfTag = [&](std::int32_t tag) {
-    if (tag > kBoneTag && tag <= kBoneTag + skeleton::kPartCount) return Part(tag - kBoneTag);
+    if (tag > kBoneTag && tag <= kBoneTag + kSegmentCount) return Part(tag - kBoneTag);
     if (tag >= kBodyTag && tag < kBodyTag + skeleton::kJointCount) {
       const std::int32_t b = bodyOfJoint[std::size_t(tag - kBodyTag)];
       if (b >= 0) return out.bodies[std::size_t(b)].owner;

@@ -65,6 +65,16 @@ inline constexpr std::int32_t kSoftTissueTag = 1;
 inline constexpr std::int32_t kBoneTag = 1;   // + skeleton::Part: 2..17
 inline constexpr std::int32_t kBodyTag = 32;  // + skeleton::JointId: 32..45
 
+// Rigid segments: the body parts (skeleton::Part, 1..kPartCount) and the
+// scapulae, which the body-part grid counts with the trunk but the
+// articulated mesh moves with their shoulders (segmentMotions). Motions
+// and per-part arrays of the articulated mesh are indexed by segment.
+inline constexpr int kRightScapula = skeleton::kPartCount + 1;
+inline constexpr int kLeftScapula = skeleton::kPartCount + 2;
+inline constexpr int kSegmentCount = skeleton::kPartCount + 2;
+// partName for a body part, "right_scapula" / "left_scapula" beyond.
+const char* segmentName(int segment);
+
 enum class ArticularShape : std::uint8_t { Sphere, Cylinder };
 
 struct ArticularBody {
@@ -103,6 +113,9 @@ struct ArticulatedMeshOptions {
   // Limb cuts start this many joint radii (the humeral or femoral head's)
   // down the limb from its shoulder or hip (<= 0: no limb cuts).
   double limbCutMarginRadii = 1.5;
+  // Each scapula its own rigid segment, turned by its shoulder's rhythm
+  // (segmentMotions); false: the trunk's.
+  bool movingScapulae = true;
   TransferMeshOptions transferMesh;
 };
 
@@ -117,7 +130,7 @@ struct ArticulatedMesh {
   std::vector<skeleton::Part> vertexPart;       // per vertex: the part of a Rigid vertex, else None
   std::vector<std::int8_t> vertexBody;          // per vertex: the body (index) a Sliding vertex stays on, else -1
   std::size_t conflictVertices = 0;             // in bones of two parts without a cut: Free
-  std::array<std::size_t, skeleton::kPartCount + 1> rigidVertices{};  // per part
+  std::array<std::size_t, kSegmentCount + 1> rigidVertices{};  // per segment
   std::size_t resolvedBoneVoxels = 0;           // bone voxels whose part's bone is resolved
   // Positions on the cuts (every copy of a vertex together) put onto their
   // body's surface, and those left where that would degenerate a tet.
@@ -142,6 +155,24 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
 // Per voxel of `grid`: the body part of a bone voxel (organ table names,
 // bones.h, and the skeleton's part grid), 0 elsewhere.
 LabelGrid bonePartGrid(const LabelGrid& grid, const OrganTable& organs, const skeleton::Skeleton& skeleton);
+
+// The scapulohumeral rhythm: past thresholdDeg of the humerus' elevation
+// (the angle between its rest and posed long axes), the scapula turns
+// upward by `ratio` of the further elevation, in the same plane, about the
+// acromion (its bone's most superior point, next to the clavicle, which
+// stays with the trunk); the arm below keeps the orientation its joints give
+// and rides on the turned glenoid.
+struct ScapularRhythm {
+  double ratio = 0.4;
+  double thresholdDeg = 30.0;
+};
+
+// The motions of every segment (index = segment, kSegmentCount + 1 entries)
+// from the forward kinematics' part motions (index = Part): each scapula
+// resolved in `mesh` turned by its shoulder's rhythm, the parts below that
+// shoulder carried with it.
+std::vector<Eigen::Isometry3d> segmentMotions(std::span<const Eigen::Isometry3d> partMotions, const skeleton::Skeleton& skeleton,
+                                              const ArticulatedMesh& mesh, const ScapularRhythm& rhythm = {});
 
 // Part `part`'s motion (index = Part; identity where absent) at `fraction`
 // of it (screwInterpolate, solve/injective_solve.h).

@@ -99,7 +99,7 @@ void ArticulatedPoser::nearestParts() {
   std::vector<std::array<std::pair<double, skeleton::Part>, 2>> best(nv, {{{kInf, skeleton::Part::None}, {kInf, skeleton::Part::None}}});
   std::vector<double> dist(nv);
   using Item = std::pair<double, std::int32_t>;
-  for (int p = 1; p <= skeleton::kPartCount; ++p) {
+  for (int p = 1; p <= kSegmentCount; ++p) {
     std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
     std::fill(dist.begin(), dist.end(), kInf);
     for (std::size_t v = 0; v < nv; ++v)
@@ -147,7 +147,7 @@ void ArticulatedPoser::nearestParts() {
 
 void ArticulatedPoser::predict(InjectiveSolver& solver, std::span<const Eigen::Isometry3d> motions, double from, double to) {
   PartTransforms step;
-  for (int p = 0; p <= skeleton::kPartCount; ++p)
+  for (int p = 0; p <= kSegmentCount; ++p)
     step[std::size_t(p)] = partMotionAt(motions, skeleton::Part(p), to) * partMotionAt(motions, skeleton::Part(p), from).inverse();
   const std::vector<Eigen::Vector3d>& current = solver.positions();
   std::vector<Eigen::Vector3d> predicted(current.size());
@@ -183,7 +183,7 @@ std::vector<Eigen::Vector3d> ArticulatedPoser::corrected(const std::vector<Eigen
   // (the best fit of its vertices of the solve) onto its motion.
   PartTransforms correction;
   correction.fill(Eigen::Isometry3d::Identity());
-  for (int p = 1; p <= skeleton::kPartCount; ++p) {
+  for (int p = 1; p <= kSegmentCount; ++p) {
     const std::vector<std::int32_t>& owned = partConstrained_[std::size_t(p)];
     if (owned.size() < 3) continue;
     const Eigen::Isometry3d m = std::size_t(p) < motions.size() ? motions[std::size_t(p)] : Eigen::Isometry3d::Identity();

@@ -78,7 +78,7 @@ private:
   // Moves the solve's positions towards the blended step motion from
   // `from` to `to` of the pose, as far as no tet inverts.
   void predict(InjectiveSolver& solver, std::span<const Eigen::Isometry3d> motions, double from, double to);
-  using PartTransforms = std::array<Eigen::Isometry3d, skeleton::kPartCount + 1>;
+  using PartTransforms = std::array<Eigen::Isometry3d, kSegmentCount + 1>;
   // Solve vertex i's point p moved by its nearest parts' transforms,
   // blended by nearWeight_.
   Eigen::Vector3d blended(std::size_t i, const PartTransforms& transforms, const Eigen::Vector3d& p) const;
@@ -94,7 +94,7 @@ private:
   std::vector<std::int32_t> solved_;      // solve index -> mesh vertex
   std::vector<Tet> solveTets_;            // the solved tets (solve indices)
   std::vector<std::int32_t> constrained_, sliding_;  // solve indices
-  std::array<std::vector<std::int32_t>, skeleton::kPartCount + 1> partConstrained_;  // per part: its constrained solve indices
+  std::array<std::vector<std::int32_t>, kSegmentCount + 1> partConstrained_;  // per part: its constrained solve indices
   std::vector<Eigen::Vector3d> constrainedTargets_, slidingTargets_;
   std::vector<Eigen::Vector3d> positions_;
   InjectiveSolver solver_;    // bones hard (the last step)

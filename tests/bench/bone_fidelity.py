@@ -34,16 +34,23 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from bone_shapes import ORDER, Grid, body_frame, classify_bone, read_organs, sides  # noqa: E402
 
 
-def reference(rest, posed, rest_ijk, parts_at, transforms):
-    """Posed-lattice mask of the rest voxels rest_ijk moved by their parts' transforms (nearest neighbour)."""
+def reference(rest, posed, rest_ijk, parts_at, transforms, own=None):
+    """Posed-lattice mask of the rest voxels rest_ijk moved by their parts' transforms (nearest neighbour).
+
+    own: a transform (4 x 4) that moves every voxel instead (a segment of its own, such as a scapula)."""
+    if own is not None:
+        parts_at = np.full(len(rest_ijk), -1)
     out = np.zeros(posed.data.shape, bool)
     inv_rest = np.linalg.inv(rest.affine)
     shape = np.array(rest.data.shape)
     for part in np.unique(parts_at):
         sel = rest_ijk[parts_at == part].astype(np.int64)
-        if part == 0 or part > len(transforms):
+        if own is not None:
+            m = np.asarray(own)
+        elif part == 0 or part > len(transforms):
             raise SystemExit(f"bone voxels in body part {part}, which the report has no transform for")
-        m = np.array(transforms[part - 1]["matrix"])
+        else:
+            m = np.array(transforms[part - 1]["matrix"])
         member = np.zeros(rest.data.shape, bool)
         member[tuple(sel.T)] = True
         # The moved voxels' bounding box on the posed lattice, one voxel wider.
@@ -88,6 +95,7 @@ def main():
         transforms = json.load(f).get("part_transforms")
     if not transforms:
         raise SystemExit(f"{args.report}: no part_transforms (a joint pose's report has them)")
+    by_name = {t["part"]: t["matrix"] for t in transforms if "part" in t}
     frame = body_frame(rest)
     spacing = np.sqrt((posed.linear ** 2).sum(axis=0))
 
@@ -98,7 +106,10 @@ def main():
         for side, ijk in split.items():
             if len(ijk):
                 ijk = ijk.astype(np.int64)
-                refs[side] = (len(ijk), reference(rest, posed, ijk, parts[tuple(ijk.T)], transforms))
+                # A bone the deformation moved as its own segment ("right_scapula"
+                # in part_transforms, deform --articulated) follows that transform.
+                own = by_name.get(f"{side}_{bone}")
+                refs[side] = (len(ijk), reference(rest, posed, ijk, parts[tuple(ijk.T)], transforms, own))
         if not refs:
             continue
         posed_bone = posed.mask(bone)

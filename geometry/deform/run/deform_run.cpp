@@ -157,7 +157,7 @@ std::vector<std::pair<std::string, Eigen::Matrix4d>> partTransformsInWorld(std::
     Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
     m.topLeftCorner<3, 3>() = g.direction * motions[p].linear() * g.direction.transpose();
     m.topRightCorner<3, 1>() = g.direction * motions[p].translation();
-    out.emplace_back(skeleton::partName(skeleton::Part(p)), m);
+    out.emplace_back(segmentName(int(p)), m);
   }
   return out;
 }
@@ -249,10 +249,11 @@ PosedMesh poseArticulated(const DeformGridRequest& o, const Source& source, Defo
   const LabelGrid& grid = source.workingGrid();
   StageTimer skeletonTimer("skeleton");
   const skeleton::Skeleton sk = skeleton::buildSkeleton(grid, *o.organs, {o.input, o.organsSource, o.parts});
-  const skeleton::PartMotions motions = skeleton::partMotions(skeleton::posedJoints(sk, o.pose.joints, o.poseSource), o.pose.joints);
+  const skeleton::PartMotions partMotions = skeleton::partMotions(skeleton::posedJoints(sk, o.pose.joints, o.poseSource), o.pose.joints);
   report.stages.push_back(skeletonTimer.stop());
   StageTimer meshTimer("articulated transfer mesh");
   ArticulatedMesh mesh = buildArticulatedMesh(grid, *o.organs, sk);
+  const std::vector<Eigen::Isometry3d> motions = segmentMotions(partMotions, sk, mesh);
   report.stages.push_back(meshTimer.stop());
   StageTimer poseTimer("articulated pose");
   ArticulatedPoser poser(mesh);

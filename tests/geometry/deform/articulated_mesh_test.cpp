@@ -87,6 +87,51 @@ TEST(ArticulatedMesh, BonesAndBodiesAreResolvedAndTheirVerticesRigid) {
   EXPECT_GT(m.rigidVertices[std::size_t(Part::RightForearm)], 4u);
 }
 
+// Each scapula is its own segment; past 30 degrees of elevation it turns
+// upward by 0.4 of the further elevation, in the arm's plane, about its
+// acromion, and the arm keeps the orientation its joints give.
+TEST(ArticulatedMesh, TheScapulaFollowsItsShouldersRhythm) {
+  const Figure& f = figure();
+  const ArticulatedMesh& m = f.mesh;
+  EXPECT_GT(m.rigidVertices[std::size_t(kRightScapula)], 10u);
+  EXPECT_GT(m.rigidVertices[std::size_t(kLeftScapula)], 10u);
+  EXPECT_STREQ(segmentName(kRightScapula), "right_scapula");
+  EXPECT_STREQ(segmentName(int(Part::RightForearm)), "right_forearm");
+  const skeleton::Joint* joint = f.skeleton.joint(JointId::RightShoulder);
+  ASSERT_NE(joint, nullptr);
+  const auto motionsFor = [&](double abduction) {
+    PoseJoint pj;
+    pj.name = "right_shoulder";
+    pj.degrees = {0.0, abduction, 0.0};
+    const std::vector<PoseJoint> angles{pj};
+    const skeleton::PartMotions parts = skeleton::partMotions(skeleton::posedJoints(f.skeleton, angles, "pose"), angles);
+    return std::pair{parts, segmentMotions(parts, f.skeleton, m)};
+  };
+  const auto angleOf = [](const Eigen::Isometry3d& t) { return Eigen::AngleAxisd(t.linear()).angle() * 180.0 / std::numbers::pi; };
+  {
+    const auto [parts, segments] = motionsFor(20.0);
+    ASSERT_EQ(segments.size(), std::size_t(kSegmentCount + 1));
+    EXPECT_NEAR(angleOf(segments[std::size_t(kRightScapula)]), 0.0, 1e-9);
+    EXPECT_TRUE(segments[std::size_t(Part::RightUpperArm)].isApprox(parts[std::size_t(Part::RightUpperArm)]));
+  }
+  const auto [parts, segments] = motionsFor(80.0);
+  const Eigen::Isometry3d& scapula = segments[std::size_t(kRightScapula)];
+  const Eigen::Vector3d d = joint->longAxis.normalized(), posed = parts[std::size_t(Part::RightUpperArm)].linear() * d;
+  const double elevation = std::acos(d.dot(posed)) * 180.0 / std::numbers::pi;  // about the 80 degrees asked
+  EXPECT_NEAR(elevation, 80.0, 2.0);
+  EXPECT_NEAR(angleOf(scapula), 0.4 * (elevation - 30.0), 1e-6);
+  EXPECT_NEAR(angleOf(segments[std::size_t(kLeftScapula)]), 0.0, 1e-9);
+  // Turned in the arm's plane of elevation.
+  EXPECT_GT(Eigen::AngleAxisd(scapula.linear()).axis().dot(d.cross(posed).normalized()), 1.0 - 1e-9);
+  // The arm's orientation is kept; it rides on the turned glenoid.
+  for (const Part p : {Part::RightUpperArm, Part::RightForearm, Part::RightHand}) {
+    EXPECT_TRUE(segments[std::size_t(p)].linear().isApprox(parts[std::size_t(p)].linear(), 1e-9)) << int(p);
+    EXPECT_LT((segments[std::size_t(p)] * joint->centre - scapula * joint->centre).norm(), 1e-9) << int(p);
+  }
+  // The acromion, the pivot, stays; the glenoid (the joint centre) moves.
+  EXPECT_GT((scapula * joint->centre - joint->centre).norm(), 1.0);
+}
+
 TEST(ArticulatedMesh, TheBodiesSurfaceIsCutOutsideTheAttachmentAndItsVerticesLieOnIt) {
   const ArticulatedMesh& m = figure().mesh;
   ASSERT_EQ(m.cuts.size(), m.bodies.size());
@@ -105,7 +150,7 @@ TEST(ArticulatedMesh, TheBodiesSurfaceIsCutOutsideTheAttachmentAndItsVerticesLie
     EXPECT_GT(sliding, 0u) << "joint " << int(body.joint);
   }
   EXPECT_LE(offSurface, m.unsnappedVertices);
-  EXPECT_LT(double(m.unsnappedVertices), 0.05 * double(m.snappedVertices));
+  EXPECT_LT(double(m.unsnappedVertices), 0.06 * double(m.snappedVertices));
 }
 
 // The joint turned with the body's owner moved rigidly, the other side
