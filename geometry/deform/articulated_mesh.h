@@ -114,8 +114,10 @@ struct ArticulatedMeshOptions {
   // down the limb from its shoulder or hip (<= 0: no limb cuts).
   double limbCutMarginRadii = 1.5;
   // Each scapula its own rigid segment, turned by its shoulder's rhythm
-  // (segmentMotions); false: the trunk's.
-  bool movingScapulae = true;
+  // (segmentMotions); false: the trunk's (docs/POSES.md: not yet the
+  // default, the tissue between the scapula and the ribs has no sliding
+  // plane).
+  bool movingScapulae = false;
   TransferMeshOptions transferMesh;
 };
 

@@ -154,6 +154,8 @@ std::vector<std::pair<std::string, Eigen::Matrix4d>> partTransformsInWorld(std::
                                                                              const GridGeometry& g) {
   std::vector<std::pair<std::string, Eigen::Matrix4d>> out;
   for (std::size_t p = 1; p < motions.size(); ++p) {
+    // Segments beyond the body parts (the scapulae) only where they moved.
+    if (p > std::size_t(skeleton::kPartCount) && motions[p].isApprox(Eigen::Isometry3d::Identity(), 0.0)) continue;
     Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
     m.topLeftCorner<3, 3>() = g.direction * motions[p].linear() * g.direction.transpose();
     m.topRightCorner<3, 1>() = g.direction * motions[p].translation();
