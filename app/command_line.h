@@ -26,6 +26,7 @@ void addRemeshCommand(CLI::App& app);
 void addRenderCommand(CLI::App& app);
 void addCageCommand(CLI::App& app);
 void addDeformCommand(CLI::App& app);
+void addPrepareCommand(CLI::App& app);
 void addPartsCommand(CLI::App& app);
 void addViewCommand(CLI::App& app);
 

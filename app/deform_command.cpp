@@ -5,6 +5,7 @@
 //   deformation-adaptive refinement (eq. 4.5-4.7; field interpolation on the
 //   GPU) -> rasterization of G' (GPU; --cpu for the CPU reference), streamed
 //   slab by slab to the output file.
+// --prepared takes the pre-processing from `voxmorph prepare`'s file.
 // --max-memory runs out of core. The run itself is deformGrid
 // (geometry/deform/run/deform_run.h), which the viewer's export calls too,
 // on the GPU's engines (gpu/raster_engines.h) or the CPU's.
@@ -86,7 +87,8 @@ void deform(const DeformOptions& o) {
     surfaceWorldToGrid(*request.cage, frame);
   }
   checkDeformGridRequest(request);
-  request.provenance = commandProvenance({{"grid", o.run.input}, {"organs", o.organs}, {"pose", o.pose}, {"cage", o.cage}});
+  request.provenance =
+      commandProvenance({{"grid", o.run.input}, {"organs", o.organs}, {"pose", o.pose}, {"cage", o.cage}, {"prepared", o.run.prepared}});
 
   const std::unique_ptr<RasterEngines> engines = gpu::makeRasterEngines(o.cpu, request.warn);
   const DeformationReport report = deformGrid(request, *engines);
@@ -134,6 +136,10 @@ void addDeformCommand(CLI::App& app) {
   cmd->add_option("--vertices", o->run.vertices, "Automatic cage: vertices after QEM")->capture_default_str()
       ->check(integerIn(8, 100000))
       ->excludes(cage);
+  cmd->add_option("--prepared", o->run.prepared,
+                  "Rest state saved by voxmorph prepare (.vxprep): its skeleton, cage, envelope and transfer mesh instead of "
+                  "building them (same result); refused when made from another grid, organ table or --parts, or without this "
+                  "pose's separations, --separate, --dilation and --vertices");
   cmd->add_option("--samples", o->run.samples, "k: k^3 samples per output voxel, majority label (odd k recommended)")->capture_default_str()
       ->check(integerIn(1, kMaxRasterSamples));
   cmd->add_option("--max-memory", o->run.maxMemoryMb,

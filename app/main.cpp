@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   vox::app::addRemeshCommand(app);
   vox::app::addRenderCommand(app);
   vox::app::addCageCommand(app);
+  vox::app::addPrepareCommand(app);
   vox::app::addDeformCommand(app);
   vox::app::addPartsCommand(app);
   vox::app::addViewCommand(app);

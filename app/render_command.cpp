@@ -2,7 +2,8 @@
 // (thesis chapter 5). With --pose the deformation pipeline (voxmorph deform's
 // pre-processing and one frame, without refinement) gives the transfer mesh
 // and its posed positions, and the source grid is rendered through them
-// without rasterizing the posed grid. Without a pose the grid is shown at
+// without rasterizing the posed grid (--prepared: voxmorph prepare's rest
+// state instead of that pre-processing). Without a pose the grid is shown at
 // rest through an identity transfer mesh (six tets over the foreground's box). The GPU kernel
 // renders by default; --cpu uses the CPU reference and --verify runs both and
 // fails when they disagree beyond the stated tolerance.
@@ -25,6 +26,7 @@
 #include "geometry/render/raycast_scene.h"
 #include "geometry/render/rest_transfer_mesh.h"
 #include "geometry/deform/pose/joint_pose.h"
+#include "geometry/deform/prepared_state.h"
 #include "gpu/context.h"
 #include "gpu/kernels/raycast.h"
 
@@ -54,6 +56,7 @@ struct RenderOptions {
   std::string pose;
   std::int64_t maxMemoryMb = 0;  // 0: the machine's memory
   std::string parts;
+  std::string prepared;  // voxmorph prepare's rest state, with --pose
   std::string shading = surfaceNormalsName(RaycastShading{}.normals);
   bool cpu = false;
   bool verify = false;
@@ -102,6 +105,8 @@ void render(const RenderOptions& o) {
     if (skeletal) skeleton::requireBones(*organs, o.organs);
   } else if (!o.parts.empty()) {
     throw UsageError("--parts", "needs a --pose");
+  } else if (!o.prepared.empty()) {
+    throw UsageError("--prepared", "needs a --pose");
   }
   checkGridFitsMemory(o.input, o.maxMemoryMb, o.pose.empty() ? kRenderMemory : kPosedMemory,
                       o.pose.empty() ? "render" : "render the pose", "rendering needs the whole grid in memory");
@@ -121,10 +126,22 @@ void render(const RenderOptions& o) {
     posed = restMesh.positions;
   } else {
     const Pose pose = poseInGridFrame(*worldPose, grid.geometry(), o.pose);
+    // A prepared state (voxmorph prepare) gives the skeleton, cage and
+    // transfer mesh; the pipeline runs on the whole grid here (working factor 1).
+    std::shared_ptr<PreparedState> prepared;
+    if (!o.prepared.empty()) {
+      prepared = std::make_shared<PreparedState>(PreparedState::read(o.prepared));
+      const std::string note = prepared->check(preparedInputs(o.input, organs, o.organs, o.parts, 1, grid.dims()));
+      if (!note.empty() && !o.quiet) std::fprintf(stderr, "voxmorph: warning: %s\n", note.c_str());
+    }
+    const bool skeletal = !pose.joints.empty() || usesBodyParts(pose) || !o.parts.empty();
     std::optional<LabelGrid> userParts;
-    if (!o.parts.empty()) userParts = readGrid(o.parts);
-    PipelineOptions options = skeleton::skeletalPoseOptions(pose, o.pose, grid, organs, {o.input, o.organs, o.parts}, std::move(userParts));
+    if (!o.parts.empty() && !(prepared && prepared->skeleton)) userParts = readGrid(o.parts);
+    PipelineOptions options = prepared && prepared->skeleton && skeletal
+                                  ? skeleton::skeletalPoseOptions(pose, o.pose, *prepared->skeleton, organs)
+                                  : skeleton::skeletalPoseOptions(pose, o.pose, grid, organs, {o.input, o.organs, o.parts}, std::move(userParts));
     options.envelope = false;
+    options.prepared = prepared;
     DeformationPipeline pipeline(grid, options);
     warnForegroundOutside(pipeline.stats().foregroundOutsideCage, !options.cage.separations.empty());
     pipeline.deform();
@@ -197,6 +214,9 @@ void addRenderCommand(CLI::App& app) {
   cmd->add_option("--pose", o->pose, "Pose file (JSON, docs/POSES.md): render the grid posed through its transfer mesh (a pose with "
                                      "joints needs --organs)");
   cmd->add_option("--parts", o->parts, "Body-part grid (voxmorph parts) for a joint pose instead of the assignment from the bones");
+  cmd->add_option("--prepared", o->prepared,
+                  "With --pose: the rest state saved by voxmorph prepare (.vxprep) instead of building the cage and transfer mesh "
+                  "(same image); refused when made from another grid, organ table or --parts, or without this pose's separations");
   cmd->add_option("--max-memory", o->maxMemoryMb,
                   "Refuse a grid whose in-core work exceeds this budget (MB; default the machine's memory)")
       ->check(integerIn(64, std::int64_t(1) << 30, "MB"));

@@ -24,6 +24,8 @@ void addViewCommand(CLI::App& app) {
   cmd->add_option("--organs", o->organs, "Organ table (ID name tissue density): names, colours, masses, label groups");
   cmd->add_option("--pose", o->pose, "Pose file to start from (docs/POSES.md): its separations shape the cage and the transfer mesh");
   cmd->add_option("--separate", o->separations, "Separate two label groups, as `deform --separate` (repeatable)")->allow_extra_args(false);
+  cmd->add_option("--prepared", o->prepared, "Rest state saved by voxmorph prepare (.vxprep): its skeleton, cage, envelope and transfer mesh "
+                                             "instead of building them (the setup pose's separations must be among those prepared)");
   cmd->add_option("--script", o->script, "Run a scripted session (JSON list of steps; docs/VIEWER.md) and quit");
   cmd->add_option("--screenshot-dir", o->screenshotDir, "Directory for the script's screenshots");
   cmd->add_option("--frame-log", o->frameLog, "Write per-frame times (deformation, ray casting, UI, present) as CSV");

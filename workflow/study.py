@@ -22,6 +22,8 @@ the repository root for `./run study`).
 
 import csv
 import os
+import hashlib
+import re
 import shlex
 from dataclasses import dataclass, field
 
@@ -48,6 +50,12 @@ DEFORM_OPTIONS = {
 }
 
 
+# deform options that shape the rest state `voxmorph prepare` saves (the
+# cage options and the extra separations): rows of one phantom (grid and
+# organ table) that give the same ones share one prepared state.
+REST_OPTIONS = ("--dilation", "--vertices", "--separate")
+
+
 class StudyError(Exception):
     """A fault of the study file: its message names the file and line."""
 
@@ -71,6 +79,62 @@ class Row:
             if o.startswith("--max-memory="):
                 return int(o.split("=", 1)[1])
         return None
+
+
+    @property
+    def rest_options(self):
+        """The row's options that shape the rest state, as `prepare` takes them."""
+        out, i = [], 0
+        while i < len(self.options):
+            name, _, inline = self.options[i].partition("=")
+            takes = DEFORM_OPTIONS.get(name, False)
+            value = inline if inline or not takes else self.options[i + 1]
+            if takes and not inline:
+                i += 1
+            if name in REST_OPTIONS:
+                out += [name, value]
+            i += 1
+        return out
+
+    @property
+    def preparable(self):
+        """Whether the row's deform takes a prepared state (in core only)."""
+        return self.max_memory_mb is None
+
+
+@dataclass
+class PreparedGroup:
+    name: str  # the prepared file's name, without .vxprep
+    grid: str
+    organs: str
+    options: list  # rest_options of its rows
+    poses: list  # its rows' poses, each once, in study order
+    rows: list
+
+
+def prepared_groups(rows):
+    """The prepared states a study needs: one per phantom (grid, organ table)
+    and rest options, holding the poses of its rows (those that run in
+    core). Named by the phantom; where one phantom needs several, each name
+    adds a digest of its grid, organ table and options."""
+    groups = {}
+    for r in rows:
+        if not r.preparable:
+            continue
+        key = (r.phantom, os.path.abspath(r.grid), os.path.abspath(r.organs) if r.organs else "", tuple(r.rest_options))
+        g = groups.setdefault(key, PreparedGroup("", r.grid, r.organs, r.rest_options, [], []))
+        if r.pose not in g.poses:
+            g.poses.append(r.pose)
+        g.rows.append(r)
+    per_phantom = {}
+    for key in groups:
+        per_phantom[key[0]] = per_phantom.get(key[0], 0) + 1
+    for key, g in groups.items():
+        base = re.sub(r"[^A-Za-z0-9_.-]", "_", key[0]) or "phantom"
+        if per_phantom[key[0]] > 1:
+            base += "_" + hashlib.sha256(repr(key[1:]).encode()).hexdigest()[:8]
+        g.name = base
+    return list(groups.values())
 
 
 def _empty(text):

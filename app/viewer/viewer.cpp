@@ -4,6 +4,7 @@
 #include "app/viewer/viewer_app.h"
 #include "geometry/deform/pose/pose_editor.h"
 #include "geometry/deform/pose/pose_frame.h"
+#include "geometry/deform/prepared_state.h"
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/io/png_io.h"
@@ -52,7 +53,13 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options) {
     if (!input_.scripted) input_.scroll += dy;
   });
   std::fprintf(stderr, "view: pre-processing %s (cage, transfer mesh, embedding)\n", options.grid.c_str());
-  editor_ = std::make_unique<PoseEditor>(grid_, organs, setupPose_, setupSource, extra);
+  std::shared_ptr<PreparedState> prepared;
+  if (!options.prepared.empty()) {
+    prepared = std::make_shared<PreparedState>(PreparedState::read(options.prepared));
+    const std::string note = prepared->check(preparedInputs(options.grid, organs, options.organs, "", 1, grid_.dims()));
+    if (!note.empty()) std::fprintf(stderr, "voxmorph: warning: %s\n", note.c_str());
+  }
+  editor_ = std::make_unique<PoseEditor>(grid_, organs, setupPose_, setupSource, extra, std::move(prepared));
   palette_ = organs ? Palette::fromOrgans(*organs, grid_.maxLabel()) : Palette(grid_.maxLabel());
   panels_ = std::make_unique<Panels>(editor_->pose().arapIterations);
   gizmo_ = std::make_unique<Gizmo>(*editor_, orbit_, cuts_);

@@ -16,6 +16,7 @@ struct ViewerOptions {
   std::string pose;                      // setup pose: separations and first selections
   std::vector<std::string> separations;  // --separate, as `deform` takes them
   std::string cage;                      // a cage file instead of the automatic one (not yet: refused)
+  std::string prepared;                  // voxmorph prepare's rest state of the grid ("" for none)
   std::string script;                    // scripted session (viewer_script.h)
   std::string screenshotDir;
   std::string frameLog;                  // CSV of per-frame times

@@ -1,6 +1,7 @@
 #include "geometry/deform/pipeline.h"
 #include "geometry/disjoint_sets.h"
 
+#include "geometry/deform/prepared_state.h"
 #include "geometry/deform/solve/green_coordinates.h"
 #include "geometry/skeleton/label_groups.h"
 #include "geometry/raster/out_of_core.h"
@@ -90,6 +91,12 @@ DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOp
       for (Label& l : meshGroups_.labels())
         if (l != 0 && !named.count(l)) l = kOtherGroups;
     }
+    if (options_.prepared) {
+      groupsDigest_ = gridDigest(groups_);
+      groupsWords_ = separations.empty() ? "the foreground"
+                     : options_.bodyParts && (options_.groupsFromParts || !options_.organs) ? "the label groups of the body parts"
+                                                                                              : "the label groups of the organ names";
+    }
     stats_.stages.push_back(timer.stop());
   }
   {
@@ -100,12 +107,24 @@ DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOp
       stats_.cage.check = checkSurface(builtCage_);
       stats_.cage.foregroundOutside = countForegroundOutside(builtCage_, groups_);
     } else {
-      CageResult r = buildCage(groups_, options_.cage);
-      if (!r.report.check.validCage())
-        throw RuntimeFailure("the automatic cage is not a valid cage (" + cageFault(r.report.check) +
-                             "); try another --vertices or --dilation");
-      builtCage_ = std::move(r.cage);
-      stats_.cage = r.report;
+      PreparedState* prepared = options_.prepared.get();
+      PreparedCageQuery query;
+      if (prepared)
+        query = {groupsDigest_ + " " + cageOptionsKey(options_.cage), groupsWords_, separationsText(separations, grid.geometry()),
+                 cageOptionsText(options_.cage)};
+      if (const PreparedCage* stored = prepared ? prepared->findCage(query.key) : nullptr) {
+        builtCage_ = stored->cage;
+        stats_.cage = stored->report;
+      } else {
+        if (prepared && !prepared->recording) prepared->refuseCage(query);
+        CageResult r = buildCage(groups_, options_.cage);
+        if (!r.report.check.validCage())
+          throw RuntimeFailure("the automatic cage is not a valid cage (" + cageFault(r.report.check) +
+                               "); try another --vertices or --dilation");
+        builtCage_ = std::move(r.cage);
+        stats_.cage = r.report;
+        if (prepared) prepared->cages.push_back({query.key, query.groups, query.separations, query.options, builtCage_, stats_.cage});
+      }
     }
     stats_.foregroundOutsideCage = stats_.cage.foregroundOutside;
     stats_.stages.push_back(timer.stop());
@@ -118,7 +137,15 @@ DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOp
   if (options_.pose) selectHandles(*options_.pose, builtCage_, options_.poseSource, cageGroups_, cageBodyParts_);
   if (options_.envelope) {
     StageTimer timer("envelope");
-    envelope_ = extractEnvelope(groups_, options_.envelopeOptions);
+    PreparedState* prepared = options_.prepared.get();
+    const std::string key = prepared ? groupsDigest_ + " " + envelopeOptionsKey(options_.envelopeOptions) : "";
+    if (const PreparedEnvelope* stored = prepared ? prepared->findEnvelope(key) : nullptr) {
+      envelope_ = stored->envelope;
+    } else {
+      if (prepared && !prepared->recording) prepared->refuseEnvelope();
+      envelope_ = extractEnvelope(groups_, options_.envelopeOptions);
+      if (prepared) prepared->envelopes.push_back({key, envelope_});
+    }
     stats_.stages.push_back(timer.stop());
   }
   if (options_.bodyParts && options_.organs && skeleton::namesBones(*options_.organs))
@@ -126,19 +153,33 @@ DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOp
   sizing_ = defaultSizingField(groups_.geometry(), options_.sizingFraction);
   {
     StageTimer timer("transfer mesh");
-    buildTransferMesh();
+    buildTransferMesh(true);
     stats_.stages.push_back(timer.stop());
   }
   if (options_.pose) setPose(*options_.pose, options_.poseSource);
 }
 
-void DeformationPipeline::buildTransferMesh() {
+void DeformationPipeline::buildTransferMesh(bool initial) {
   const bool separated = !options_.cage.separations.empty();
-  transferMesh_ = vox::buildTransferMesh(separated ? meshGroups_ : groups_, sizing_, options_.transferMesh);
-  stats_.cuts.clear();
-  for (const LimbSeparation& s : options_.cuts ? *options_.cuts : options_.cage.separations)
-    stats_.cuts.push_back(cutTransferMesh(transferMesh_, s.groupA, s.groupB, s.region));
-  stats_.uncoveredVoxels = countUncoveredVoxels(transferMesh_, groups_);
+  const std::vector<LimbSeparation>& cuts = options_.cuts ? *options_.cuts : options_.cage.separations;
+  PreparedState* prepared = initial ? options_.prepared.get() : nullptr;
+  PreparedMeshQuery query;
+  if (prepared)
+    query = {(separated ? gridDigest(meshGroups_) : groupsDigest_) + " " + groupsDigest_ + " " + gridDigest(sizing_) + " " +
+                 transferMeshOptionsKey(options_.transferMesh) + " cuts " + separationsKey(cuts),
+             separationsText(cuts, groups_.geometry())};
+  if (const PreparedTransferMesh* stored = prepared ? prepared->findMesh(query.key) : nullptr) {
+    transferMesh_ = stored->mesh;
+    stats_.cuts = stored->cutReports;
+    stats_.uncoveredVoxels = stored->uncoveredVoxels;
+  } else {
+    if (prepared && !prepared->recording) prepared->refuseMesh(query);
+    transferMesh_ = vox::buildTransferMesh(separated ? meshGroups_ : groups_, sizing_, options_.transferMesh);
+    stats_.cuts.clear();
+    for (const LimbSeparation& s : cuts) stats_.cuts.push_back(cutTransferMesh(transferMesh_, s.groupA, s.groupB, s.region));
+    stats_.uncoveredVoxels = countUncoveredVoxels(transferMesh_, groups_);
+    if (prepared) prepared->meshes.push_back({query.key, query.cuts, transferMesh_, stats_.cuts, stats_.uncoveredVoxels});
+  }
   // The bone groups depend on the TM alone: once per TM, not per pose.
   rigidBones_ = boneKeys_.voxelCount() > 0 ? rigidBoneGroups(transferMesh_, boneKeys_, options_.rigidJointRings) : RigidBoneGroups{};
 }

@@ -51,11 +51,14 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace vox {
+
+class PreparedState;
 
 struct PipelineOptions {
   // Organ table of the grid: label groups for limb separation. Required when
@@ -102,6 +105,13 @@ struct PipelineOptions {
   // selects nothing fails before the transfer mesh is built.
   std::optional<Pose> pose;
   std::string poseSource = "pose";
+  // A saved rest state (prepared_state.h, `voxmorph prepare`): the cage,
+  // envelope and transfer mesh are taken from it where it holds them for
+  // this grid's label groups and these options (the same bytes the
+  // pipeline would build), and a piece it lacks is refused (InputError
+  // naming the file and what differs). With prepared->recording the
+  // pipeline builds what it lacks and adds it instead.
+  std::shared_ptr<PreparedState> prepared;
 };
 
 // Options that apply `pose` as `voxmorph deform` does: its separations for
@@ -181,7 +191,9 @@ public:
   const PipelineStats& stats() const { return stats_; }
 
 private:
-  void buildTransferMesh();
+  // initial: the pre-processing's TM (from options_.prepared where it has
+  // it); the refinement's regenerations build theirs.
+  void buildTransferMesh(bool initial = false);
   void precomputeFrame(bool withEnvelope);
   // One frame of the deformer at `fraction` of the pose (handles and rigid
   // bone motions).
@@ -197,6 +209,7 @@ private:
   LabelGrid boneKeys_;  // rigid_bones.h (empty without rigid bones)
   RigidBoneGroups rigidBones_;
   LabelGrid groups_, meshGroups_;  // meshGroups_: S reduced to the separated groups (empty without separations)
+  std::string groupsDigest_, groupsWords_;  // groups_'s digest and how it was made (prepared state keys and messages)
   TriMesh builtCage_, cage_, envelope_;
   ScalarGrid sizing_;
   TetMesh transferMesh_;

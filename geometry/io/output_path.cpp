@@ -36,6 +36,8 @@ std::string extensionFault(const std::string& path, OutputKind kind) {
       return endsWith(path, ".csv") ? "" : "tables are written as CSV (use .csv)";
     case OutputKind::Text:
       return "";
+    case OutputKind::Prepared:
+      return endsWith(path, ".vxprep") ? "" : "prepared states are written as .vxprep";
   }
   return "";
 }

@@ -9,7 +9,7 @@
 namespace vox {
 
 // Text: any extension (organ tables).
-enum class OutputKind { Grid, TetMesh, Surface, Png, Json, Csv, Text };
+enum class OutputKind { Grid, TetMesh, Surface, Png, Json, Csv, Text, Prepared };
 
 // Throws UsageError(option, ...) for an extension the kind's writers do not
 // know, InputError(path, ...) for a missing or read-only directory. "-"

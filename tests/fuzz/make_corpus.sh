@@ -8,7 +8,7 @@ cd "$(dirname "$0")"
 bin=$(realpath "${1:-../../build/release/voxmorph}")
 out=corpus
 rm -rf "$out"
-mkdir -p "$out"/{nifti,metaimage,nrrd,inr,medit,meshb,vtu,gmsh,obj,off,ply,pose,organs,remesh,mesh,parts,viewer_script}
+mkdir -p "$out"/{nifti,metaimage,nrrd,inr,medit,meshb,vtu,gmsh,obj,off,ply,pose,organs,remesh,mesh,parts,viewer_script,prepared}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 
@@ -98,4 +98,10 @@ printf '{"joints": {"left_hip": {"flexion": 45}, "left_knee": {"flexion": 60}}, 
 "$bin" synth skeleton --size 20 -o "$tmp/sk20.nii" --organs "$tmp/sk20.dat" >/dev/null
 "$bin" parts "$tmp/sk20.nii" --organs "$tmp/sk20.dat" -o "$out/parts/other_dims.nii" -q
 cp ../app/data/viewer_session.json "$out/viewer_script/session.json"
+# Prepared states (fuzz_prepared): the stick figure without a skeleton, and
+# the skeleton figure with its skeleton and a separated arm.
+"$bin" synth stick --size 16 -o "$tmp/st16.nii" >/dev/null
+"$bin" prepare "$tmp/st16.nii" --vertices 12 -o "$out/prepared/stick16.vxprep" -q
+printf '{"joints": {"right_shoulder": {"abduction": 30}}}' > "$tmp/arm.json"
+"$bin" prepare "$tmp/sk24.nii" --organs "$tmp/sk24.dat" --pose "$tmp/arm.json" --vertices 24 -o "$out/prepared/skeleton24.vxprep" -q
 find "$out" -type f | sort | xargs wc -c | tail -1

@@ -7,7 +7,9 @@
 # sheet holds the 4 tiles; a second run executes nothing; removing one row's
 # output reruns that row alone (and the summary); a job killed mid-way
 # (SIGKILL) leaves none of its row's outputs and no temporary files; a bad
-# study file is one error naming the file, the line and the fault.
+# study file is one error naming the file, the line and the fault. Each
+# phantom is prepared once (voxmorph prepare) before its rows, which deform
+# with it; removing a row's output does not prepare again.
 # Exit 77 (skipped) when snakemake is not installed.
 set -euo pipefail
 bin=$1 src=$2 work=$3 python=$4
@@ -33,11 +35,18 @@ files=(posed.nii.gz report.json report.csv plots.png front.png side.png)
 # Slurm profile, dry run: one posture job per row, with its resources.
 "${smk[@]}" --profile "$src/workflow/profiles/slurm" -n > dryrun.log 2>&1 || { cat dryrun.log; fail "dry run"; }
 test "$(grep -c '^rule posture:' dryrun.log)" -eq 4 || fail "dry run lists $(grep -c '^rule posture:' dryrun.log) posture jobs, not 4"
-test "$(grep -c 'resources: mem_mb=4096, .*cpus_per_task=2, runtime=60, gpus=0' dryrun.log)" -eq 4 || fail "resources missing from the dry run"
+test "$(grep -c '^rule prepare:' dryrun.log)" -eq 2 || fail "dry run lists $(grep -c '^rule prepare:' dryrun.log) prepare jobs, not 2 (one per phantom)"
+test "$(grep -c 'resources: mem_mb=4096, .*cpus_per_task=2, runtime=60, gpus=0' dryrun.log)" -eq 6 || fail "resources missing from the dry run"
 
 # First run: every row, the summary and the contact sheet.
 "${smk[@]}" --cores 2 > run1.log 2>&1 || { cat run1.log; fail "first run"; }
 for r in "${rows[@]}"; do for f in "${files[@]}"; do test -s "$r/$f" || fail "$r/$f missing"; done; done
+# Each phantom prepared once, its rows deformed with it.
+for ph in tall short; do test -s "out/prepared/$ph.vxprep" || fail "out/prepared/$ph.vxprep missing"; done
+test "$(grep -c '^rule prepare:' run1.log)" -eq 2 || fail "the first run prepared $(grep -c '^rule prepare:' run1.log) times, not 2"
+for r in "${rows[@]}"; do
+  grep -q '"role": "prepared"' "$r/report.json" || fail "$r did not deform with the prepared state (its report's inputs)"
+done
 "$python" - "$(sha256sum tall.nii.gz | cut -c1-64)" "$(sha256sum short.dat | cut -c1-64)" <<'PY'
 import json
 import sys
@@ -78,6 +87,7 @@ test "$before" = "$(stamp)" || fail "second run changed files"
 rm out/short/stick_head_turned_30/report.json
 "${smk[@]}" --cores 2 > run3.log 2>&1 || { cat run3.log; fail "third run"; }
 grep -Eq '^posture +1 ' run3.log || { cat run3.log; fail "the third run did not run exactly one row"; }
+grep -q '^rule prepare:' run3.log && { cat run3.log; fail "the third run prepared again"; }
 after=$(stamp)
 for r in "${rows[@]:0:3}"; do
   test "$(grep "^$r/" <<<"$before")" = "$(grep "^$r/" <<<"$after")" || fail "$r was run again"

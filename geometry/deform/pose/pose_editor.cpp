@@ -1,5 +1,6 @@
 #include "geometry/deform/pose/pose_editor.h"
 
+#include "geometry/deform/prepared_state.h"
 #include "geometry/skeleton/label_groups.h"
 #include "geometry/deform/pose/joint_pose.h"
 #include "geometry/error.h"
@@ -47,7 +48,7 @@ bool sameHandleSets(const Pose& a, const Pose& b) {
 }
 
 PoseEditor::PoseEditor(const LabelGrid& grid, std::optional<OrganTable> organs, const Pose& setup, const std::string& setupSource,
-                       const std::vector<LimbSeparation>& extraSeparations)
+                       const std::vector<LimbSeparation>& extraSeparations, std::shared_ptr<PreparedState> prepared)
     : grid_(grid), organs_(std::move(organs)), setupSource_(setupSource), separations_(setup.separations) {
   for (const LimbSeparation& s : extraSeparations) separations_.push_back({s, std::nullopt});
   Pose shaping = setup;
@@ -55,7 +56,9 @@ PoseEditor::PoseEditor(const LabelGrid& grid, std::optional<OrganTable> organs, 
   PipelineOptions options;
   if (!setup.joints.empty() || usesBodyParts(setup)) {
     requireOrganTable(organs_.has_value(), OrganTableNeed::Bones, setupSource);
-    skeleton_ = std::make_unique<skeleton::Skeleton>(skeleton::buildSkeleton(grid_, *organs_, {"grid", "organ table", "body parts"}));
+    skeleton_ = prepared && prepared->skeleton
+                    ? std::make_unique<skeleton::Skeleton>(*prepared->skeleton)
+                    : std::make_unique<skeleton::Skeleton>(skeleton::buildSkeleton(grid_, *organs_, {"grid", "organ table", "body parts"}));
     options = skeleton::skeletalPoseOptions(shaping, setupSource, *skeleton_, organs_);
     separations_ = options.pose->separations;
   } else {
@@ -64,6 +67,7 @@ PoseEditor::PoseEditor(const LabelGrid& grid, std::optional<OrganTable> organs, 
   // The selections are embedded by update(); a pose without any has none.
   const Pose compiledSetup = *options.pose;
   options.pose.reset();
+  options.prepared = std::move(prepared);
   pipeline_ = std::make_unique<DeformationPipeline>(grid_, options);
   tetVoxels_ = tetLabelVoxels(grid_, pipeline_->transferMesh());
   // The edited pose keeps its joints and its own separations (the compiled

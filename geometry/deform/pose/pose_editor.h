@@ -78,8 +78,12 @@ public:
   // shape the pre-processing, and the session edits its joint angles and
   // its own selections, and saves them so. Throws what DeformationPipeline
   // and the compilation throw (InputError for bad input).
+  // `prepared` (voxmorph prepare's rest state of this grid, already checked
+  // against it: PreparedState::check) gives the skeleton, cage, envelope and
+  // transfer mesh; one without the setup's separations is refused
+  // (DeformationPipeline).
   PoseEditor(const LabelGrid& grid, std::optional<OrganTable> organs, const Pose& setup, const std::string& setupSource,
-             const std::vector<LimbSeparation>& extraSeparations = {});
+             const std::vector<LimbSeparation>& extraSeparations = {}, std::shared_ptr<PreparedState> prepared = nullptr);
   ~PoseEditor();
 
   const DeformationPipeline& pipeline() const { return *pipeline_; }

@@ -5,6 +5,7 @@
 #include "geometry/deform/pipeline.h"
 #include "geometry/deform/pose/joint_pose.h"
 #include "geometry/deform/pose/posed_extent.h"
+#include "geometry/deform/prepared_state.h"
 #include "geometry/deform/solve/label_volumes.h"
 #include "geometry/deform/solve/rigid_bones.h"
 #include "geometry/error.h"
@@ -106,16 +107,19 @@ void refuseOrForce(const DeformGridRequest& o, DeformationReport& report, const 
   warn(o, fault + "; written because of --force");
 }
 
+}  // namespace
+
 // The pipeline's options on the working grid: a pose with joints (or
 // selections by body part, or a user's parts grid) compiled against the
 // skeleton, the cage options and the extra separations.
-PipelineOptions pipelineOptions(const DeformGridRequest& o, const Source& source) {
+PipelineOptions deformPipelineOptions(const DeformGridRequest& o, const LabelGrid& working, int factor, const PreparedState* prepared) {
+  const skeleton::Skeleton* stored = prepared && prepared->skeleton ? &*prepared->skeleton : nullptr;
   std::optional<LabelGrid> userParts;
-  if (!o.parts.empty()) {
+  if (!o.parts.empty() && !stored) {
     LabelGrid parts = readGrid(o.parts);  // its dims checked with the request
-    if (source.factor > 1) {
+    if (factor > 1) {
       LabelGridSlices slices(parts);
-      parts = downsampleLabels(slices, source.factor);
+      parts = downsampleLabels(slices, factor);
     }
     userParts = std::move(parts);
   }
@@ -124,17 +128,26 @@ PipelineOptions pipelineOptions(const DeformGridRequest& o, const Source& source
   // tissue around the bone follows it.
   skeleton::JointPoseOptions joints;
   if (o.rigidBones) joints.jointZone = skeleton::JointZone::Child;
-  PipelineOptions options = skeleton::skeletalPoseOptions(o.pose, o.poseSource, source.workingGrid(), o.organs,
-                                                          {o.input, o.organsSource, o.parts}, std::move(userParts), joints);
+  // The prepared skeleton (built from the same grid, organ table and parts
+  // grid: PreparedState::check) stands in for the one built here.
+  const bool skeletal = !o.pose.joints.empty() || usesBodyParts(o.pose) || !o.parts.empty();
+  PipelineOptions options = stored && skeletal ? skeleton::skeletalPoseOptions(o.pose, o.poseSource, *stored, o.organs, joints)
+                                               : skeleton::skeletalPoseOptions(o.pose, o.poseSource, working, o.organs,
+                                                                               {o.input, o.organsSource, o.parts}, std::move(userParts), joints);
   // Any pose on a grid whose organ table names bones: the body parts too, for
   // the collision count and the bone measures (the label groups of a pose
   // without joints stay those of the organ names).
   if (!options.bodyParts && o.organs && skeleton::namesBones(*o.organs)) {
-    try {
-      options.bodyParts = skeleton::bodyParts(source.workingGrid(), *o.organs, o.input, o.organsSource).parts;
+    if (stored) {
+      options.bodyParts = stored->parts.parts;
       options.groupsFromParts = false;
-    } catch (const InputError&) {
-      // A table that names bones the grid does not hold: no body parts.
+    } else {
+      try {
+        options.bodyParts = skeleton::bodyParts(working, *o.organs, o.input, o.organsSource).parts;
+        options.groupsFromParts = false;
+      } catch (const InputError&) {
+        // A table that names bones the grid does not hold: no body parts.
+      }
     }
   }
   options.rigidBones = o.rigidBones;
@@ -147,6 +160,8 @@ PipelineOptions pipelineOptions(const DeformGridRequest& o, const Source& source
   if (o.cage) options.userCage = *o.cage;
   return options;
 }
+
+namespace {
 
 // Each part's forward-kinematics motion (grid frame) as a 4 x 4 matrix in
 // the world frame (world = direction * grid).
@@ -199,10 +214,12 @@ Collisions collisionsOf(const DeformGridRequest& o, const Source& source, const 
 
 // The cage pipeline: cage, transfer mesh, embedding, deformation,
 // refinement, collisions.
-PosedMesh poseByCage(const DeformGridRequest& o, const Source& source, RasterEngines& engines, DeformationReport& report) {
+PosedMesh poseByCage(const DeformGridRequest& o, const Source& source, RasterEngines& engines, DeformationReport& report,
+                     const std::shared_ptr<PreparedState>& prepared) {
   PosedMesh out;
   StageTimer skeletonTimer("skeleton");
-  const PipelineOptions options = pipelineOptions(o, source);
+  PipelineOptions options = deformPipelineOptions(o, source.workingGrid(), source.factor, prepared.get());
+  options.prepared = prepared;
   if (options.bodyParts) report.stages.push_back(skeletonTimer.stop());
   const bool separated = !options.cage.separations.empty();
   auto pipeline = std::make_unique<DeformationPipeline>(source.workingGrid(), options);
@@ -246,11 +263,12 @@ PosedMesh poseByCage(const DeformGridRequest& o, const Source& source, RasterEng
 }
 
 // The joint pose on the transfer mesh that resolves the skeleton.
-PosedMesh poseArticulated(const DeformGridRequest& o, const Source& source, DeformationReport& report) {
+PosedMesh poseArticulated(const DeformGridRequest& o, const Source& source, DeformationReport& report, const PreparedState* prepared) {
   PosedMesh out;
   const LabelGrid& grid = source.workingGrid();
   StageTimer skeletonTimer("skeleton");
-  const skeleton::Skeleton sk = skeleton::buildSkeleton(grid, *o.organs, {o.input, o.organsSource, o.parts});
+  const skeleton::Skeleton sk = prepared && prepared->skeleton ? *prepared->skeleton
+                                                               : skeleton::buildSkeleton(grid, *o.organs, {o.input, o.organsSource, o.parts});
   const skeleton::PartMotions partMotions = skeleton::partMotions(skeleton::posedJoints(sk, o.pose.joints, o.poseSource), o.pose.joints);
   report.stages.push_back(skeletonTimer.stop());
   StageTimer meshTimer("articulated transfer mesh");
@@ -318,6 +336,8 @@ void checkDeformGridRequest(const DeformGridRequest& o) {
     throw InputError(o.posedCage, "unknown surface format for --posed-cage (use .obj, .off or .ply)");
   if (o.preserveVolumes && o.maxMemoryMb > 0)
     throw UsageError("--preserve-volumes", "needs the posed grid in memory; it cannot be combined with --max-memory");
+  if (!o.prepared.empty() && o.maxMemoryMb > 0)
+    throw UsageError("--prepared", "holds the rest state of an in-core run; it cannot be combined with --max-memory");
   if (!o.collisionMask.empty() && !hasGridExtension(o.collisionMask))
     throw InputError(o.collisionMask, "unknown grid format for --collision-mask");
   if (!o.posedMesh.empty() && !hasTetMeshExtension(o.posedMesh))
@@ -364,7 +384,16 @@ DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines)
   report.workingFactor = source.factor;
   report.workingVoxels = source.workingGrid().voxelCount();
 
-  PosedMesh posedMesh = o.articulated ? poseArticulated(o, source, report) : poseByCage(o, source, engines, report);
+  std::shared_ptr<PreparedState> prepared;
+  if (!o.prepared.empty()) {
+    StageTimer preparedTimer("prepared state");
+    prepared = std::make_shared<PreparedState>(PreparedState::read(o.prepared));
+    const std::string note =
+        prepared->check(preparedInputs(o.input, o.organs, o.organsSource, o.parts, source.factor, source.workingGrid().dims()));
+    if (!note.empty()) warn(o, note);
+    report.stages.push_back(preparedTimer.stop());
+  }
+  PosedMesh posedMesh = o.articulated ? poseArticulated(o, source, report, prepared.get()) : poseByCage(o, source, engines, report, prepared);
   const TetMesh& rest = posedMesh.rest;
   const std::vector<Eigen::Vector3d>& deformed = posedMesh.deformed;
   LabelGrid& collisionMask = posedMesh.collisionMask;

@@ -31,6 +31,9 @@
 
 namespace vox {
 
+struct PipelineOptions;
+class PreparedState;
+
 struct DeformGridRequest {
   std::string input;          // label grid file
   std::string output;         // posed grid file (any grid format in core)
@@ -76,6 +79,12 @@ struct DeformGridRequest {
   // tissue overlaps) on the posed grid's lattice at the working grid's
   // spacing; "" for none.
   std::string collisionMask;
+  // A rest state saved by `voxmorph prepare` (deform/prepared_state.h) to
+  // take the skeleton, cage, envelope and transfer mesh from; "" for none.
+  // One made from another grid, organ table or parts grid, another working
+  // grid, or without this pose's separations and cage options is refused
+  // (InputError naming the file and what differs). In core only.
+  std::string prepared;
   // Copied into the report: the caller's command line and input digests.
   Provenance provenance;
   // Warnings (foreground outside the cage).
@@ -92,5 +101,13 @@ void checkDeformGridRequest(const DeformGridRequest& request);
 // Runs the whole deformation on `engines` and writes request.output (and the
 // optional outputs); the returned report has every field of the JSON report.
 DeformationReport deformGrid(const DeformGridRequest& request, RasterEngines& engines);
+
+// The options deformGrid gives the cage pipeline for `request` on `working`
+// (the source block-downsampled by `factor`): the pose compiled against the
+// skeleton (prepared->skeleton when it holds one, else built), the body
+// parts of a grid whose organ table names bones, the cage options and the
+// extra separations. prepare_run.h prepares with the same options.
+PipelineOptions deformPipelineOptions(const DeformGridRequest& request, const LabelGrid& working, int factor,
+                                      const PreparedState* prepared = nullptr);
 
 }  // namespace vox
