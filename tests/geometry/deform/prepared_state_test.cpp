@@ -111,7 +111,7 @@ TEST(PreparedState, HoldsTheSkeletonAndOneCageAndMeshPerSetOfSeparations) {
 
 TEST(PreparedState, ReadsBackBitForBit) {
   const PreparedState& s = prepared().state;
-  const std::string path = test::tempDir() + "/figure.vxprep";
+  const std::string path = figure().dir + "/figure.vxprep";
   s.write(path);
   const PreparedState r = PreparedState::read(path);
   EXPECT_EQ(r.source, path);
@@ -230,7 +230,7 @@ TEST(PreparedState, RefusesWhatItWasNotPreparedFor) {
   EXPECT_NE(e.find("prepared from another organ table (figure.dat"), std::string::npos) << e;
   e = errorOf([&] { state->check(preparedInputs(figure().grid, std::nullopt, "", "", 1, grid.dims())); });
   EXPECT_NE(e.find("this run has none"), std::string::npos) << e;
-  const std::string moved = test::tempDir() + "/other.mha";
+  const std::string moved = figure().dir + "/other.mha";
   LabelGrid changed = grid;
   changed.labels()[0] = 1;
   writeGrid(moved, changed);
@@ -268,7 +268,7 @@ TEST(PreparedState, RefusesTruncatedCorruptedForeignAndOtherVersionFiles) {
             std::string::npos)
       << refusal(b);
   EXPECT_NE(refusal(bytes + "x").find("corrupted"), std::string::npos);
-  EXPECT_NE(errorOf([] { PreparedState::read(test::tempDir() + "/missing.vxprep"); }).find("cannot open"), std::string::npos);
+  EXPECT_NE(errorOf([] { PreparedState::read(figure().dir + "/missing.vxprep"); }).find("cannot open"), std::string::npos);
 }
 
 TEST(PreparedState, ACountBeyondItsBytesIsRefusedBeforeAnythingIsAllocated) {
