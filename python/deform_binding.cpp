@@ -75,9 +75,10 @@ DeformGridRequest::VolumeTarget volumeTarget(const py::object& preserve, bool& o
 py::tuple deform(const py::object& gridArgument, const py::object& pose, const py::object& organsArgument, const py::object& preserveVolumes,
                  const py::object& prepared, const std::string& output, bool cpu, int samples, bool rigidBones, bool articulated, bool force,
                  double maxBodyChange, double maxBoneChange, bool allowGrowth, std::int64_t maxMemoryMb) {
-  if (!prepared.is_none())
-    throw py::value_error("prepared: prepared-state files are not available in this version of voxmorph; leave prepared=None");
+  if (!prepared.is_none() && py::isinstance<Grid>(gridArgument))
+    throw py::value_error("prepared: a prepared state is checked against the grid file it was made from; give the grid as that path, not a Grid");
   DeformGridRequest request;
+  if (!prepared.is_none()) request.prepared = py::str(prepared).cast<std::string>();
   request.preserveVolumes = false;
   request.volumeTarget = volumeTarget(preserveVolumes, request.preserveVolumes);
   const OrganArgument organs = organArgument(organsArgument);
@@ -256,8 +257,10 @@ organs: OrganTable or its path: masses in the report, label groups for separatio
     and the bones a joint pose needs.
 preserve_volumes: False; True or 'deformed' relabels boundary voxels so each label keeps
     the volume the deformation gives it; 'rest' keeps its rest volume (organ masses).
-prepared: reserved for prepared-state files, which this version does not have:
-    anything but None raises ValueError.
+prepared: a rest state saved by `voxmorph prepare` (.vxprep path): the skeleton, cage,
+    envelope and transfer mesh are taken from it instead of rebuilt; the result is
+    byte-identical. The grid must then be given as the path it was prepared from; a state
+    made from another grid, organ table or options raises ValueError naming what differs.
 output: also write the posed grid to this file (atomically: nothing is left on error or
     Ctrl-C); by default it is only returned.
 cpu: rasterize with the CPU reference instead of the GPU (the GPU falls back to the CPU

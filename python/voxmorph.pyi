@@ -69,7 +69,7 @@ def deform(
     *,
     organs: _Organs = None,
     preserve_volumes: bool | Literal["deformed", "rest"] = False,
-    prepared: None = None,
+    prepared: str | PathLike[str] | None = None,
     output: str = "",
     cpu: bool = False,
     samples: int = 1,
@@ -82,7 +82,7 @@ def deform(
     max_memory: int = 0,
 ) -> tuple[Grid, dict[str, Any]]:
     """Re-poses a grid as `voxmorph deform`: (posed Grid, the CLI's JSON report as a dict).
-    prepared: reserved (prepared-state files do not exist yet): anything but None raises ValueError."""
+    prepared: a `voxmorph prepare` state (.vxprep) of the grid file given as `grid`; byte-identical results."""
 
 class Posing:
     """The per-frame posing session: pipeline built once, each frame() is ARAP -> Green coordinates -> propagation."""

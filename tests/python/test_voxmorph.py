@@ -121,9 +121,24 @@ def test_deform_is_byte_identical_to_the_cli(figure, tmp_path):
     assert sorted(os.listdir(tmp_path)) == ["cli.nii.gz", "paths.nii.gz", "python.nii.gz"]
 
 
-def test_deform_refuses_prepared_state(figure):
+def test_deform_takes_a_prepared_state(figure, tmp_path):
+    state = str(tmp_path / "figure.vxprep")
+    cli("prepare", figure["grid"], "--organs", figure["organs"], "--pose", figure["pose"], "-o", state, "-q")
+    common = dict(organs=figure["organs"], preserve_volumes=True, cpu=True, force=True)
+    voxmorph.deform(figure["grid"], figure["pose"], output=str(tmp_path / "without.nii.gz"), **common)
+    voxmorph.deform(figure["grid"], figure["pose"], prepared=state, output=str(tmp_path / "with.nii.gz"), **common)
+    assert (tmp_path / "with.nii.gz").read_bytes() == (tmp_path / "without.nii.gz").read_bytes()
+    # A Grid in memory has no file for the state to be checked against.
     with pytest.raises(ValueError, match="prepared"):
-        voxmorph.deform(voxmorph.Grid.read(figure["grid"]), figure["pose"], organs=figure["organs"], prepared="state.vmp")
+        voxmorph.deform(voxmorph.Grid.read(figure["grid"]), figure["pose"], prepared=state, **common)
+    # A state of another grid: the CLI's one-line refusal, nothing written.
+    other = tmp_path / "other.nii.gz"
+    g = voxmorph.Grid.read(figure["grid"])
+    g.labels[0, 0, 0] = 1
+    g.write(str(other))
+    with pytest.raises(ValueError, match="prepared from another grid"):
+        voxmorph.deform(str(other), figure["pose"], prepared=state, output=str(tmp_path / "stale.nii.gz"), **common)
+    assert not (tmp_path / "stale.nii.gz").exists()
 
 
 # --- Posing, parts ------------------------------------------------------------------------
