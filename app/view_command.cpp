@@ -27,6 +27,8 @@ void addViewCommand(CLI::App& app) {
   cmd->add_option("--prepared", o->prepared, "Rest state saved by voxmorph prepare (.vxprep): its skeleton, cage, envelope and transfer mesh "
                                              "instead of building them (the setup pose's separations must be among those prepared)");
   cmd->add_option("--script", o->script, "Run a scripted session (JSON list of steps; docs/VIEWER.md) and quit");
+  cmd->add_flag("--offscreen", o->offscreen, "Run the script without a window or display server: frames drawn into an offscreen image "
+                                            "of the window's size (same screenshots and frame log)");
   cmd->add_option("--screenshot-dir", o->screenshotDir, "Directory for the script's screenshots");
   cmd->add_option("--frame-log", o->frameLog, "Write per-frame times (deformation, ray casting, UI, present) as CSV");
   cmd->add_option("--width", o->width, "Window width")->capture_default_str()->check(CLI::Range(720, 8192));
@@ -35,6 +37,7 @@ void addViewCommand(CLI::App& app) {
   cmd->add_option("--max-memory", *maxMemoryMb, "Refuse a grid whose in-core work exceeds this budget (MB; default the machine's memory)")
       ->check(integerIn(64, std::int64_t(1) << 30, "MB"));
   cmd->callback([o, maxMemoryMb] {
+    if (o->offscreen && o->script.empty()) throw UsageError("--offscreen", "needs a --script (an offscreen session takes no input)");
     checkGridFitsMemory(o->grid, *maxMemoryMb, kPosedMemory, "pose it interactively", "the viewer needs the whole grid in memory");
     runViewer(*o);
   });

@@ -48,7 +48,8 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options) {
   const int height = script_ && script_->script().height ? script_->script().height : options.height;
   // The window first: without a display the session ends before the
   // pre-processing.
-  window_ = std::make_unique<ViewerWindow>("voxmorph view - " + options_.grid, width, height, options_.vsync && !script_);
+  window_ = std::make_unique<ViewerWindow>("voxmorph view - " + options_.grid, width, height, options_.vsync && !script_,
+                                           options_.offscreen);
   window_->onScroll([this](double dy) {
     if (!input_.scripted) input_.scroll += dy;
   });
@@ -205,27 +206,23 @@ void Viewer::handleKeys() {
 }
 
 void Viewer::run() {
-  GLFWwindow* glfw = window_->glfw();
-  gpu::Swapchain& swapchain = window_->swapchain();
+  gpu::RenderTarget& target = window_->target();
   EditState lastState = editor_->state();
   bool lastDragging = false;
-  while (!quit_ && !glfwWindowShouldClose(glfw)) {
+  while (!quit_ && !window_->closeRequested()) {
     const auto t0 = std::chrono::steady_clock::now();
-    glfwPollEvents();
+    window_->pollEvents();
     input_.scripted = script_.has_value();
-    if (!script_) {
-      glfwGetCursorPos(glfw, &input_.x, &input_.y);
-      for (int b = 0; b < 3; ++b) input_.down[b] = glfwGetMouseButton(glfw, b) == GLFW_PRESS;
-    }
+    if (!script_) window_->pointer(input_.x, input_.y, input_.down);
     const bool playing = script_ && script_->beginFrame(*this);
     int fw = 0, fh = 0;
     window_->framebufferSize(fw, fh);
     if (fw == 0 || fh == 0) {
-      glfwWaitEvents();
+      window_->waitEvents();
       continue;
     }
-    if (std::uint32_t(fw) != swapchain.width() || std::uint32_t(fh) != swapchain.height()) {
-      swapchain.resize(std::uint32_t(fw), std::uint32_t(fh));
+    if (std::uint32_t(fw) != target.width() || std::uint32_t(fh) != target.height()) {
+      target.resize(std::uint32_t(fw), std::uint32_t(fh));
       viewDirty_ = true;
     }
     const CameraRays rays = orbit_.viewRays(fw, fh);
@@ -272,7 +269,7 @@ void Viewer::run() {
 
     const auto tPresent = std::chrono::steady_clock::now();
     const ViewerWindow::Presented presented = window_->present(view_);
-    if (presented != ViewerWindow::Presented::Done) swapchain.resize(std::uint32_t(fw), std::uint32_t(fh));
+    if (presented != ViewerWindow::Presented::Done) target.resize(std::uint32_t(fw), std::uint32_t(fh));
     if (presented == ViewerWindow::Presented::NoImage) continue;
     frame_.presentMs = msSince(tPresent);
     frame_.totalMs = msSince(t0);

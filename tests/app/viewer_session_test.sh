@@ -33,41 +33,6 @@ if [ -n "${VOX_UPDATE_GOLDEN:-}" ]; then  # regenerate, then look at the PNGs
   cp posed.png "$src/assets/golden/viewer_am_right_arm_45.png"
   cp posed_cut.png "$src/assets/golden/viewer_am_right_arm_45_cut.png"
 fi
-python3 - "$src/assets/golden" <<'PY'
-import sys, zlib, struct
-def load(path):
-    d = open(path, 'rb').read()
-    w, h, depth, ctype = struct.unpack('>IIBB', d[16:26])
-    assert depth == 8 and ctype == 2, path
-    i, idat = 8, b''
-    while i < len(d):
-        n = struct.unpack('>I', d[i:i + 4])[0]
-        if d[i + 4:i + 8] == b'IDAT': idat += d[i + 8:i + 8 + n]
-        i += 12 + n
-    raw, rows, prev, stride = zlib.decompress(idat), [], bytearray(w * 3), w * 3
-    for y in range(h):
-        f, line = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
-        for x in range(stride):
-            a = line[x - 3] if x >= 3 else 0
-            b = prev[x]
-            c = prev[x - 3] if x >= 3 else 0
-            if f == 1: line[x] = (line[x] + a) & 255
-            elif f == 2: line[x] = (line[x] + b) & 255
-            elif f == 3: line[x] = (line[x] + (a + b) // 2) & 255
-            elif f == 4:
-                p = a + b - c; pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
-                line[x] = (line[x] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
-        rows.append(line); prev = line
-    return w, h, rows
-golden = sys.argv[1]
-for shot, gold in [('rest.png', 'viewer_am_rest.png'), ('posed.png', 'viewer_am_right_arm_45.png'),
-                   ('posed_cut.png', 'viewer_am_right_arm_45_cut.png')]:
-    w, h, a = load(shot)
-    gw, gh, b = load(golden + '/' + gold)
-    assert (w, h) == (gw, gh), (shot, w, h, gw, gh)
-    differing = sum(1 for y in range(h) for x in range(w)
-                    if max(abs(a[y][3 * x + k] - b[y][3 * x + k]) for k in range(3)) > 5)
-    print(f'{shot}: {differing} of {w * h} pixels differ from {gold} by more than 5/255')
-    assert differing <= 0.001 * w * h, shot
-PY
+python3 "$src/tests/app/golden_png.py" "$src/assets/golden" rest.png=viewer_am_rest.png posed.png=viewer_am_right_arm_45.png \
+  posed_cut.png=viewer_am_right_arm_45_cut.png
 echo "viewer session: passed"
