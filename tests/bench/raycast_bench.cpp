@@ -6,9 +6,12 @@
 //
 // A frame is what a pose change costs: deformed positions -> render frame
 // and refitted BVH (CPU), then upload, per-tet factors, entry buffer, rays
-// and readback (GPU). Counters: cpu_ms is the process's CPU time per frame
-// (all lavapipe threads), which on a loaded machine says more than wall
-// time; gpu_ms the kernels' timestamps.
+// and readback (GPU). Raycast/... reads the image back to the host (what
+// `voxmorph render` and a screenshot need); RaycastToImage/... is the same
+// frame left in a GPU image (gpu::RaycastKernel::renderTo), as the viewer
+// draws it, so the two differ by the read-back. Counters: cpu_ms is the
+// process's CPU time per frame (all lavapipe threads), which on a loaded
+// machine says more than wall time; gpu_ms the kernels' timestamps.
 //
 // The transfer mesh is the pipeline's (buildTransferMesh: CGAL Mesh_3 of the
 // foreground, default sizing field, built once per phantom on the original
@@ -34,6 +37,7 @@
 #include "geometry/render/rest_transfer_mesh.h"
 #include "gpu/buffer.h"
 #include "gpu/context.h"
+#include "gpu/image.h"
 #include "gpu/kernels/rasterize.h"
 #include "gpu/kernels/raycast.h"
 #include "tests/geometry/render/fixtures.h"
@@ -141,7 +145,7 @@ RaycastShading benchShading() {
   return shading;
 }
 
-void BM_RaycastFrame(benchmark::State& state, std::string name, test::Deformation pose, std::string cut) {
+void BM_RaycastFrame(benchmark::State& state, std::string name, test::Deformation pose, std::string cut, bool readBack) {
   Scene& s = scene(name);
   int w = 0, h = 0;
   imageSize(w, h);
@@ -154,19 +158,23 @@ void BM_RaycastFrame(benchmark::State& state, std::string name, test::Deformatio
   const Camera camera =
       parseCamera("azimuth=20,elevation=10", restFrame.toGrid(restFrame.cellsLo), restFrame.toGrid(restFrame.cellsHi), w, h);
   s.kernel->render(restFrame, makeRaycastView(restFrame, camera, cuts), s.palette, shading);  // pipelines compiled
+  gpu::Image2D target;
+  if (!readBack) target = gpu::Image2D(context(), std::uint32_t(w), std::uint32_t(h));
   double cpu = 0.0, gpu = 0.0, frameCpu = 0.0;
-  std::size_t visible = 0;
+  RgbImage image;
   for (auto _ : state) {
     const double c0 = cpuMs();
     const RaycastFrame frame = prepareRaycastFrame(s.mesh, posed);
     frameCpu += cpuMs() - c0;
-    const RgbImage image = s.kernel->render(frame, makeRaycastView(frame, camera, cuts), s.palette, shading);
+    if (readBack) image = s.kernel->render(frame, makeRaycastView(frame, camera, cuts), s.palette, shading);
+    else s.kernel->renderTo(target, frame, makeRaycastView(frame, camera, cuts), s.palette, shading);
     cpu += cpuMs() - c0;
     const gpu::RaycastFrameTimes& t = s.kernel->lastTimes();
     gpu += t.prepareGpuMs + t.entriesGpuMs + t.raycastGpuMs;
-    visible = countNotBackground(image, RaycastShading{}.background);
     benchmark::DoNotOptimize(image.pixels.data());
   }
+  if (!readBack) image = target.download();  // after the timed frames, for the pixel count
+  const std::size_t visible = countNotBackground(image, RaycastShading{}.background);
   const double n = double(state.iterations());
   state.counters["cpu_ms"] = cpu / n;
   state.counters["frame_prep_cpu_ms"] = frameCpu / n;
@@ -221,13 +229,15 @@ void BM_RerasterizeAndUpload(benchmark::State& state, std::string name, test::De
 int main(int argc, char** argv) {
   for (const char* name : {"am", "af", "af_upsampled_171M"}) {
     for (test::Deformation pose : {test::Deformation::Rest, test::Deformation::Twist, test::Deformation::Bend})
-      for (const char* cut : {"", "y<135mm"}) {
-        const std::string label = std::string("Raycast/") + name + "/" + test::deformationName(pose) + (*cut ? "/cut" : "");
-        benchmark::RegisterBenchmark(label.c_str(), BM_RaycastFrame, std::string(name), pose, std::string(cut))
-            ->Unit(benchmark::kMillisecond)
-            ->Iterations(5)
-            ->UseRealTime();
-      }
+      for (const char* cut : {"", "y<135mm"})
+        for (bool readBack : {true, false}) {
+          const std::string label = std::string(readBack ? "Raycast/" : "RaycastToImage/") + name + "/" + test::deformationName(pose) +
+                                    (*cut ? "/cut" : "");
+          benchmark::RegisterBenchmark(label.c_str(), BM_RaycastFrame, std::string(name), pose, std::string(cut), readBack)
+              ->Unit(benchmark::kMillisecond)
+              ->Iterations(5)
+              ->UseRealTime();
+        }
     for (test::Deformation pose : {test::Deformation::Twist, test::Deformation::Bend})
       benchmark::RegisterBenchmark((std::string("RerasterizeAndUpload/") + name + "/" + test::deformationName(pose)).c_str(),
                                    BM_RerasterizeAndUpload, std::string(name), pose)
