@@ -35,7 +35,6 @@ public:
   // Ends Dear ImGui (the device idle first); the destructor does it otherwise.
   void shutdownImGui();
 
-  bool offscreen() const { return window_ == nullptr; }
   gpu::Context& context() { return *context_; }
   gpu::RenderTarget& target() { return *target_; }
   // The window's framebuffer, or the offscreen image.
@@ -55,8 +54,8 @@ public:
   void newBackendFrame();
   enum class Presented { NoImage, Done, OutOfDate };
   // Draws `view` (when valid; else the background) right of the panel and
-  // the rendered UI over it, and presents it; `screenshot` takes the
-  // presented image. NoImage: none could be acquired (resize first);
+  // the rendered UI over it, and presents it (offscreen: leaves it in the
+  // image); `screenshot` takes the finished image. NoImage: none could be acquired (resize first);
   // OutOfDate: presented, resize before the next frame.
   Presented present(const gpu::Image2D& view, RgbImage* screenshot = nullptr);
 
