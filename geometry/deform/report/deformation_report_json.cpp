@@ -98,7 +98,7 @@ std::string deformationReportJson(const DeformationReport& r) {
                      {"tets", s.tets},
                      {"mean_error", s.meanError},
                      {"max_error", s.maxError},
-                     {"update_strength", s.strength},
+                     {"split_edges", s.splitEdges},
                      {"seconds", s.seconds}});
   }
   root["refinement"] = {{"iterations", steps}, {"stop", r.refinement.stopReason}};
