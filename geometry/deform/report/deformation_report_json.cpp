@@ -101,7 +101,7 @@ std::string deformationReportJson(const DeformationReport& r) {
                      {"split_edges", s.splitEdges},
                      {"seconds", s.seconds}});
   }
-  root["refinement"] = {{"iterations", steps}, {"stop", r.refinement.stopReason}};
+  root["refinement"] = {{"iterations", steps}, {"kept", r.refinement.kept}, {"stop", r.refinement.stopReason}};
   root["distortion"] = {{"volume_mm3", r.distortion.volume},
                         {"angle_deg", toJson(r.distortion.angle)},
                         {"stretch", toJson(r.distortion.stretch)}};
