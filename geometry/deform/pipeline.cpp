@@ -317,11 +317,23 @@ std::vector<std::uint8_t> DeformationPipeline::acrossSeparation() const {
   for (const LimbSeparation& s : cuts)
     for (const Label g : {s.groupA, s.groupB})
       if (g < separated.size()) separated[g] = 1;
-  const std::vector<std::uint8_t> inside = insideCage(cage_, transferMesh_.positions);
-  auto candidate = [&](std::size_t v) {
+  // Only the vertices of a separated group that are not placed otherwise
+  // need the cage's winding number.
+  const auto ofSeparatedGroup = [&](std::size_t v) {
     const Label g = vertexGroup[v];
-    return inside[v] && !out[v] && g != kMixed && g < separated.size() && separated[g];
+    return !out[v] && g != kMixed && g < separated.size() && separated[g];
   };
+  std::vector<std::size_t> classified;
+  std::vector<Eigen::Vector3d> points;
+  for (std::size_t v = 0; v < nv; ++v)
+    if (ofSeparatedGroup(v)) {
+      classified.push_back(v);
+      points.push_back(transferMesh_.positions[v]);
+    }
+  const std::vector<std::uint8_t> pointInside = insideCage(cage_, points);
+  std::vector<std::uint8_t> inside(nv, 0);
+  for (std::size_t k = 0; k < classified.size(); ++k) inside[classified[k]] = pointInside[k];
+  auto candidate = [&](std::size_t v) { return inside[v] && ofSeparatedGroup(v); };
   DisjointSets islands(nv);
   const auto find = [&](std::int32_t v) { return islands.find(v); };
   for (std::size_t t = 0; t < transferMesh_.tetCount(); ++t) {

@@ -5,7 +5,7 @@
 //   DeformationPipeline pipeline(workingGrid, options);  // pre-process
 //   pipeline.setPose(pose, "pose.json");                  // handles, factorizations
 //   pipeline.deform();                                    // one frame
-//   pipeline.refine(refinementOptions, interpolation);    // post-process, eq. 4.5-4.7
+//   pipeline.refine(refinementOptions, interpolation);    // post-process, eq. 4.5-4.6
 //   ... rasterize pipeline.transferMesh() / deformedTransferMesh() (rasterize.h,
 //       gpu/kernels/rasterize.h, out_of_core.h), or ray-cast them.
 //
