@@ -161,9 +161,11 @@ TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, con
   const double radius = 4.0 * g.spacing.maxCoeff();
   for (int pass = 0;; ++pass) {
     parallelRanges(padded.dims[2], workerThreads(0), [&](std::int64_t k0, std::int64_t k1) {
-      for (std::int64_t k = k0; k < k1; ++k)
+      for (std::int64_t k = k0; k < k1; ++k) {
+        throwIfCancelled();
         for (std::int64_t j = 0; j < padded.dims[1]; ++j)
           for (std::int64_t i = 0; i < padded.dims[0]; ++i) atCentres.at(i, j, k) = Label(label(padded.voxelCenter(i, j, k)));
+      }
     }, 8);
     reportProgress("transfer mesh", 0.1);
     TetMesh mesh = restrictedDelaunayVolume(domain, criteria);

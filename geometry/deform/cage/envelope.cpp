@@ -1,5 +1,6 @@
 #include "geometry/deform/cage/envelope.h"
 
+#include "geometry/cancellation.h"
 #include "geometry/distance_transform.h"
 #include "geometry/deform/cage/restricted_delaunay.h"
 #include "geometry/error.h"
@@ -33,7 +34,8 @@ void gaussianSmooth(ScalarGrid& field, double sigmaMm) {
     // Lines are independent: ranges of them on the parallel loop.
     parallelRanges(dims[a2], workerThreads(0), [&](std::int64_t u0, std::int64_t u1) {
       std::vector<float> line(static_cast<std::size_t>(len));
-      for (std::int64_t u = u0; u < u1; ++u)
+      for (std::int64_t u = u0; u < u1; ++u) {
+        throwIfCancelled();
         for (std::int64_t t = 0; t < dims[a1]; ++t) {
           const std::int64_t base = t * stride[a1] + u * stride[a2];
           for (std::int64_t p = 0; p < len; ++p) line[std::size_t(p)] = field.values[std::size_t(base + p * stride[axis])];
@@ -46,6 +48,7 @@ void gaussianSmooth(ScalarGrid& field, double sigmaMm) {
             field.values[std::size_t(base + p * stride[axis])] = float(v);
           }
         }
+      }
     }, 4);
   }
 }
