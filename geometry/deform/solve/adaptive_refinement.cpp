@@ -13,9 +13,10 @@ namespace vox {
 
 namespace {
 
-// A marked tet is bisected this many times in a round (longest edge first,
-// then its children's): three bisections of a tet halve its edges, as one
-// regular 1-to-8 subdivision would, with the tets' shapes kept.
+// A marked tet is bisected this many times in a round (its longest edge,
+// then its children's): three bisections of a tet shrink it about as one
+// regular 1-to-8 subdivision would, and splitting the longest edge first
+// keeps the children from flattening.
 constexpr int kBisectionsPerRound = 3;
 // A round bisects in at most this many conflict-free passes (in one pass no
 // tet holds two split edges); tets still due after them are measured again

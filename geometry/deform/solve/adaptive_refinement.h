@@ -9,8 +9,8 @@
 // is large (eq. 4.7), then embeds and deforms all of it again. Here the TM
 // is refined in place instead: each round splits only the tets whose e_t
 // crosses the threshold that makes the error non-uniform (e_t > uniformRatio
-// e_mean), by three successive longest-edge bisections (which halve a tet's
-// edges and keep its shape), and only the new midpoints are
+// e_mean), by three successive longest-edge bisections (about the edge
+// halving of a regular 1-to-8 subdivision), and only the new midpoints are
 // embedded (the subject places them by the deformation itself). A tet can
 // only gain from a split when the deformation places the midpoint: edges
 // with an end placed otherwise (the propagation outside the cage, a rigid
