@@ -216,6 +216,116 @@ void ballCentre(Joint& joint, const GridGeometry& g, const BoneVoxels& bone, con
 }
 
 // Bone points of the parts `parts` (e.g. the trunk's) as one cloud.
+// A bone's voxels as a bitmap over their bounding box (constant-time lookup).
+class VoxelBitmap {
+public:
+  VoxelBitmap(const GridGeometry& g, const std::vector<std::int64_t>& voxels) : g_(g) {
+    lo_ = {std::numeric_limits<std::int64_t>::max(), std::numeric_limits<std::int64_t>::max(), std::numeric_limits<std::int64_t>::max()};
+    hi_ = {-1, -1, -1};
+    for (const std::int64_t v : voxels) {
+      const Index3 c = g.ijk(v);
+      for (int a = 0; a < 3; ++a) {
+        lo_[std::size_t(a)] = std::min(lo_[std::size_t(a)], c[a]);
+        hi_[std::size_t(a)] = std::max(hi_[std::size_t(a)], c[a]);
+      }
+    }
+    if (voxels.empty()) return;
+    for (int a = 0; a < 3; ++a) size_[std::size_t(a)] = hi_[std::size_t(a)] - lo_[std::size_t(a)] + 1;
+    bits_.assign(std::size_t(size_[0] * size_[1] * size_[2]), false);
+    for (const std::int64_t v : voxels) {
+      const Index3 c = g.ijk(v);
+      bits_[offset(c[0], c[1], c[2])] = true;
+    }
+  }
+  // Whether the voxel nearest the grid-frame point p is set.
+  bool at(const Eigen::Vector3d& p) const {
+    const Eigen::Vector3d c = g_.continuousIndex(p);
+    const std::int64_t i = std::llround(c[0]), j = std::llround(c[1]), k = std::llround(c[2]);
+    if (bits_.empty() || i < lo_[0] || j < lo_[1] || k < lo_[2] || i > hi_[0] || j > hi_[1] || k > hi_[2]) return false;
+    return bits_[offset(i, j, k)];
+  }
+
+private:
+  std::size_t offset(std::int64_t i, std::int64_t j, std::int64_t k) const {
+    return std::size_t(((k - lo_[2]) * size_[1] + (j - lo_[1])) * size_[0] + (i - lo_[0]));
+  }
+  const GridGeometry& g_;
+  std::array<std::int64_t, 3> lo_{}, hi_{}, size_{};
+  std::vector<bool> bits_;
+};
+
+// Child bone voxels (`child`: surface voxel centres) that the hinge's
+// flexion, every 10 degrees up to the top of its range, carries into the
+// parent's bone: how well `centre` serves as the hinge's centre (0: the
+// child's bone end turns clear of the parent's). Counting stops past
+// `enough`.
+std::size_t hingeOverlaps(const std::vector<Eigen::Matrix3d>& turns, const Eigen::Vector3d& centre, const std::vector<Eigen::Vector3d>& child,
+                          const VoxelBitmap& parent, std::size_t enough) {
+  std::size_t n = 0;
+  for (const Eigen::Matrix3d& r : turns)
+    for (const Eigen::Vector3d& p : child)
+      if (parent.at(centre + r * (p - centre)) && ++n > enough) return n;
+  return n;
+}
+
+// The hinge's centre moved across its flexion axis to where the child's bone
+// end turns clear of the parent's bone over the flexion range, the nearest
+// such place to the estimate (the parent bone's distal end, which lies on its
+// shaft, while the trochlea and the femoral condyles turn about a centre in
+// front of the humeral shaft and behind the femoral one). Searched within an
+// eighth of the parent bone's length, on a grid of two finest voxels, then of
+// half a voxel about the best; the fewest overlaps win, then the nearest to
+// the estimate; a move under a finest voxel is not made. Returns the
+// distance moved (mm).
+double clearHinge(Joint& joint, const GridGeometry& g, const BoneVoxels& parent, const BoneShape& parentShape, const BoneVoxels& child) {
+  const double reach = 0.3 * parentShape.length(), range = 0.125 * parentShape.length();
+  std::vector<std::int64_t> childSorted = child.voxels;
+  std::sort(childSorted.begin(), childSorted.end());
+  std::vector<Eigen::Vector3d> near;
+  for (const Eigen::Vector3d& p : centres(g, surfaceVoxels(g, childSorted)))
+    if ((p - joint.centre).norm() < reach) near.push_back(p);
+  // At most kSamples of them, evenly strided (fine grids).
+  constexpr std::size_t kSamples = 4000;
+  if (near.size() > kSamples) {
+    std::vector<Eigen::Vector3d> kept;
+    kept.reserve(kSamples);
+    for (std::size_t i = 0; i < kSamples; ++i) kept.push_back(near[i * near.size() / kSamples]);
+    near.swap(kept);
+  }
+  const Eigen::Vector3d axis = joint.axis(Dof::Flexion).normalized();
+  Eigen::Vector3d u = joint.longAxis - joint.longAxis.dot(axis) * axis;
+  if (near.empty() || range <= 0.0 || u.norm() < 1e-6) return 0.0;
+  u.normalize();
+  const Eigen::Vector3d w = axis.cross(u);
+  std::vector<Eigen::Matrix3d> turns;
+  for (double degrees = 10.0; degrees <= joint.kind().range[std::size_t(Dof::Flexion)][1]; degrees += 10.0)
+    turns.push_back(joint.rotation({degrees, 0.0, 0.0}));
+  const VoxelBitmap parentBits(g, parent.voxels);
+  const Eigen::Vector3d estimate = joint.centre;
+  std::size_t best = hingeOverlaps(turns, estimate, near, parentBits, std::numeric_limits<std::size_t>::max());
+  if (best == 0) return 0.0;
+  Eigen::Vector2d bestOffset = Eigen::Vector2d::Zero();
+  const auto consider = [&](const Eigen::Vector2d& o) {
+    if (o.norm() > range) return;
+    const std::size_t n = hingeOverlaps(turns, estimate + o[0] * u + o[1] * w, near, parentBits, best);
+    if (n < best || (n == best && o.norm() < bestOffset.norm())) {
+      best = n;
+      bestOffset = o;
+    }
+  };
+  const double coarse = 2.0 * g.spacing.minCoeff();
+  const int steps = int(std::ceil(range / coarse));
+  for (int a = -steps; a <= steps; ++a)
+    for (int b = -steps; b <= steps; ++b) consider(Eigen::Vector2d(a, b) * coarse);
+  const Eigen::Vector2d around = bestOffset;
+  for (int a = -4; a <= 4; ++a)
+    for (int b = -4; b <= 4; ++b) consider(around + Eigen::Vector2d(a, b) * (0.25 * coarse));
+  // A move under a finest voxel is within what the bone end's voxels say.
+  if (bestOffset.norm() < g.spacing.minCoeff()) return 0.0;
+  joint.centre = estimate + bestOffset[0] * u + bestOffset[1] * w;
+  return bestOffset.norm();
+}
+
 std::vector<Eigen::Vector3d> partBonePoints(const GridGeometry& g, const BodyParts& bones, Part part) {
   std::vector<Eigen::Vector3d> out;
   for (const BoneVoxels& b : bones.bones)
@@ -295,27 +405,36 @@ void estimateLimb(std::array<std::optional<Joint>, kJointCount>& found, const Gr
     const Eigen::Vector3d d = target - j.centre;
     j.longAxis = d.norm() > 1e-6 ? Eigen::Vector3d(d.normalized()) : fallback;
   };
-  if (top) {
-    const Eigen::Vector3d distal = mid ? mid->centre : mean(upperShape->end(!*upperProximalHigh, 0.02 * upperShape->length()));
-    towards(*top, distal, -f.superior);
-    setLeftRight(*top, std::nullopt, f);
-  }
-  if (mid) {
-    towards(*mid, low ? low->centre : middleShape->centroid, -f.superior);
-    const BoneShape& s = *upperShape;
-    const std::optional<Eigen::Vector3d> hinge = widestAcross(s.end(!*upperProximalHigh, 0.08 * s.length()), s.axis, 1.5);
-    mid->axisMethod = "bone end width";
-    setLeftRight(*mid, hinge, f);
-  }
-  if (low) {
-    towards(*low, endShape->centroid, -f.superior);
-    std::optional<Eigen::Vector3d> hinge;
-    if (limb.lowHinge) {
-      const BoneShape& s = *middleShape;
-      hinge = widestAcross(s.end(s.nearerHigh(endShape->centroid), 0.06 * s.length()), s.axis, 1.5);
+  const auto setAxes = [&] {
+    if (top) {
+      const Eigen::Vector3d distal = mid ? mid->centre : mean(upperShape->end(!*upperProximalHigh, 0.02 * upperShape->length()));
+      towards(*top, distal, -f.superior);
+      setLeftRight(*top, std::nullopt, f);
     }
-    low->axisMethod = "bone end width";
-    setLeftRight(*low, hinge, f);
+    if (mid) {
+      towards(*mid, low ? low->centre : middleShape->centroid, -f.superior);
+      const BoneShape& s = *upperShape;
+      const std::optional<Eigen::Vector3d> hinge = widestAcross(s.end(!*upperProximalHigh, 0.08 * s.length()), s.axis, 1.5);
+      mid->axisMethod = "bone end width";
+      setLeftRight(*mid, hinge, f);
+    }
+    if (low) {
+      towards(*low, endShape->centroid, -f.superior);
+      std::optional<Eigen::Vector3d> hinge;
+      if (limb.lowHinge) {
+        const BoneShape& s = *middleShape;
+        hinge = widestAcross(s.end(s.nearerHigh(endShape->centroid), 0.06 * s.length()), s.axis, 1.5);
+      }
+      low->axisMethod = "bone end width";
+      setLeftRight(*low, hinge, f);
+    }
+  };
+  setAxes();
+  // The hinge's centre where the child's bone end turns clear of the
+  // parent's, then the axes again from it.
+  if (mid && upper && middle && clearHinge(*mid, g, *upper, *upperShape, *middle) > 0.0) {
+    mid->method = "distal end, cleared over flexion";
+    setAxes();
   }
 }
 

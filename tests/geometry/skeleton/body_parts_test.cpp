@@ -12,6 +12,9 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -257,6 +260,61 @@ TEST(BodyParts, AdultMale) {
     EXPECT_LT(nearest, halfDiagonal) << j->kind().name;
   }
   EXPECT_LT((s.joint(JointId::RightShoulder)->centre - Eigen::Vector3d(97, 145, 1450)).norm(), 5.0);
+
+  // Elbows and knees: turned about their centres through every 10 degrees
+  // of the flexion range, the forearm bones and the tibiae stay out of the
+  // humerus and the femur. At the humerus' and femur's distal ends (the
+  // estimate before the centre is cleared) the forearm bones cut into the
+  // humerus by 1 to 181 voxels per angle, the tibiae into the femur by up
+  // to 496. The cleared centre lies in front of the humeral shaft and
+  // behind the femoral one, as the trochlea and the condyles do.
+  for (const JointId id : {JointId::RightElbow, JointId::LeftElbow, JointId::RightKnee, JointId::LeftKnee}) {
+    const Joint* j = s.joint(id);
+    ASSERT_TRUE(j);
+    EXPECT_EQ(j->method, "distal end, cleared over flexion") << j->kind().name;
+    const bool arm = id == JointId::RightElbow || id == JointId::LeftElbow;
+    const BoneVoxels* parent = s.parts.find(arm ? Bone::Humerus : Bone::Femur, j->kind().side);
+    const BoneVoxels* child = s.parts.find(arm ? Bone::ForearmBones : Bone::LowerLegBones, j->kind().side);
+    ASSERT_TRUE(parent && child);
+    std::vector<std::int64_t> parentVoxels = parent->voxels;
+    std::sort(parentVoxels.begin(), parentVoxels.end());
+    const GridGeometry& g = grid.geometry();
+    int worst = 0;
+    for (double deg = 10.0; deg <= j->kind().range[0][1]; deg += 10.0) {
+      const Eigen::Matrix3d r = j->rotation({deg, 0.0, 0.0});
+      int overlaps = 0;
+      for (const std::int64_t v : child->voxels) {
+        const Index3 c = g.ijk(v);
+        const Eigen::Vector3d q = g.continuousIndex(j->centre + r * (g.voxelCenter(c[0], c[1], c[2]) - j->centre));
+        const std::int64_t qi = std::llround(q[0]), qj = std::llround(q[1]), qk = std::llround(q[2]);
+        overlaps += g.contains(qi, qj, qk) && std::binary_search(parentVoxels.begin(), parentVoxels.end(), g.index(qi, qj, qk));
+      }
+      worst = std::max(worst, overlaps);
+    }
+    std::cout << j->kind().name << ": at most " << worst << " voxels of the child's bone in the parent's over the flexion range\n";
+    EXPECT_LE(worst, 3) << j->kind().name;
+    // The centre in front of the parent bone's axis (its principal axis) at
+    // an elbow, behind it at a knee.
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (const std::int64_t v : parent->voxels) {
+      const Index3 c = g.ijk(v);
+      centroid += g.voxelCenter(c[0], c[1], c[2]) / double(parent->voxels.size());
+    }
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (const std::int64_t v : parent->voxels) {
+      const Index3 c = g.ijk(v);
+      const Eigen::Vector3d d = g.voxelCenter(c[0], c[1], c[2]) - centroid;
+      cov += d * d.transpose();
+    }
+    const Eigen::Vector3d axis = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvectors().col(2);
+    const Eigen::Vector3d off = (j->centre - centroid) - (j->centre - centroid).dot(axis) * axis;
+    const double front = off.dot(j->anterior);
+    std::cout << j->kind().name << ": centre " << front << " mm in front of the parent bone's axis\n";
+    if (arm)
+      EXPECT_GT(front, 0.0) << j->kind().name;
+    else
+      EXPECT_LT(front, 0.0) << j->kind().name;
+  }
 }
 
 }  // namespace
