@@ -128,11 +128,12 @@ void Viewer::renderView(bool interactive) {
     view_ = gpu::Image2D(window_->context(), std::uint32_t(w), std::uint32_t(h));
   const auto t0 = std::chrono::steady_clock::now();
   const CuttingPlanes& cuts = cuts_.planes(editor_->state().cuts);
-  const RaycastFrame frame = prepareRaycastFrame(*mesh_, editor_->transferMeshPositions());
+  const std::vector<Eigen::Vector3d>& positions = editor_->transferMeshPositions();
+  const RaycastFrame frame = placeRaycastFrame(*mesh_, positions);
   const RaycastView view = makeRaycastView(frame, orbit_.camera(w, h), cuts);
   RaycastShading shading;
   shading.normals = panels_->surfaceNormals();
-  kernel_->renderTo(view_, frame, view, palette_, shading);
+  kernel_->renderTo(view_, frame, positions, view, palette_, shading);
   frame_.raycastMs = msSince(t0);
   frame_.renderWidth = w;
   frame_.renderHeight = h;

@@ -21,6 +21,7 @@ using shader::RaycastNode;
 using shader::RaycastParams;
 using shader::RaycastPreparePush;
 using shader::RaycastPush;
+using shader::RaycastRefitPush;
 
 static_assert(VOX_RAYCAST_BVH_STACK == 2 * kBvhMaxDepth);
 static_assert(VOX_RAYCAST_FACE_HIT_TOLERANCE == kFaceHitTolerance);
@@ -69,8 +70,9 @@ std::uint32_t packRgba(Rgb c, bool opaque) {
 
 // An upper bound of the pixels the entry pass tests for any face: the pixel
 // box of its projection, one pixel of slack (the whole image when a vertex
-// lies near or behind the eye).
-std::uint64_t maxFacePixels(const std::vector<Tri>& faces, const std::vector<Eigen::Vector3d>& positions, const RaycastView& view,
+// lies near or behind the eye). `position(v)`: vertex v in the render frame.
+template <class Position>
+std::uint64_t maxFacePixels(const std::vector<Tri>& faces, const Position& position, const RaycastView& view,
                             const Eigen::Matrix3d& toCamera) {
   const int w = view.camera.width, h = view.camera.height;
   const double sxScale = view.camera.tanHalfFovY * view.camera.aspect, syScale = view.camera.tanHalfFovY;
@@ -79,7 +81,7 @@ std::uint64_t maxFacePixels(const std::vector<Tri>& faces, const std::vector<Eig
     double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
     bool behind = false;
     for (std::int32_t v : f) {
-      const Eigen::Vector3d k = toCamera * (positions[std::size_t(v)] - view.eye);
+      const Eigen::Vector3d k = toCamera * (position(std::size_t(v)) - view.eye);
       if (k[0] < 2.0 * VOX_RAYCAST_NEAR_DEPTH) {
         behind = true;
         break;
@@ -112,6 +114,9 @@ RaycastKernel::RaycastKernel(Context& context, const LabelGrid& source, const Ra
       tetCount_(mesh.tets.size()),
       nodeCount_(mesh.restBvh.size()),
       faceCount_(mesh.boundary.size()),
+      refit_(context, {"raycast_refit.comp",
+                       {BindingKind::StorageBuffer, BindingKind::StorageBuffer, BindingKind::StorageBuffer, BindingKind::StorageBuffer},
+                       sizeof(RaycastRefitPush)}),
       prepare_(context, {"raycast_prepare.comp",
                          {BindingKind::StorageBuffer, BindingKind::StorageBuffer, BindingKind::StorageBuffer},
                          sizeof(RaycastPreparePush)}),
@@ -173,14 +178,38 @@ RaycastKernel::RaycastKernel(Context& context, const LabelGrid& source, const Ra
   rest_ = uploadOnce(context, rest, "rest coordinates");
   faces_ = uploadOnce(context, faces, "boundary faces");
 
+  // The BVH with its rest boxes, and the refit order: every leaf, then the
+  // inner nodes by depth, deepest first (children follow their parent in
+  // depth-first order, so one forward sweep gives the depths).
+  std::vector<RaycastNode> nodes(nodeCount_);
+  std::vector<int> depth(nodeCount_, 0);
+  int deepest = 0;
+  for (std::size_t n = 0; n < nodeCount_; ++n) {
+    const BvhNode& b = mesh.restBvh[n];
+    storeNode(b, nodes[n]);
+    if (b.count == 0) {
+      depth[n + 1] = depth[std::size_t(b.rightOrFirst)] = depth[n] + 1;
+      deepest = std::max(deepest, depth[n] + 1);
+    }
+  }
+  std::vector<std::uint32_t> order;
+  order.reserve(nodeCount_);
+  for (std::size_t n = 0; n < nodeCount_; ++n)
+    if (mesh.restBvh[n].count > 0) order.push_back(std::uint32_t(n));
+  refitLevels_.emplace_back(0u, std::uint32_t(order.size()));
+  for (int d = deepest; d >= 0; --d) {
+    const auto first = std::uint32_t(order.size());
+    for (std::size_t n = 0; n < nodeCount_; ++n)
+      if (depth[n] == d && mesh.restBvh[n].count == 0) order.push_back(std::uint32_t(n));
+    if (order.size() > first) refitLevels_.emplace_back(first, std::uint32_t(order.size()) - first);
+  }
+  nodes_ = uploadOnce(context, nodes, "BVH nodes");
+  refitOrder_ = uploadOnce(context, order, "BVH refit order");
+
   const std::uint64_t positionBytes = checkedBinding(context, 16 * std::uint64_t(vertexCount_), "positions");
-  const std::uint64_t nodeBytes = checkedBinding(context, sizeof(RaycastNode) * std::uint64_t(nodeCount_), "BVH nodes");
   const std::uint64_t factorBytes = checkedBinding(context, 64 * std::uint64_t(tetCount_), "tet factors");
-  positionsStaging_ = Buffer(context, positionBytes, MemoryIntent::Upload);
-  nodesStaging_ = Buffer(context, nodeBytes, MemoryIntent::Upload);
+  for (Buffer& b : positions_) b = Buffer(context, positionBytes, MemoryIntent::Upload);
   paramsStaging_ = Buffer(context, sizeof(RaycastParams), MemoryIntent::Upload);
-  positions_ = Buffer(context, positionBytes, MemoryIntent::Device);
-  nodes_ = Buffer(context, nodeBytes, MemoryIntent::Device);
   params_ = Buffer(context, sizeof(RaycastParams), MemoryIntent::Device);
   factors_ = Buffer(context, factorBytes, MemoryIntent::Device);
 }
@@ -188,7 +217,7 @@ RaycastKernel::RaycastKernel(Context& context, const LabelGrid& source, const Ra
 RgbImage RaycastKernel::render(const RaycastFrame& frame, const RaycastView& view, const Palette& palette, const RaycastShading& shading,
                                const RaycastLimits& limits) {
   const auto t0 = std::chrono::steady_clock::now();
-  castRays(frame, view, palette, shading, limits);
+  castRays(frame, nullptr, view, palette, shading, limits);
   const int w = view.camera.width, h = view.camera.height;
   batch_.copy(image_, imageReadback_, 4 * std::uint64_t(w) * std::uint64_t(h));
   finishFrame();
@@ -205,10 +234,36 @@ void RaycastKernel::renderTo(Image2D& target, const RaycastFrame& frame, const R
   const auto t0 = std::chrono::steady_clock::now();
   if (std::int64_t(target.width()) != view.camera.width || std::int64_t(target.height()) != view.camera.height)
     throw RuntimeFailure("ray caster: the target image's size differs from the camera's");
-  castRays(frame, view, palette, shading, limits);
+  castRays(frame, nullptr, view, palette, shading, limits);
   batch_.copy(image_, target);
   finishFrame();
   times_.totalMs = msSince(t0);
+}
+
+void RaycastKernel::renderTo(Image2D& target, const RaycastFrame& frame, const std::vector<Eigen::Vector3d>& deformedPositions,
+                             const RaycastView& view, const Palette& palette, const RaycastShading& shading, const RaycastLimits& limits) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (std::int64_t(target.width()) != view.camera.width || std::int64_t(target.height()) != view.camera.height)
+    throw RuntimeFailure("ray caster: the target image's size differs from the camera's");
+  castRays(frame, &deformedPositions, view, palette, shading, limits);
+  batch_.copy(image_, target);
+  finishFrame();
+  times_.totalMs = msSince(t0);
+}
+
+std::vector<BvhNode> RaycastKernel::downloadBvh() const {
+  std::vector<RaycastNode> stored(nodeCount_);
+  nodes_.download(stored.data(), sizeof(RaycastNode) * stored.size());
+  std::vector<BvhNode> out(nodeCount_);
+  for (std::size_t n = 0; n < nodeCount_; ++n) {
+    for (int a = 0; a < 3; ++a) {
+      out[n].lo[a] = stored[n].lo[a];
+      out[n].hi[a] = stored[n].hi[a];
+    }
+    out[n].rightOrFirst = stored[n].rightOrFirst;
+    out[n].count = stored[n].count;
+  }
+  return out;
 }
 
 void RaycastKernel::finishFrame() {
@@ -216,21 +271,30 @@ void RaycastKernel::finishFrame() {
   if (batch_.timings().size() == 2) times_.raycastGpuMs = batch_.timings()[1].ms;
 }
 
-void RaycastKernel::castRays(const RaycastFrame& frame, const RaycastView& view, const Palette& palette, const RaycastShading& shading,
-                             const RaycastLimits& limits) {
+void RaycastKernel::castRays(const RaycastFrame& frame, const std::vector<Eigen::Vector3d>* deformed, const RaycastView& view,
+                             const Palette& palette, const RaycastShading& shading, const RaycastLimits& limits) {
   const auto t0 = std::chrono::steady_clock::now();
-  if (frame.positions.size() != vertexCount_ || frame.bvh.size() != nodeCount_)
+  if ((deformed ? deformed->size() : frame.positions.size()) != vertexCount_)
     throw RuntimeFailure("ray caster: the frame does not belong to the mesh the kernel was built for");
   const int w = view.camera.width, h = view.camera.height;
 
-  // Per-frame data into staging memory.
-  auto* pos = static_cast<float*>(positionsStaging_.mapped());
-  for (std::size_t v = 0; v < vertexCount_; ++v) {
-    for (int a = 0; a < 3; ++a) pos[4 * v + std::size_t(a)] = float(frame.positions[v][a]);
-    pos[4 * v + 3] = 0.0f;
+  // The positions, in the render frame, straight into this frame's mapped
+  // buffer (the same floats as float(frame.positions[v]) would be).
+  const Buffer& positions = positions_[frameIndex_];
+  frameIndex_ ^= 1u;
+  auto* pos = static_cast<float*>(positions.mapped());
+  if (deformed) {
+    for (std::size_t v = 0; v < vertexCount_; ++v) {
+      const Eigen::Vector3d r = frame.toRender((*deformed)[v]);
+      for (int a = 0; a < 3; ++a) pos[4 * v + std::size_t(a)] = float(r[a]);
+      pos[4 * v + 3] = 0.0f;
+    }
+  } else {
+    for (std::size_t v = 0; v < vertexCount_; ++v) {
+      for (int a = 0; a < 3; ++a) pos[4 * v + std::size_t(a)] = float(frame.positions[v][a]);
+      pos[4 * v + 3] = 0.0f;
+    }
   }
-  auto* nodes = static_cast<RaycastNode*>(nodesStaging_.mapped());
-  for (std::size_t n = 0; n < nodeCount_; ++n) storeNode(frame.bvh[n], nodes[n]);
 
   const Eigen::Vector3d steps = occupancyDifferenceSteps(source_);
   RaycastParams p{};
@@ -299,13 +363,17 @@ void RaycastKernel::castRays(const RaycastFrame& frame, const RaycastView& view,
   times_.uploadMs = msSince(t0);
 
   batch_.timestamp("start");
-  batch_.copy(positionsStaging_, positions_, 16 * std::uint64_t(vertexCount_));
-  batch_.copy(nodesStaging_, nodes_, sizeof(RaycastNode) * std::uint64_t(nodeCount_));
   batch_.copy(paramsStaging_, params_, sizeof(RaycastParams));
   batch_.copy(paletteStaging_, palette_, 4 * std::uint64_t(palette.size()));
   batch_.timestamp("uploaded");
+  for (const auto& [first, count] : refitLevels_) {
+    batch_.dispatch(refit_,
+                    {Binding::storage(nodes_), Binding::storage(faces_), Binding::storage(positions), Binding::storage(refitOrder_)},
+                    RaycastRefitPush{first, count, 0, 0}, (count + VOX_RAYCAST_REFIT_GROUP_SIZE - 1) / VOX_RAYCAST_REFIT_GROUP_SIZE);
+    batch_.barrier();
+  }
   const RaycastPreparePush push{std::uint32_t(tetCount_), 0, 0, 0};
-  batch_.dispatch(prepare_, {Binding::storage(tets_), Binding::storage(positions_), Binding::storage(factors_)}, push,
+  batch_.dispatch(prepare_, {Binding::storage(tets_), Binding::storage(positions), Binding::storage(factors_)}, push,
                   std::uint32_t((tetCount_ + VOX_RAYCAST_PREPARE_GROUP_SIZE - 1) / VOX_RAYCAST_PREPARE_GROUP_SIZE));
   batch_.barrier();
   batch_.timestamp("prepared");
@@ -314,12 +382,14 @@ void RaycastKernel::castRays(const RaycastFrame& frame, const RaycastView& view,
   batch_.fill(entryBuffer_, 0u, 2 * imageBytes, imageBytes);
   batch_.fill(tileFlags_, 0u);
   const auto faceGroups = std::uint32_t((faceCount_ + VOX_RAYCAST_ENTRIES_GROUP_SIZE - 1) / VOX_RAYCAST_ENTRIES_GROUP_SIZE);
-  const std::uint64_t pixels = maxFacePixels(faceVertices_, frame.positions, view, toCamera);
+  const std::uint64_t pixels =
+      deformed ? maxFacePixels(faceVertices_, [&](std::size_t v) { return frame.toRender((*deformed)[v]); }, view, toCamera)
+               : maxFacePixels(faceVertices_, [&](std::size_t v) { return frame.positions[v]; }, view, toCamera);
   const auto chunks = std::uint32_t(std::max<std::uint64_t>(1, (pixels + VOX_RAYCAST_ENTRIES_CHUNK_PIXELS - 1) / VOX_RAYCAST_ENTRIES_CHUNK_PIXELS));
   for (std::uint32_t pass = 0; pass < 2; ++pass) {
     const RaycastEntriesPush entriesPush{std::uint32_t(faceCount_), pass, 0, 0};
     batch_.dispatch(entries_,
-                    {Binding::storage(params_), Binding::storage(faces_), Binding::storage(positions_), Binding::storage(entryBuffer_),
+                    {Binding::storage(params_), Binding::storage(faces_), Binding::storage(positions), Binding::storage(entryBuffer_),
                      Binding::storage(tileFlags_)},
                     entriesPush, faceGroups, chunks);
     batch_.barrier();
@@ -344,7 +414,7 @@ void RaycastKernel::castRays(const RaycastFrame& frame, const RaycastView& view,
   const std::uint32_t maxGroups = context_.info().maxWorkGroupCount[0];
   batch_.timestamp("start");
   batch_.dispatch(raycast_,
-                  {Binding::storage(params_), Binding::storage(nodes_), Binding::storage(faces_), Binding::storage(positions_),
+                  {Binding::storage(params_), Binding::storage(nodes_), Binding::storage(faces_), Binding::storage(positions),
                    Binding::storage(factors_), Binding::storage(neighbors_), Binding::storage(rest_), Binding::storage(palette_),
                    Binding::storage(entryBuffer_), Binding::storage(image_), Binding::storage(tiles_), slab(0), slab(1), slab(2),
                    slab(3), slab(4), slab(5), slab(6), slab(7)},

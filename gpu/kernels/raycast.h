@@ -6,9 +6,13 @@
 // in z-slabs of whole slices, one storage binding (at most 128 MiB) per slab,
 // up to VOX_RAYCAST_MAX_SLABS slabs (512 M voxels with 128 MiB bindings). The
 // mesh connectivity, neighbours, boundary faces and rest coordinates go once
-// too. Per frame only the deformed positions and the refitted boundary BVH
-// are uploaded; one compute pass recomputes the per-tet factors (eq. 5.1-5.2),
-// two rasterize the front boundary faces into the entry buffer (each pixel's
+// too, and so does the boundary BVH's topology. Per frame the host writes
+// only the deformed positions, as floats straight into one of two
+// persistently mapped host-visible buffers (frames alternate, so that a
+// frame's writes never touch the buffer the previous frame's passes read)
+// that the passes bind without a copy. Compute passes refit the BVH's boxes
+// (one per tree level: shaders/raycast_refit.comp) and recompute the per-tet
+// factors (eq. 5.1-5.2), two rasterize the front boundary faces into the entry buffer (each pixel's
 // first entry face and the number of front faces its ray crosses, and which
 // 8x8 tiles hold such pixels), then one invocation per pixel of those tiles
 // casts its ray, querying the BVH only for re-entries. The tile list is made
@@ -31,6 +35,7 @@
 #include "gpu/pipeline.h"
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace vox::gpu {
@@ -44,8 +49,8 @@ struct RaycastKernelOptions {
 // Times of the last render() (ms). GPU times come from timestamps (0 when the
 // queue has none).
 struct RaycastFrameTimes {
-  double uploadMs = 0.0;     // host: positions, BVH and parameters into staging memory
-  double prepareGpuMs = 0.0; // GPU: per-tet factors
+  double uploadMs = 0.0;     // host: positions and parameters into mapped memory
+  double prepareGpuMs = 0.0; // GPU: BVH refit and per-tet factors
   double entriesGpuMs = 0.0; // GPU: entry buffer
   double raycastGpuMs = 0.0; // GPU: the rays
   std::uint32_t activeTiles = 0;  // 8x8 tiles that ran the ray pass
@@ -66,6 +71,17 @@ public:
   void renderTo(Image2D& target, const RaycastFrame& frame, const RaycastView& view, const Palette& palette,
                 const RaycastShading& shading = {}, const RaycastLimits& limits = {});
 
+  // The viewer's frame: `frame` from placeRaycastFrame (no positions or
+  // BVH) and `deformedPositions` (#V, grid frame), which go to the render
+  // frame on their way into the mapped positions buffer. The image equals
+  // renderTo's with prepareRaycastFrame's frame. Waits for the GPU.
+  void renderTo(Image2D& target, const RaycastFrame& frame, const std::vector<Eigen::Vector3d>& deformedPositions,
+                const RaycastView& view, const Palette& palette, const RaycastShading& shading = {}, const RaycastLimits& limits = {});
+
+  // The boundary BVH of the last frame as the GPU refitted it (float boxes
+  // padded for the tolerant face test; before any frame, the rest tree's).
+  std::vector<BvhNode> downloadBvh() const;
+
   const RaycastFrameTimes& lastTimes() const { return times_; }
   std::size_t slabCount() const { return slabs_.size(); }
   std::uint64_t gridUploadBytes() const { return gridBytes_; }
@@ -73,8 +89,9 @@ public:
 private:
   // Records and runs everything up to the ray pass, whose dispatch stays
   // recorded for the caller to append its copy and call finishFrame().
-  void castRays(const RaycastFrame& frame, const RaycastView& view, const Palette& palette, const RaycastShading& shading,
-                const RaycastLimits& limits);
+  // `deformed`: grid-frame positions, or nullptr for frame.positions.
+  void castRays(const RaycastFrame& frame, const std::vector<Eigen::Vector3d>* deformed, const RaycastView& view, const Palette& palette,
+                const RaycastShading& shading, const RaycastLimits& limits);
   void finishFrame();
 
   Context& context_;
@@ -82,6 +99,7 @@ private:
   Index3 sourceShift_{0, 0, 0};
   std::size_t vertexCount_ = 0, tetCount_ = 0, nodeCount_ = 0, faceCount_ = 0;
   std::vector<Tri> faceVertices_;  // host copy of the boundary faces, to bound their projections
+  ComputePipeline refit_;
   ComputePipeline prepare_;
   ComputePipeline entries_;
   ComputePipeline raycast_;
@@ -90,9 +108,16 @@ private:
   std::uint64_t gridBytes_ = 0;
   // Uploaded once.
   Buffer tets_, neighbors_, rest_, faces_;
-  // Per frame: staging (host visible) and device copies.
-  Buffer positionsStaging_, nodesStaging_, paramsStaging_, paletteStaging_;
-  Buffer positions_, nodes_, params_, palette_, factors_;
+  // The BVH (topology uploaded once, boxes refitted per frame), the refit
+  // order and its levels: [first, first + count) of the order per dispatch.
+  Buffer nodes_, refitOrder_;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> refitLevels_;
+  // Per frame: the positions (mapped, two for alternating frames), staging
+  // (host visible) and device copies of the rest.
+  Buffer positions_[2];
+  std::uint32_t frameIndex_ = 0;
+  Buffer paramsStaging_, paletteStaging_;
+  Buffer params_, palette_, factors_;
   Buffer entryBuffer_, image_, imageReadback_, tileFlags_, tiles_;
   std::uint32_t tileCount_ = 0;
   CommandBatch batch_;

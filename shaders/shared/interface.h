@@ -184,6 +184,19 @@ static_assert(sizeof(RasterReducePush) == 32);
 #define VOX_RAYCAST_PREPARE_BINDING_POSITIONS 1  // vec4[vertexCount]: render frame xyz
 #define VOX_RAYCAST_PREPARE_BINDING_FACTORS 2    // vec4[4 * tetCount]: planes 1..3 (xyz, w), anchor (xyz)
 
+// raycast_refit.comp: the boundary BVH's boxes for the deformed positions
+// (CPU reference: refitBoundaryBvh in geometry/render/boundary_bvh.cpp). The
+// rest tree's topology stays on the GPU; one dispatch boxes every leaf (its
+// faces' vertices, padded like the host's boxes: VOX_RAYCAST_REFIT_PAD cells
+// plus 2 VOX_RAYCAST_FACE_HIT_TOLERANCE of the box's extent), then one per
+// depth joins the inner nodes' children, deepest first.
+#define VOX_RAYCAST_REFIT_GROUP_SIZE 64
+#define VOX_RAYCAST_REFIT_PAD 1e-3
+#define VOX_RAYCAST_REFIT_BINDING_NODES 0      // RaycastNode[nodeCount]
+#define VOX_RAYCAST_REFIT_BINDING_FACES 1      // uvec4[faceCount]: vertices a, b, c and the tet
+#define VOX_RAYCAST_REFIT_BINDING_POSITIONS 2  // vec4[vertexCount]: render frame xyz
+#define VOX_RAYCAST_REFIT_BINDING_ORDER 3      // uint[nodeCount]: the leaves, then the inner nodes, deepest first
+
 // raycast_entries.comp: one invocation per boundary face; rasterizes the
 // front faces into the entry buffer (uint[3 * width * height], three planes):
 // the smallest hit parameter t >= 0 per pixel (float bits, pass 0), the
@@ -228,6 +241,13 @@ struct RaycastPreparePush {
   uint pad0;
   uint pad1;
   uint pad2;
+};
+
+struct RaycastRefitPush {
+  uint first;  // nodes order[first .. first + count) of the refit order
+  uint count;
+  uint pad0;
+  uint pad1;
 };
 
 struct RaycastPush {
