@@ -52,8 +52,19 @@ public:
     dispatch(pipeline, bindings, &push, sizeof(Push), groupsX, groupsY, groupsZ);
   }
 
+  // The dispatch size (x, y, z groups) read by the GPU from `sizes` at
+  // `offset` (a buffer made with VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT), as an
+  // earlier pass wrote it: the host never sees it.
+  void dispatchIndirect(const ComputePipeline& pipeline, std::initializer_list<Binding> bindings, const void* push,
+                        std::uint32_t pushBytes, const Buffer& sizes, std::uint64_t offset);
+  template <class Push>
+  void dispatchIndirect(const ComputePipeline& pipeline, std::initializer_list<Binding> bindings, const Push& push, const Buffer& sizes,
+                        std::uint64_t offset) {
+    dispatchIndirect(pipeline, bindings, &push, sizeof(Push), sizes, offset);
+  }
+
   // Makes all earlier shader and transfer writes visible to later shader,
-  // transfer and host accesses.
+  // transfer, indirect-dispatch and host accesses.
   void barrier();
   void copy(const Buffer& src, Buffer& dst, std::uint64_t bytes, std::uint64_t srcOffset = 0, std::uint64_t dstOffset = 0);
   // The slices [z0, z0 + depth) of a 3D image from / to the buffer's start.
@@ -78,6 +89,8 @@ public:
 
 private:
   void begin();
+  // Binds the pipeline, its descriptors and push constants.
+  void bind(const ComputePipeline& pipeline, std::initializer_list<Binding> bindings, const void* push, std::uint32_t pushBytes);
   Context& context_;
   VkCommandBuffer cmd_ = VK_NULL_HANDLE;
   VkFence fence_ = VK_NULL_HANDLE;

@@ -12,12 +12,15 @@
 // frame's writes never touch the buffer the previous frame's passes read)
 // that the passes bind without a copy. Compute passes refit the BVH's boxes
 // (one per tree level: shaders/raycast_refit.comp) and recompute the per-tet
-// factors (eq. 5.1-5.2), two rasterize the front boundary faces into the entry buffer (each pixel's
-// first entry face and the number of front faces its ray crosses, and which
-// 8x8 tiles hold such pixels), then one invocation per pixel of those tiles
-// casts its ray, querying the BVH only for re-entries. The tile list is made
-// on the host between two submissions: on CPU drivers an invocation of the
-// ray shader costs even when it exits at once, and most tiles see no mesh.
+// factors (eq. 5.1-5.2), two rasterize the front boundary faces into the
+// entry buffer (each pixel's first entry face and the number of front faces
+// its ray crosses, and which 8x8 tiles hold such pixels, listed on the GPU:
+// shaders/raycast_entries.comp), then one invocation per
+// pixel of those tiles casts its ray, querying the BVH only for re-entries:
+// on CPU drivers an invocation of the ray shader costs even when it exits at
+// once, and most tiles see no mesh. The entry passes also size their own
+// and the ray pass's dispatches (indirect dispatch), so a frame is one
+// submission that the host neither reads from nor waits on midway.
 //
 // lavapipe ends a shader invocation after 65535 loop iterations. The entry
 // pass splits large faces to stay below; a ray takes about three iterations
@@ -44,6 +47,9 @@ struct RaycastKernelOptions {
   // Bytes per label slab; 0 = the context's largest binding. Tests set small
   // values so that several slabs are exercised on small grids.
   std::uint64_t slabBytes = 0;
+  // Work groups per row of the ray pass's dispatch; 0 = the device's limit.
+  // Tests set small values so that the dispatch spans several rows.
+  std::uint32_t rayGroupsPerRow = 0;
 };
 
 // Times of the last render() (ms). GPU times come from timestamps (0 when the
@@ -53,7 +59,6 @@ struct RaycastFrameTimes {
   double prepareGpuMs = 0.0; // GPU: BVH refit and per-tet factors
   double entriesGpuMs = 0.0; // GPU: entry buffer
   double raycastGpuMs = 0.0; // GPU: the rays
-  std::uint32_t activeTiles = 0;  // 8x8 tiles that ran the ray pass
   double totalMs = 0.0;      // host: render() from call to image
 };
 
@@ -98,7 +103,6 @@ private:
   GridGeometry source_;
   Index3 sourceShift_{0, 0, 0};
   std::size_t vertexCount_ = 0, tetCount_ = 0, nodeCount_ = 0, faceCount_ = 0;
-  std::vector<Tri> faceVertices_;  // host copy of the boundary faces, to bound their projections
   ComputePipeline refit_;
   ComputePipeline prepare_;
   ComputePipeline entries_;
@@ -119,7 +123,9 @@ private:
   Buffer paramsStaging_, paletteStaging_;
   Buffer params_, palette_, factors_;
   Buffer entryBuffer_, image_, imageReadback_, tileFlags_, tiles_;
+  Buffer dispatchSizes_;  // indirect dispatch sizes the entry passes write
   std::uint32_t tileCount_ = 0;
+  std::uint32_t rayGroupsPerRow_ = 0;
   CommandBatch batch_;
   RaycastFrameTimes times_;
 };

@@ -223,6 +223,24 @@ TEST(RaycastGpu, ManySlabsGiveTheSameImage) {
   EXPECT_GT(countNotBackground(a, RaycastShading{}.background), 300u);
 }
 
+TEST(RaycastGpu, RayDispatchOverSeveralRowsGivesTheSameImage) {
+  // The entry pass lists the tiles and sizes the ray pass's dispatch on the
+  // GPU: with 7 work groups per row the flagged tiles span many rows, the
+  // last one partly filled.
+  const LabelGrid grid = stickFigure();
+  const TetMesh rest = coarseVoxelTransferMesh(grid, 3);
+  const RaycastMesh mesh = buildRaycastMesh(rest, grid.geometry());
+  gpu::RaycastKernel wide(context(), grid, mesh);
+  gpu::RaycastKernel narrow(context(), grid, mesh, {0, 7});
+  const Palette palette(grid.maxLabel());
+  for (test::Deformation d : {test::Deformation::Twist, test::Deformation::Rest}) {
+    const Frame f = makeFrame(mesh, test::deform(rest.positions, grid.geometry(), d), "azimuth=30,elevation=20", "", 160, 120);
+    const RgbImage a = wide.render(f.frame, f.view, palette);
+    EXPECT_EQ(compareImages(a, narrow.render(f.frame, f.view, palette), 0).differing, 0u) << test::deformationName(d);
+    EXPECT_GT(countNotBackground(a, RaycastShading{}.background), 300u);
+  }
+}
+
 TEST(RaycastGpu, OnlyPositionsChangeBetweenFrames) {
   // One kernel renders a sequence of poses (the grid and the mesh stay on the
   // GPU); each frame equals a fresh kernel's rendering of that pose.
