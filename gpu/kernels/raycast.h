@@ -69,6 +69,8 @@ public:
   // VOX_RAYCAST_MAX_SLABS slabs, or when a mesh array exceeds one binding.
   RaycastKernel(Context& context, const LabelGrid& source, const RaycastMesh& mesh, RaycastKernelOptions options = {});
 
+  // frame.positions go to the GPU; frame.bvh is not read (the kernel refits
+  // its own tree).
   RgbImage render(const RaycastFrame& frame, const RaycastView& view, const Palette& palette, const RaycastShading& shading = {},
                   const RaycastLimits& limits = {});
   // The same frame into a GPU image of the camera's size, not read back (the
