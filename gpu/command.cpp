@@ -29,6 +29,7 @@ CommandBatch::CommandBatch(Context& context, std::uint32_t maxTimestamps) : cont
 
 CommandBatch::~CommandBatch() {
   VkDevice dev = context_.device();
+  if (pending_) vkWaitForFences(dev, 1, &fence_, VK_TRUE, UINT64_MAX);
   if (recording_) vkEndCommandBuffer(cmd_);
   if (queries_) vkDestroyQueryPool(dev, queries_, nullptr);
   vkDestroyFence(dev, fence_, nullptr);
@@ -37,6 +38,7 @@ CommandBatch::~CommandBatch() {
 
 void CommandBatch::begin() {
   if (recording_) return;
+  wait();
   VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
   bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
   VOX_VK(vkBeginCommandBuffer(cmd_, &bi));
@@ -211,6 +213,11 @@ void CommandBatch::timestamp(std::string label) {
 }
 
 void CommandBatch::submitAndWait() {
+  submit();
+  wait();
+}
+
+void CommandBatch::submit() {
   if (!recording_) return;
   recording_ = false;
   VOX_VK(vkEndCommandBuffer(cmd_));
@@ -220,6 +227,13 @@ void CommandBatch::submitAndWait() {
   VkDevice dev = context_.device();
   VOX_VK(vkResetFences(dev, 1, &fence_));
   VOX_VK(vkQueueSubmit(context_.queue(), 1, &si, fence_));
+  pending_ = true;
+}
+
+void CommandBatch::wait() {
+  if (!pending_) return;
+  pending_ = false;
+  VkDevice dev = context_.device();
   VOX_VK(vkWaitForFences(dev, 1, &fence_, VK_TRUE, UINT64_MAX));
   timings_.clear();
   if (queries_ && !labels_.empty()) {

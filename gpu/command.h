@@ -1,6 +1,7 @@
 #pragma once
 // CommandBatch: records compute dispatches, copies and timestamps into one
-// command buffer, submits it and waits. Reusable after submitAndWait().
+// command buffer, submits it and waits, or submits it and lets the host go
+// on (submit(); recording the next batch first waits for this one).
 
 #include "gpu/buffer.h"
 #include "gpu/context.h"
@@ -82,7 +83,13 @@ public:
   void timestamp(std::string label);
 
   void submitAndWait();
-  // Timestamps of the last submission.
+  // Submits without waiting. Later submissions to the queue are ordered
+  // after this one's commands only as far as its last barrier() says.
+  void submit();
+  // Waits for the last submit(), if any.
+  void wait();
+  bool pending() const { return pending_; }
+  // Timestamps of the last submission that was waited for.
   const std::vector<Timing>& timings() const { return timings_; }
 
   VkCommandBuffer handle() const { return cmd_; }
@@ -99,6 +106,7 @@ private:
   std::vector<std::string> labels_;
   std::vector<Timing> timings_;
   bool recording_ = false;
+  bool pending_ = false;
 };
 
 }  // namespace vox::gpu

@@ -188,7 +188,9 @@ RgbImage RaycastKernel::render(const RaycastFrame& frame, const RaycastView& vie
   castRays(frame, nullptr, view, palette, shading, limits);
   const int w = view.camera.width, h = view.camera.height;
   batch_.copy(image_, imageReadback_, 4 * std::uint64_t(w) * std::uint64_t(h));
-  finishFrame();
+  batch_.barrier();
+  batch_.submitAndWait();
+  readGpuTimes();
   RgbImage image(w, h);
   const auto* px = static_cast<const std::uint32_t*>(imageReadback_.mapped());
   for (std::size_t i = 0; i < image.pixels.size(); ++i)
@@ -204,7 +206,8 @@ void RaycastKernel::renderTo(Image2D& target, const RaycastFrame& frame, const R
     throw RuntimeFailure("ray caster: the target image's size differs from the camera's");
   castRays(frame, nullptr, view, palette, shading, limits);
   batch_.copy(image_, target);
-  finishFrame();
+  batch_.barrier();
+  batch_.submit();
   times_.totalMs = msSince(t0);
 }
 
@@ -215,11 +218,13 @@ void RaycastKernel::renderTo(Image2D& target, const RaycastFrame& frame, const s
     throw RuntimeFailure("ray caster: the target image's size differs from the camera's");
   castRays(frame, &deformedPositions, view, palette, shading, limits);
   batch_.copy(image_, target);
-  finishFrame();
+  batch_.barrier();
+  batch_.submit();
   times_.totalMs = msSince(t0);
 }
 
-std::vector<BvhNode> RaycastKernel::downloadBvh() const {
+std::vector<BvhNode> RaycastKernel::downloadBvh() {
+  wait();
   std::vector<RaycastNode> stored(nodeCount_);
   nodes_.download(stored.data(), sizeof(RaycastNode) * stored.size());
   std::vector<BvhNode> out(nodeCount_);
@@ -234,8 +239,12 @@ std::vector<BvhNode> RaycastKernel::downloadBvh() const {
   return out;
 }
 
-void RaycastKernel::finishFrame() {
-  batch_.submitAndWait();
+void RaycastKernel::wait() {
+  batch_.wait();
+  readGpuTimes();
+}
+
+void RaycastKernel::readGpuTimes() {
   const auto& ts = batch_.timings();
   if (ts.size() == 5) {
     times_.prepareGpuMs = ts[2].ms - ts[1].ms;
@@ -268,6 +277,11 @@ void RaycastKernel::castRays(const RaycastFrame& frame, const std::vector<Eigen:
       pos[4 * v + 3] = 0.0f;
     }
   }
+  // The previous frame may still run: it reads the other positions buffer,
+  // and the buffers below, which this frame rewrites.
+  const double positionsMs = msSince(t0);
+  wait();
+  const auto t1 = std::chrono::steady_clock::now();
 
   const Eigen::Vector3d steps = occupancyDifferenceSteps(source_);
   RaycastParams p{};
@@ -332,8 +346,7 @@ void RaycastKernel::castRays(const RaycastFrame& frame, const std::vector<Eigen:
     tileFlags_ = Buffer(context_, 4 * std::uint64_t(tileCount_), MemoryIntent::Device);
     tiles_ = Buffer(context_, 4 * (1 + std::uint64_t(tileCount_)), MemoryIntent::Device);
   }
-  times_ = {};
-  times_.uploadMs = msSince(t0);
+  times_.uploadMs = positionsMs + msSince(t1);
 
   batch_.timestamp("start");
   batch_.copy(paramsStaging_, params_, sizeof(RaycastParams));

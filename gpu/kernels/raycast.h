@@ -52,8 +52,10 @@ struct RaycastKernelOptions {
   std::uint32_t rayGroupsPerRow = 0;
 };
 
-// Times of the last render() (ms). GPU times come from timestamps (0 when the
-// queue has none).
+// Times of the last frame (ms). Host times are the last call's; GPU times
+// come from timestamps (0 when the queue has none) of the last frame the host
+// waited for: renderTo's frame is waited for when the next frame starts or
+// at wait().
 struct RaycastFrameTimes {
   double uploadMs = 0.0;     // host: positions and parameters into mapped memory
   double prepareGpuMs = 0.0; // GPU: BVH refit and per-tet factors
@@ -74,20 +76,27 @@ public:
   RgbImage render(const RaycastFrame& frame, const RaycastView& view, const Palette& palette, const RaycastShading& shading = {},
                   const RaycastLimits& limits = {});
   // The same frame into a GPU image of the camera's size, not read back (the
-  // viewer blits it to the screen). Waits for the GPU.
+  // viewer blits it to the screen). Returns once the frame is submitted:
+  // later submissions to the queue see the image written (the frame ends
+  // with a barrier), and the next frame waits for this one before it reuses
+  // the kernel's buffers. The target must live until then (wait()).
   void renderTo(Image2D& target, const RaycastFrame& frame, const RaycastView& view, const Palette& palette,
                 const RaycastShading& shading = {}, const RaycastLimits& limits = {});
 
   // The viewer's frame: `frame` from placeRaycastFrame (no positions or
   // BVH) and `deformedPositions` (#V, grid frame), which go to the render
   // frame on their way into the mapped positions buffer. The image equals
-  // renderTo's with prepareRaycastFrame's frame. Waits for the GPU.
+  // renderTo's with prepareRaycastFrame's frame. Returns once submitted.
   void renderTo(Image2D& target, const RaycastFrame& frame, const std::vector<Eigen::Vector3d>& deformedPositions,
                 const RaycastView& view, const Palette& palette, const RaycastShading& shading = {}, const RaycastLimits& limits = {});
 
+  // Waits for the last frame's GPU work.
+  void wait();
+
   // The boundary BVH of the last frame as the GPU refitted it (float boxes
   // padded for the tolerant face test; before any frame, the rest tree's).
-  std::vector<BvhNode> downloadBvh() const;
+  // Waits for the frame.
+  std::vector<BvhNode> downloadBvh();
 
   const RaycastFrameTimes& lastTimes() const { return times_; }
   std::size_t slabCount() const { return slabs_.size(); }
@@ -99,7 +108,8 @@ private:
   // `deformed`: grid-frame positions, or nullptr for frame.positions.
   void castRays(const RaycastFrame& frame, const std::vector<Eigen::Vector3d>* deformed, const RaycastView& view, const Palette& palette,
                 const RaycastShading& shading, const RaycastLimits& limits);
-  void finishFrame();
+  // The GPU times of the frame the batch last waited for.
+  void readGpuTimes();
 
   Context& context_;
   GridGeometry source_;

@@ -11,11 +11,15 @@
 // screenshot need). RaycastToImage/... is the
 // viewer's frame: placeRaycastFrame and the deformed positions written
 // straight into the kernel's mapped buffer, the BVH refitted on the GPU,
-// the image left in a GPU image (gpu::RaycastKernel::renderTo). Counters:
+// the image left in a GPU image (gpu::RaycastKernel::renderTo), which
+// returns once the frame is submitted: the next frame waits for it after
+// writing its positions, so a frame's time is the larger of the host's and
+// the GPU's. Counters:
 // cpu_ms is the process's CPU time per frame (all lavapipe threads), which
 // on a loaded machine says more than wall time; frame_prep_cpu_ms the part
 // in prepareRaycastFrame or placeRaycastFrame; gpu_ms the kernels'
-// timestamps. Google Benchmark's CPU column is the calling thread's time
+// timestamps (RaycastToImage: those of the frame before, finished while
+// the host prepared the next). Google Benchmark's CPU column is the calling thread's time
 // alone: the host's share of the frame.
 //
 // The transfer mesh is the pipeline's (buildTransferMesh: CGAL Mesh_3 of the
@@ -178,6 +182,7 @@ void BM_RaycastFrame(benchmark::State& state, std::string name, test::Deformatio
     gpu += t.prepareGpuMs + t.entriesGpuMs + t.raycastGpuMs;
     benchmark::DoNotOptimize(image.pixels.data());
   }
+  s.kernel->wait();
   if (!readBack) image = target.download();  // after the timed frames, for the pixel count
   const std::size_t visible = countNotBackground(image, RaycastShading{}.background);
   const double n = double(state.iterations());

@@ -176,10 +176,10 @@ TEST(RaycastGpu, BvhRefitOnTheGpuHoldsTheCpuRefit) {
     const RaycastMesh mesh = buildRaycastMesh(c.rest, c.grid->geometry());
     gpu::RaycastKernel kernel(context(), *c.grid, mesh);
     const Palette palette(c.grid->maxLabel());
+    gpu::Image2D target(context(), 64, 48);  // outlives the frames that write it
     for (test::Deformation d : {test::Deformation::Twist, test::Deformation::Bend, test::Deformation::Rotate}) {
       const std::vector<Eigen::Vector3d> posed = test::deform(c.rest.positions, c.grid->geometry(), d);
       const Frame f = makeFrame(mesh, posed, "azimuth=20", "", 64, 48);
-      gpu::Image2D target(context(), 64, 48);
       kernel.renderTo(target, placeRaycastFrame(mesh, posed), posed, f.view, palette);
       const std::vector<BvhNode> gpuBvh = kernel.downloadBvh();
       ASSERT_EQ(gpuBvh.size(), f.frame.bvh.size());
