@@ -154,6 +154,33 @@ TEST(RaycastGpu, DeformedPositionsRenderTheFramesImage) {
   EXPECT_THROW(placeRaycastFrame(mesh, std::vector<Eigen::Vector3d>(3)), InputError);
 }
 
+TEST(RaycastGpu, FramesSubmittedBackToBackKeepTheirPoses) {
+  // renderTo returns before the GPU is done: frame N+1 writes its positions
+  // (into the other mapped buffer) and records its passes while frame N may
+  // still run. Each image equals the waited-for rendering of its pose.
+  const LabelGrid grid = stickFigure();
+  const TetMesh rest = coarseVoxelTransferMesh(grid, 3);
+  const RaycastMesh mesh = buildRaycastMesh(rest, grid.geometry());
+  gpu::RaycastKernel kernel(context(), grid, mesh);
+  const Palette palette(grid.maxLabel());
+  const test::Deformation poses[] = {test::Deformation::Twist, test::Deformation::Rest, test::Deformation::Bend, test::Deformation::Rotate,
+                                     test::Deformation::Twist};
+  std::vector<gpu::Image2D> targets;
+  std::vector<Frame> frames;
+  for (test::Deformation d : poses) {
+    const std::vector<Eigen::Vector3d> posed = test::deform(rest.positions, grid.geometry(), d);
+    frames.push_back(makeFrame(mesh, posed, "azimuth=30,elevation=10", "", 128, 96));
+    targets.emplace_back(context(), 128, 96);
+    kernel.renderTo(targets.back(), placeRaycastFrame(mesh, posed), posed, frames.back().view, palette);
+  }
+  kernel.wait();
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const RgbImage waited = kernel.render(frames[i].frame, frames[i].view, palette);
+    EXPECT_EQ(compareImages(targets[i].download(), waited, 0).differing, 0u) << "frame " << i << ", " << test::deformationName(poses[i]);
+    EXPECT_GT(countNotBackground(waited, RaycastShading{}.background), 300u);
+  }
+}
+
 TEST(RaycastGpu, BvhRefitOnTheGpuHoldsTheCpuRefit) {
   // After each posed frame the GPU's boxes contain the host's refitted boxes
   // (refitBoundaryBvh in double) and exceed them by no more than the padding
