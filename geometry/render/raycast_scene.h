@@ -54,7 +54,7 @@ struct RaycastFrame {
   Index3 cellShift{0, 0, 0};              // output voxel of render cell 0
   Eigen::Vector3d renderOrigin{0, 0, 0};  // grid-frame position of render cell 0's centre
   std::vector<Eigen::Vector3d> positions; // #V, render frame
-  std::vector<BvhNode> bvh;               // boundary BVH refitted to `positions`
+  std::vector<BvhNode> bvh;               // boundary BVH refitted to `positions` (CPU reference; the GPU refits its own)
   Eigen::Vector3d cellsLo{0, 0, 0};       // box covered by G''s cells, render frame
   Eigen::Vector3d cellsHi{0, 0, 0};
 
