@@ -80,7 +80,8 @@ void main() {
   const uint columns = px1 - px0 + 1u;
   if (pc.pass == 2u) {
     const uint pixels = columns * (py1 - py0 + 1u);
-    atomicMax(dispatchSize[VOX_RAYCAST_DISPATCH_ENTRIES + 1], (pixels + VOX_RAYCAST_ENTRIES_CHUNK_PIXELS - 1u) / VOX_RAYCAST_ENTRIES_CHUNK_PIXELS);
+    const uint chunks = (pixels + VOX_RAYCAST_ENTRIES_CHUNK_PIXELS - 1u) / VOX_RAYCAST_ENTRIES_CHUNK_PIXELS;
+    atomicMax(dispatchSize[VOX_RAYCAST_DISPATCH_ENTRIES + 1], chunks);
     return;
   }
   const uint first = gl_WorkGroupID.y * VOX_RAYCAST_ENTRIES_CHUNK_PIXELS;

@@ -378,9 +378,10 @@ void RaycastKernel::castRays(const RaycastFrame& frame, const std::vector<Eigen:
   batch_.fill(image_, p.background);
   batch_.barrier();
   auto entriesPass = [&](std::uint32_t pass) -> RaycastEntriesPush { return {std::uint32_t(faceCount_), pass, rayGroupsPerRow_, 0}; };
-  const std::initializer_list<Binding> entriesBindings = {
-      Binding::storage(params_),      Binding::storage(faces_),  Binding::storage(positions),    Binding::storage(entryBuffer_),
-      Binding::storage(tileFlags_), Binding::storage(tiles_), Binding::storage(dispatchSizes_)};
+  const std::initializer_list<Binding> entriesBindings = {Binding::storage(params_),      Binding::storage(faces_),
+                                                          Binding::storage(positions),    Binding::storage(entryBuffer_),
+                                                          Binding::storage(tileFlags_),   Binding::storage(tiles_),
+                                                          Binding::storage(dispatchSizes_)};
   batch_.dispatch(entries_, entriesBindings, entriesPass(2), faceGroups);
   batch_.barrier();
   for (std::uint32_t pass = 0; pass < 2; ++pass) {
