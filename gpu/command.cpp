@@ -29,6 +29,7 @@ CommandBatch::CommandBatch(Context& context, std::uint32_t maxTimestamps) : cont
 
 CommandBatch::~CommandBatch() {
   VkDevice dev = context_.device();
+  if (pending_) vkWaitForFences(dev, 1, &fence_, VK_TRUE, UINT64_MAX);
   if (recording_) vkEndCommandBuffer(cmd_);
   if (queries_) vkDestroyQueryPool(dev, queries_, nullptr);
   vkDestroyFence(dev, fence_, nullptr);
@@ -37,6 +38,7 @@ CommandBatch::~CommandBatch() {
 
 void CommandBatch::begin() {
   if (recording_) return;
+  wait();
   VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
   bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
   VOX_VK(vkBeginCommandBuffer(cmd_, &bi));
@@ -45,17 +47,40 @@ void CommandBatch::begin() {
   recording_ = true;
 }
 
+namespace {
+
+void checkInterface(const PipelineDesc& desc, std::size_t bindings, std::uint32_t pushBytes) {
+  if (bindings != desc.bindings.size())
+    throw RuntimeFailure(desc.shader + ": dispatch given " + std::to_string(bindings) + " bindings, pipeline has " +
+                         std::to_string(desc.bindings.size()));
+  if (pushBytes != desc.pushConstantBytes) throw RuntimeFailure(desc.shader + ": push constant size mismatch");
+}
+
+}  // namespace
+
 void CommandBatch::dispatch(const ComputePipeline& pipeline, std::initializer_list<Binding> bindings, const void* push,
                             std::uint32_t pushBytes, std::uint32_t gx, std::uint32_t gy, std::uint32_t gz) {
   const auto& desc = pipeline.desc();
-  if (bindings.size() != desc.bindings.size())
-    throw RuntimeFailure(desc.shader + ": dispatch given " + std::to_string(bindings.size()) + " bindings, pipeline has " +
-                         std::to_string(desc.bindings.size()));
-  if (pushBytes != desc.pushConstantBytes)
-    throw RuntimeFailure(desc.shader + ": push constant size mismatch");
   const auto& lim = context_.info().maxWorkGroupCount;
+  checkInterface(desc, bindings.size(), pushBytes);
   if (gx == 0 || gy == 0 || gz == 0) return;
   if (gx > lim[0] || gy > lim[1] || gz > lim[2]) throw RuntimeFailure(desc.shader + ": dispatch exceeds the work group count limit");
+  bind(pipeline, bindings, push, pushBytes);
+  vkCmdDispatch(cmd_, gx, gy, gz);
+}
+
+void CommandBatch::dispatchIndirect(const ComputePipeline& pipeline, std::initializer_list<Binding> bindings, const void* push,
+                                    std::uint32_t pushBytes, const Buffer& sizes, std::uint64_t offset) {
+  if (!sizes.valid() || offset % 4 != 0 || offset + 12 > sizes.size())
+    throw RuntimeFailure(pipeline.desc().shader + ": indirect dispatch sizes out of the buffer");
+  bind(pipeline, bindings, push, pushBytes);
+  vkCmdDispatchIndirect(cmd_, sizes.handle(), offset);
+}
+
+void CommandBatch::bind(const ComputePipeline& pipeline, std::initializer_list<Binding> bindings, const void* push,
+                        std::uint32_t pushBytes) {
+  const auto& desc = pipeline.desc();
+  checkInterface(desc, bindings.size(), pushBytes);
   begin();
   std::vector<VkDescriptorBufferInfo> bufferInfos(bindings.size());
   std::vector<VkDescriptorImageInfo> imageInfos(bindings.size());
@@ -90,7 +115,6 @@ void CommandBatch::dispatch(const ComputePipeline& pipeline, std::initializer_li
   if (!writes.empty())
     context_.cmdPushDescriptorSet(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.layout(), 0, std::uint32_t(writes.size()), writes.data());
   if (pushBytes) vkCmdPushConstants(cmd_, pipeline.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, pushBytes, push);
-  vkCmdDispatch(cmd_, gx, gy, gz);
 }
 
 void CommandBatch::barrier() {
@@ -98,9 +122,11 @@ void CommandBatch::barrier() {
   VkMemoryBarrier mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
   mb.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
   mb.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_READ_BIT |
-                     VK_ACCESS_TRANSFER_WRITE_BIT | VK_ACCESS_HOST_READ_BIT;
+                     VK_ACCESS_TRANSFER_WRITE_BIT | VK_ACCESS_HOST_READ_BIT | VK_ACCESS_INDIRECT_COMMAND_READ_BIT;
   vkCmdPipelineBarrier(cmd_, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
-                       VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_HOST_BIT, 0, 1, &mb,
+                       VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT | VK_PIPELINE_STAGE_HOST_BIT |
+                           VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT,
+                       0, 1, &mb,
                        0, nullptr, 0, nullptr);
 }
 
@@ -187,6 +213,11 @@ void CommandBatch::timestamp(std::string label) {
 }
 
 void CommandBatch::submitAndWait() {
+  submit();
+  wait();
+}
+
+void CommandBatch::submit() {
   if (!recording_) return;
   recording_ = false;
   VOX_VK(vkEndCommandBuffer(cmd_));
@@ -196,6 +227,13 @@ void CommandBatch::submitAndWait() {
   VkDevice dev = context_.device();
   VOX_VK(vkResetFences(dev, 1, &fence_));
   VOX_VK(vkQueueSubmit(context_.queue(), 1, &si, fence_));
+  pending_ = true;
+}
+
+void CommandBatch::wait() {
+  if (!pending_) return;
+  pending_ = false;
+  VkDevice dev = context_.device();
   VOX_VK(vkWaitForFences(dev, 1, &fence_, VK_TRUE, UINT64_MAX));
   timings_.clear();
   if (queries_ && !labels_.empty()) {

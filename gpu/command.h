@@ -1,6 +1,7 @@
 #pragma once
 // CommandBatch: records compute dispatches, copies and timestamps into one
-// command buffer, submits it and waits. Reusable after submitAndWait().
+// command buffer, submits it and waits, or submits it and lets the host go
+// on (submit(); recording the next batch first waits for this one).
 
 #include "gpu/buffer.h"
 #include "gpu/context.h"
@@ -52,8 +53,19 @@ public:
     dispatch(pipeline, bindings, &push, sizeof(Push), groupsX, groupsY, groupsZ);
   }
 
+  // The dispatch size (x, y, z groups) read by the GPU from `sizes` at
+  // `offset` (a buffer made with VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT), as an
+  // earlier pass wrote it: the host never sees it.
+  void dispatchIndirect(const ComputePipeline& pipeline, std::initializer_list<Binding> bindings, const void* push,
+                        std::uint32_t pushBytes, const Buffer& sizes, std::uint64_t offset);
+  template <class Push>
+  void dispatchIndirect(const ComputePipeline& pipeline, std::initializer_list<Binding> bindings, const Push& push, const Buffer& sizes,
+                        std::uint64_t offset) {
+    dispatchIndirect(pipeline, bindings, &push, sizeof(Push), sizes, offset);
+  }
+
   // Makes all earlier shader and transfer writes visible to later shader,
-  // transfer and host accesses.
+  // transfer, indirect-dispatch and host accesses.
   void barrier();
   void copy(const Buffer& src, Buffer& dst, std::uint64_t bytes, std::uint64_t srcOffset = 0, std::uint64_t dstOffset = 0);
   // The slices [z0, z0 + depth) of a 3D image from / to the buffer's start.
@@ -71,13 +83,21 @@ public:
   void timestamp(std::string label);
 
   void submitAndWait();
-  // Timestamps of the last submission.
+  // Submits without waiting. Later submissions to the queue are ordered
+  // after this one's commands only as far as its last barrier() says.
+  void submit();
+  // Waits for the last submit(), if any.
+  void wait();
+  bool pending() const { return pending_; }
+  // Timestamps of the last submission that was waited for.
   const std::vector<Timing>& timings() const { return timings_; }
 
   VkCommandBuffer handle() const { return cmd_; }
 
 private:
   void begin();
+  // Binds the pipeline, its descriptors and push constants.
+  void bind(const ComputePipeline& pipeline, std::initializer_list<Binding> bindings, const void* push, std::uint32_t pushBytes);
   Context& context_;
   VkCommandBuffer cmd_ = VK_NULL_HANDLE;
   VkFence fence_ = VK_NULL_HANDLE;
@@ -86,6 +106,7 @@ private:
   std::vector<std::string> labels_;
   std::vector<Timing> timings_;
   bool recording_ = false;
+  bool pending_ = false;
 };
 
 }  // namespace vox::gpu

@@ -18,7 +18,6 @@ layout(std430, binding = VOX_RAYCAST_BINDING_PALETTE) readonly buffer Palette { 
 layout(std430, binding = VOX_RAYCAST_BINDING_ENTRIES) readonly buffer Entries { uint entries[]; };
 layout(std430, binding = VOX_RAYCAST_BINDING_IMAGE) writeonly buffer Image { uint image[]; };
 layout(std430, binding = VOX_RAYCAST_BINDING_TILES) readonly buffer Tiles { uint tiles[]; };
-layout(push_constant) uniform Push { RaycastPush pc; };
 layout(std430, binding = VOX_RAYCAST_BINDING_SLAB0 + 0) readonly buffer Slab0 { uint slab0[]; };
 layout(std430, binding = VOX_RAYCAST_BINDING_SLAB0 + 1) readonly buffer Slab1 { uint slab1[]; };
 layout(std430, binding = VOX_RAYCAST_BINDING_SLAB0 + 2) readonly buffer Slab2 { uint slab2[]; };
@@ -494,8 +493,8 @@ uint shade(Hit h) {
 void main() {
   const uint tilesX = (P.width + VOX_RAYCAST_GROUP_X - 1u) / VOX_RAYCAST_GROUP_X;
   const uint group = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
-  if (group >= pc.tileCount) return;
-  const uint tile = tiles[group];
+  if (group >= tiles[0]) return;
+  const uint tile = tiles[1u + group];
   const uvec2 px = uvec2(tile % tilesX, tile / tilesX) * uvec2(VOX_RAYCAST_GROUP_X, VOX_RAYCAST_GROUP_Y) + gl_LocalInvocationID.xy;
   if (px.x >= P.width || px.y >= P.height) return;
   const uint pixel = px.y * P.width + px.x;

@@ -16,6 +16,8 @@ layout(std430, binding = VOX_RAYCAST_ENTRIES_BINDING_FACES) readonly buffer Face
 layout(std430, binding = VOX_RAYCAST_ENTRIES_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
 layout(std430, binding = VOX_RAYCAST_ENTRIES_BINDING_ENTRIES) buffer Entries { uint entries[]; };
 layout(std430, binding = VOX_RAYCAST_ENTRIES_BINDING_TILE_FLAGS) buffer TileFlags { uint tileFlags[]; };
+layout(std430, binding = VOX_RAYCAST_ENTRIES_BINDING_TILES) buffer Tiles { uint tiles[]; };
+layout(std430, binding = VOX_RAYCAST_ENTRIES_BINDING_DISPATCH) buffer Dispatch { uint dispatchSize[]; };
 layout(push_constant) uniform Push { RaycastEntriesPush pc; };
 
 #include "shared/raycast.glsl"
@@ -76,6 +78,12 @@ void main() {
   // The bounded pixels in row order; work group row gl_WorkGroupID.y takes
   // its chunk of VOX_RAYCAST_ENTRIES_CHUNK_PIXELS of them.
   const uint columns = px1 - px0 + 1u;
+  if (pc.pass == 2u) {
+    const uint pixels = columns * (py1 - py0 + 1u);
+    const uint chunks = (pixels + VOX_RAYCAST_ENTRIES_CHUNK_PIXELS - 1u) / VOX_RAYCAST_ENTRIES_CHUNK_PIXELS;
+    atomicMax(dispatchSize[VOX_RAYCAST_DISPATCH_ENTRIES + 1], chunks);
+    return;
+  }
   const uint first = gl_WorkGroupID.y * VOX_RAYCAST_ENTRIES_CHUNK_PIXELS;
   const uint last = min(first + VOX_RAYCAST_ENTRIES_CHUNK_PIXELS, columns * (py1 - py0 + 1u));
   const uint plane = P.width * P.height;
@@ -88,7 +96,15 @@ void main() {
     if (pc.pass == 0u) {
       atomicMin(entries[pixel], floatBitsToUint(t));
       atomicAdd(entries[2u * plane + pixel], 1u);
-      tileFlags[(y / VOX_RAYCAST_GROUP_Y) * tilesX + x / VOX_RAYCAST_GROUP_X] = 1u;
+      // The first hit of a tile appends it to the list and grows the ray
+      // pass's dispatch to hold it.
+      const uint tile = (y / VOX_RAYCAST_GROUP_Y) * tilesX + x / VOX_RAYCAST_GROUP_X;
+      if (tileFlags[tile] == 0u && atomicExchange(tileFlags[tile], 1u) == 0u) {
+        const uint slot = atomicAdd(tiles[0], 1u);
+        tiles[1u + slot] = tile;
+        atomicMax(dispatchSize[VOX_RAYCAST_DISPATCH_RAYS], min(slot + 1u, pc.maxGroupsX));
+        atomicMax(dispatchSize[VOX_RAYCAST_DISPATCH_RAYS + 1], slot / pc.maxGroupsX + 1u);
+      }
     } else if (floatBitsToUint(t) == entries[pixel]) {
       atomicMin(entries[plane + pixel], f);
     }

@@ -124,15 +124,18 @@ void Viewer::renderView(bool interactive) {
   const int viewW = std::max(1, fw - viewLeft(fw)), viewH = std::max(1, fh);
   const double scale = interactive ? double(panels_->interactiveScale()) : 1.0;
   const int w = std::max(16, int(viewW * scale)), h = std::max(16, int(viewH * scale));
-  if (!view_.valid() || int(view_.width()) != w || int(view_.height()) != h)
+  if (!view_.valid() || int(view_.width()) != w || int(view_.height()) != h) {
+    kernel_->wait();  // the last frame may still write the old image
     view_ = gpu::Image2D(window_->context(), std::uint32_t(w), std::uint32_t(h));
+  }
   const auto t0 = std::chrono::steady_clock::now();
   const CuttingPlanes& cuts = cuts_.planes(editor_->state().cuts);
-  const RaycastFrame frame = prepareRaycastFrame(*mesh_, editor_->transferMeshPositions());
+  const std::vector<Eigen::Vector3d>& positions = editor_->transferMeshPositions();
+  const RaycastFrame frame = placeRaycastFrame(*mesh_, positions);
   const RaycastView view = makeRaycastView(frame, orbit_.camera(w, h), cuts);
   RaycastShading shading;
   shading.normals = panels_->surfaceNormals();
-  kernel_->renderTo(view_, frame, view, palette_, shading);
+  kernel_->renderTo(view_, frame, positions, view, palette_, shading);
   frame_.raycastMs = msSince(t0);
   frame_.renderWidth = w;
   frame_.renderHeight = h;

@@ -38,7 +38,8 @@ inline constexpr int kBvhMaxDepth = 32;  // traversal stacks hold 2 * kBvhMaxDep
 // centroids.
 std::vector<BvhNode> buildBoundaryBvh(std::vector<BoundaryFace>& faces, const std::vector<Eigen::Vector3d>& positions);
 
-// Recomputes every box bottom-up for new positions.
+// Recomputes every box bottom-up for new positions. The GPU ray caster refits
+// its own copy (shaders/raycast_refit.comp); this is its reference.
 void refitBoundaryBvh(std::vector<BvhNode>& nodes, const std::vector<BoundaryFace>& faces,
                       const std::vector<Eigen::Vector3d>& positions);
 

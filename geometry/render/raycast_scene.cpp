@@ -52,7 +52,7 @@ RaycastMesh buildRaycastMesh(const TetMesh& restMesh, const GridGeometry& source
 Eigen::Vector3d RaycastFrame::toRender(const Eigen::Vector3d& p) const { return (p - renderOrigin).cwiseQuotient(output.spacing); }
 Eigen::Vector3d RaycastFrame::toGrid(const Eigen::Vector3d& r) const { return renderOrigin + r.cwiseProduct(output.spacing); }
 
-RaycastFrame prepareRaycastFrame(const RaycastMesh& mesh, const std::vector<Eigen::Vector3d>& deformed) {
+RaycastFrame placeRaycastFrame(const RaycastMesh& mesh, const std::vector<Eigen::Vector3d>& deformed) {
   if (deformed.size() != mesh.vertexCount)
     throw InputError("deformed positions", std::to_string(deformed.size()) + " positions for a transfer mesh of " +
                                                std::to_string(mesh.vertexCount) + " vertices");
@@ -63,13 +63,18 @@ RaycastFrame prepareRaycastFrame(const RaycastMesh& mesh, const std::vector<Eige
   for (int a = 0; a < 3; ++a) f.cellShift[a] = f.output.dims[a] / 2;
   const Eigen::Vector3d shift(double(f.cellShift[0]), double(f.cellShift[1]), double(f.cellShift[2]));
   f.renderOrigin = f.output.origin + f.output.spacing.cwiseProduct(shift);
+  const Eigen::Vector3d dims(double(f.output.dims[0]), double(f.output.dims[1]), double(f.output.dims[2]));
+  f.cellsLo = -shift - Eigen::Vector3d::Constant(0.5);
+  f.cellsHi = dims - shift - Eigen::Vector3d::Constant(0.5);
+  return f;
+}
+
+RaycastFrame prepareRaycastFrame(const RaycastMesh& mesh, const std::vector<Eigen::Vector3d>& deformed) {
+  RaycastFrame f = placeRaycastFrame(mesh, deformed);
   f.positions.resize(deformed.size());
   for (std::size_t v = 0; v < deformed.size(); ++v) f.positions[v] = f.toRender(deformed[v]);
   f.bvh = mesh.restBvh;
   refitBoundaryBvh(f.bvh, mesh.boundary, f.positions);
-  const Eigen::Vector3d dims(double(f.output.dims[0]), double(f.output.dims[1]), double(f.output.dims[2]));
-  f.cellsLo = -shift - Eigen::Vector3d::Constant(0.5);
-  f.cellsHi = dims - shift - Eigen::Vector3d::Constant(0.5);
   return f;
 }
 

@@ -54,7 +54,7 @@ struct RaycastFrame {
   Index3 cellShift{0, 0, 0};              // output voxel of render cell 0
   Eigen::Vector3d renderOrigin{0, 0, 0};  // grid-frame position of render cell 0's centre
   std::vector<Eigen::Vector3d> positions; // #V, render frame
-  std::vector<BvhNode> bvh;               // boundary BVH refitted to `positions`
+  std::vector<BvhNode> bvh;               // boundary BVH refitted to `positions` (CPU reference; the GPU refits its own)
   Eigen::Vector3d cellsLo{0, 0, 0};       // box covered by G''s cells, render frame
   Eigen::Vector3d cellsHi{0, 0, 0};
 
@@ -65,6 +65,10 @@ struct RaycastFrame {
 // `deformedPositions`: #V, grid frame (mm). Throws InputError("deformed
 // positions", ...) for a wrong count or non-finite coordinates.
 RaycastFrame prepareRaycastFrame(const RaycastMesh& mesh, const std::vector<Eigen::Vector3d>& deformedPositions);
+// The same frame without `positions` and `bvh` (left empty), for the GPU
+// kernel that converts the deformed positions and refits the BVH itself
+// (gpu::RaycastKernel::renderTo with deformed positions); same errors.
+RaycastFrame placeRaycastFrame(const RaycastMesh& mesh, const std::vector<Eigen::Vector3d>& deformedPositions);
 
 // Eq. 5.1-5.2 precomputed per deformed tet, relative to vertex 0 (the anchor):
 // lambda_k(p) = planes[k].xyz . (p - anchor) + planes[k].w for k = 1..3 and

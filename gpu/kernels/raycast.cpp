@@ -20,7 +20,7 @@ using shader::RaycastEntriesPush;
 using shader::RaycastNode;
 using shader::RaycastParams;
 using shader::RaycastPreparePush;
-using shader::RaycastPush;
+using shader::RaycastRefitPush;
 
 static_assert(VOX_RAYCAST_BVH_STACK == 2 * kBvhMaxDepth);
 static_assert(VOX_RAYCAST_FACE_HIT_TOLERANCE == kFaceHitTolerance);
@@ -33,7 +33,7 @@ PipelineDesc raycastPipeline() {
   PipelineDesc d;
   d.shader = "raycast.comp";
   d.bindings.assign(VOX_RAYCAST_BINDING_SLAB0 + VOX_RAYCAST_MAX_SLABS, BindingKind::StorageBuffer);
-  d.pushConstantBytes = sizeof(RaycastPush);
+  d.pushConstantBytes = 0;
   return d;
 }
 
@@ -67,37 +67,6 @@ std::uint32_t packRgba(Rgb c, bool opaque) {
   return std::uint32_t(c.r) | (std::uint32_t(c.g) << 8) | (std::uint32_t(c.b) << 16) | (opaque ? 0xFF000000u : 0u);
 }
 
-// An upper bound of the pixels the entry pass tests for any face: the pixel
-// box of its projection, one pixel of slack (the whole image when a vertex
-// lies near or behind the eye).
-std::uint64_t maxFacePixels(const std::vector<Tri>& faces, const std::vector<Eigen::Vector3d>& positions, const RaycastView& view,
-                            const Eigen::Matrix3d& toCamera) {
-  const int w = view.camera.width, h = view.camera.height;
-  const double sxScale = view.camera.tanHalfFovY * view.camera.aspect, syScale = view.camera.tanHalfFovY;
-  std::uint64_t most = 0;
-  for (const Tri& f : faces) {
-    double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
-    bool behind = false;
-    for (std::int32_t v : f) {
-      const Eigen::Vector3d k = toCamera * (positions[std::size_t(v)] - view.eye);
-      if (k[0] < 2.0 * VOX_RAYCAST_NEAR_DEPTH) {
-        behind = true;
-        break;
-      }
-      const double x = (k[1] / k[0] / sxScale + 1.0) * 0.5 * w - 0.5, y = (1.0 - k[2] / k[0] / syScale) * 0.5 * h - 0.5;
-      x0 = std::min(x0, x);
-      x1 = std::max(x1, x);
-      y0 = std::min(y0, y);
-      y1 = std::max(y1, y);
-    }
-    if (behind) return std::uint64_t(w) * std::uint64_t(h);
-    const double cx = std::min(x1 + 1.0, w - 1.0) - std::max(x0 - 1.0, 0.0) + 1.0;
-    const double cy = std::min(y1 + 1.0, h - 1.0) - std::max(y0 - 1.0, 0.0) + 1.0;
-    if (cx > 0.0 && cy > 0.0) most = std::max(most, std::uint64_t(std::ceil(cx)) * std::uint64_t(std::ceil(cy)));
-  }
-  return most;
-}
-
 double msSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -112,12 +81,15 @@ RaycastKernel::RaycastKernel(Context& context, const LabelGrid& source, const Ra
       tetCount_(mesh.tets.size()),
       nodeCount_(mesh.restBvh.size()),
       faceCount_(mesh.boundary.size()),
+      refit_(context, {"raycast_refit.comp",
+                       {BindingKind::StorageBuffer, BindingKind::StorageBuffer, BindingKind::StorageBuffer, BindingKind::StorageBuffer},
+                       sizeof(RaycastRefitPush)}),
       prepare_(context, {"raycast_prepare.comp",
                          {BindingKind::StorageBuffer, BindingKind::StorageBuffer, BindingKind::StorageBuffer},
                          sizeof(RaycastPreparePush)}),
       entries_(context, {"raycast_entries.comp",
                          {BindingKind::StorageBuffer, BindingKind::StorageBuffer, BindingKind::StorageBuffer, BindingKind::StorageBuffer,
-                          BindingKind::StorageBuffer},
+                          BindingKind::StorageBuffer, BindingKind::StorageBuffer, BindingKind::StorageBuffer},
                          sizeof(RaycastEntriesPush)}),
       raycast_(context, raycastPipeline()),
       batch_(context) {
@@ -162,9 +134,7 @@ RaycastKernel::RaycastKernel(Context& context, const LabelGrid& source, const Ra
     }
   }
   std::vector<std::uint32_t> faces(4 * mesh.boundary.size());
-  faceVertices_.reserve(mesh.boundary.size());
   for (std::size_t f = 0; f < mesh.boundary.size(); ++f) {
-    faceVertices_.push_back(mesh.boundary[f].vertices);
     for (int k = 0; k < 3; ++k) faces[4 * f + std::size_t(k)] = std::uint32_t(mesh.boundary[f].vertices[std::size_t(k)]);
     faces[4 * f + 3] = std::uint32_t(mesh.boundary[f].tet);
   }
@@ -173,14 +143,41 @@ RaycastKernel::RaycastKernel(Context& context, const LabelGrid& source, const Ra
   rest_ = uploadOnce(context, rest, "rest coordinates");
   faces_ = uploadOnce(context, faces, "boundary faces");
 
+  // The BVH with its rest boxes, and the refit order: every leaf, then the
+  // inner nodes by depth, deepest first (children follow their parent in
+  // depth-first order, so one forward sweep gives the depths).
+  std::vector<RaycastNode> nodes(nodeCount_);
+  std::vector<int> depth(nodeCount_, 0);
+  int deepest = 0;
+  for (std::size_t n = 0; n < nodeCount_; ++n) {
+    const BvhNode& b = mesh.restBvh[n];
+    storeNode(b, nodes[n]);
+    if (b.count == 0) {
+      depth[n + 1] = depth[std::size_t(b.rightOrFirst)] = depth[n] + 1;
+      deepest = std::max(deepest, depth[n] + 1);
+    }
+  }
+  std::vector<std::uint32_t> order;
+  order.reserve(nodeCount_);
+  for (std::size_t n = 0; n < nodeCount_; ++n)
+    if (mesh.restBvh[n].count > 0) order.push_back(std::uint32_t(n));
+  refitLevels_.emplace_back(0u, std::uint32_t(order.size()));
+  for (int d = deepest; d >= 0; --d) {
+    const auto first = std::uint32_t(order.size());
+    for (std::size_t n = 0; n < nodeCount_; ++n)
+      if (depth[n] == d && mesh.restBvh[n].count == 0) order.push_back(std::uint32_t(n));
+    if (order.size() > first) refitLevels_.emplace_back(first, std::uint32_t(order.size()) - first);
+  }
+  nodes_ = uploadOnce(context, nodes, "BVH nodes");
+  refitOrder_ = uploadOnce(context, order, "BVH refit order");
+
   const std::uint64_t positionBytes = checkedBinding(context, 16 * std::uint64_t(vertexCount_), "positions");
-  const std::uint64_t nodeBytes = checkedBinding(context, sizeof(RaycastNode) * std::uint64_t(nodeCount_), "BVH nodes");
   const std::uint64_t factorBytes = checkedBinding(context, 64 * std::uint64_t(tetCount_), "tet factors");
-  positionsStaging_ = Buffer(context, positionBytes, MemoryIntent::Upload);
-  nodesStaging_ = Buffer(context, nodeBytes, MemoryIntent::Upload);
+  for (Buffer& b : positions_) b = Buffer(context, positionBytes, MemoryIntent::Upload);
   paramsStaging_ = Buffer(context, sizeof(RaycastParams), MemoryIntent::Upload);
-  positions_ = Buffer(context, positionBytes, MemoryIntent::Device);
-  nodes_ = Buffer(context, nodeBytes, MemoryIntent::Device);
+  rayGroupsPerRow_ = options.rayGroupsPerRow ? std::min(options.rayGroupsPerRow, context.info().maxWorkGroupCount[0])
+                                             : context.info().maxWorkGroupCount[0];
+  dispatchSizes_ = Buffer(context, 8 * sizeof(std::uint32_t), MemoryIntent::Device, VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT);
   params_ = Buffer(context, sizeof(RaycastParams), MemoryIntent::Device);
   factors_ = Buffer(context, factorBytes, MemoryIntent::Device);
 }
@@ -188,10 +185,12 @@ RaycastKernel::RaycastKernel(Context& context, const LabelGrid& source, const Ra
 RgbImage RaycastKernel::render(const RaycastFrame& frame, const RaycastView& view, const Palette& palette, const RaycastShading& shading,
                                const RaycastLimits& limits) {
   const auto t0 = std::chrono::steady_clock::now();
-  castRays(frame, view, palette, shading, limits);
+  castRays(frame, nullptr, view, palette, shading, limits);
   const int w = view.camera.width, h = view.camera.height;
   batch_.copy(image_, imageReadback_, 4 * std::uint64_t(w) * std::uint64_t(h));
-  finishFrame();
+  batch_.barrier();
+  batch_.submitAndWait();
+  readGpuTimes();
   RgbImage image(w, h);
   const auto* px = static_cast<const std::uint32_t*>(imageReadback_.mapped());
   for (std::size_t i = 0; i < image.pixels.size(); ++i)
@@ -205,32 +204,84 @@ void RaycastKernel::renderTo(Image2D& target, const RaycastFrame& frame, const R
   const auto t0 = std::chrono::steady_clock::now();
   if (std::int64_t(target.width()) != view.camera.width || std::int64_t(target.height()) != view.camera.height)
     throw RuntimeFailure("ray caster: the target image's size differs from the camera's");
-  castRays(frame, view, palette, shading, limits);
+  castRays(frame, nullptr, view, palette, shading, limits);
   batch_.copy(image_, target);
-  finishFrame();
+  batch_.barrier();
+  batch_.submit();
   times_.totalMs = msSince(t0);
 }
 
-void RaycastKernel::finishFrame() {
-  batch_.submitAndWait();
-  if (batch_.timings().size() == 2) times_.raycastGpuMs = batch_.timings()[1].ms;
+void RaycastKernel::renderTo(Image2D& target, const RaycastFrame& frame, const std::vector<Eigen::Vector3d>& deformedPositions,
+                             const RaycastView& view, const Palette& palette, const RaycastShading& shading, const RaycastLimits& limits) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (std::int64_t(target.width()) != view.camera.width || std::int64_t(target.height()) != view.camera.height)
+    throw RuntimeFailure("ray caster: the target image's size differs from the camera's");
+  castRays(frame, &deformedPositions, view, palette, shading, limits);
+  batch_.copy(image_, target);
+  batch_.barrier();
+  batch_.submit();
+  times_.totalMs = msSince(t0);
 }
 
-void RaycastKernel::castRays(const RaycastFrame& frame, const RaycastView& view, const Palette& palette, const RaycastShading& shading,
-                             const RaycastLimits& limits) {
+std::vector<BvhNode> RaycastKernel::downloadBvh() {
+  wait();
+  std::vector<RaycastNode> stored(nodeCount_);
+  nodes_.download(stored.data(), sizeof(RaycastNode) * stored.size());
+  std::vector<BvhNode> out(nodeCount_);
+  for (std::size_t n = 0; n < nodeCount_; ++n) {
+    for (int a = 0; a < 3; ++a) {
+      out[n].lo[a] = stored[n].lo[a];
+      out[n].hi[a] = stored[n].hi[a];
+    }
+    out[n].rightOrFirst = stored[n].rightOrFirst;
+    out[n].count = stored[n].count;
+  }
+  return out;
+}
+
+void RaycastKernel::wait() {
+  batch_.wait();
+  readGpuTimes();
+}
+
+void RaycastKernel::readGpuTimes() {
+  const auto& ts = batch_.timings();
+  if (ts.size() == 5) {
+    times_.prepareGpuMs = ts[2].ms - ts[1].ms;
+    times_.entriesGpuMs = ts[3].ms - ts[2].ms;
+    times_.raycastGpuMs = ts[4].ms - ts[3].ms;
+  }
+}
+
+void RaycastKernel::castRays(const RaycastFrame& frame, const std::vector<Eigen::Vector3d>* deformed, const RaycastView& view,
+                             const Palette& palette, const RaycastShading& shading, const RaycastLimits& limits) {
   const auto t0 = std::chrono::steady_clock::now();
-  if (frame.positions.size() != vertexCount_ || frame.bvh.size() != nodeCount_)
+  if ((deformed ? deformed->size() : frame.positions.size()) != vertexCount_)
     throw RuntimeFailure("ray caster: the frame does not belong to the mesh the kernel was built for");
   const int w = view.camera.width, h = view.camera.height;
 
-  // Per-frame data into staging memory.
-  auto* pos = static_cast<float*>(positionsStaging_.mapped());
-  for (std::size_t v = 0; v < vertexCount_; ++v) {
-    for (int a = 0; a < 3; ++a) pos[4 * v + std::size_t(a)] = float(frame.positions[v][a]);
-    pos[4 * v + 3] = 0.0f;
+  // The positions, in the render frame, straight into this frame's mapped
+  // buffer (the same floats as float(frame.positions[v]) would be).
+  const Buffer& positions = positions_[frameIndex_];
+  frameIndex_ ^= 1u;
+  auto* pos = static_cast<float*>(positions.mapped());
+  if (deformed) {
+    for (std::size_t v = 0; v < vertexCount_; ++v) {
+      const Eigen::Vector3d r = frame.toRender((*deformed)[v]);
+      for (int a = 0; a < 3; ++a) pos[4 * v + std::size_t(a)] = float(r[a]);
+      pos[4 * v + 3] = 0.0f;
+    }
+  } else {
+    for (std::size_t v = 0; v < vertexCount_; ++v) {
+      for (int a = 0; a < 3; ++a) pos[4 * v + std::size_t(a)] = float(frame.positions[v][a]);
+      pos[4 * v + 3] = 0.0f;
+    }
   }
-  auto* nodes = static_cast<RaycastNode*>(nodesStaging_.mapped());
-  for (std::size_t n = 0; n < nodeCount_; ++n) storeNode(frame.bvh[n], nodes[n]);
+  // The previous frame may still run: it reads the other positions buffer,
+  // and the buffers below, which this frame rewrites.
+  const double positionsMs = msSince(t0);
+  wait();
+  const auto t1 = std::chrono::steady_clock::now();
 
   const Eigen::Vector3d steps = occupancyDifferenceSteps(source_);
   RaycastParams p{};
@@ -292,20 +343,23 @@ void RaycastKernel::castRays(const RaycastFrame& frame, const RaycastView& view,
     imageReadback_ = Buffer(context_, imageBytes, MemoryIntent::Readback);
     entryBuffer_ = Buffer(context_, entryBytes, MemoryIntent::Device);
     tileCount_ = tilesX * tilesY;
-    tileFlags_ = Buffer(context_, 4 * std::uint64_t(tileCount_), MemoryIntent::Readback);
-    tiles_ = Buffer(context_, 4 * std::uint64_t(tileCount_), MemoryIntent::Upload);
+    tileFlags_ = Buffer(context_, 4 * std::uint64_t(tileCount_), MemoryIntent::Device);
+    tiles_ = Buffer(context_, 4 * (1 + std::uint64_t(tileCount_)), MemoryIntent::Device);
   }
-  times_ = {};
-  times_.uploadMs = msSince(t0);
+  times_.uploadMs = positionsMs + msSince(t1);
 
   batch_.timestamp("start");
-  batch_.copy(positionsStaging_, positions_, 16 * std::uint64_t(vertexCount_));
-  batch_.copy(nodesStaging_, nodes_, sizeof(RaycastNode) * std::uint64_t(nodeCount_));
   batch_.copy(paramsStaging_, params_, sizeof(RaycastParams));
   batch_.copy(paletteStaging_, palette_, 4 * std::uint64_t(palette.size()));
   batch_.timestamp("uploaded");
+  for (const auto& [first, count] : refitLevels_) {
+    batch_.dispatch(refit_,
+                    {Binding::storage(nodes_), Binding::storage(faces_), Binding::storage(positions), Binding::storage(refitOrder_)},
+                    RaycastRefitPush{first, count, 0, 0}, (count + VOX_RAYCAST_REFIT_GROUP_SIZE - 1) / VOX_RAYCAST_REFIT_GROUP_SIZE);
+    batch_.barrier();
+  }
   const RaycastPreparePush push{std::uint32_t(tetCount_), 0, 0, 0};
-  batch_.dispatch(prepare_, {Binding::storage(tets_), Binding::storage(positions_), Binding::storage(factors_)}, push,
+  batch_.dispatch(prepare_, {Binding::storage(tets_), Binding::storage(positions), Binding::storage(factors_)}, push,
                   std::uint32_t((tetCount_ + VOX_RAYCAST_PREPARE_GROUP_SIZE - 1) / VOX_RAYCAST_PREPARE_GROUP_SIZE));
   batch_.barrier();
   batch_.timestamp("prepared");
@@ -313,45 +367,40 @@ void RaycastKernel::castRays(const RaycastFrame& frame, const RaycastView& view,
   batch_.fill(entryBuffer_, 0xFFFFFFFFu, 0, 2 * imageBytes);
   batch_.fill(entryBuffer_, 0u, 2 * imageBytes, imageBytes);
   batch_.fill(tileFlags_, 0u);
+  batch_.fill(tiles_, 0u, 0, 4);
+  // Dispatch sizes: the entry passes' face groups and one chunk (pass 2 sets
+  // the chunks), no ray work groups (pass 0 adds them).
   const auto faceGroups = std::uint32_t((faceCount_ + VOX_RAYCAST_ENTRIES_GROUP_SIZE - 1) / VOX_RAYCAST_ENTRIES_GROUP_SIZE);
-  const std::uint64_t pixels = maxFacePixels(faceVertices_, frame.positions, view, toCamera);
-  const auto chunks = std::uint32_t(std::max<std::uint64_t>(1, (pixels + VOX_RAYCAST_ENTRIES_CHUNK_PIXELS - 1) / VOX_RAYCAST_ENTRIES_CHUNK_PIXELS));
+  batch_.fill(dispatchSizes_, faceGroups, 4 * VOX_RAYCAST_DISPATCH_ENTRIES, 4);
+  batch_.fill(dispatchSizes_, 1u, 4 * (VOX_RAYCAST_DISPATCH_ENTRIES + 1), 8);
+  batch_.fill(dispatchSizes_, 0u, 4 * VOX_RAYCAST_DISPATCH_RAYS, 4);
+  batch_.fill(dispatchSizes_, 1u, 4 * (VOX_RAYCAST_DISPATCH_RAYS + 1), 8);
+  batch_.fill(image_, p.background);
+  batch_.barrier();
+  auto entriesPass = [&](std::uint32_t pass) -> RaycastEntriesPush { return {std::uint32_t(faceCount_), pass, rayGroupsPerRow_, 0}; };
+  const std::initializer_list<Binding> entriesBindings = {Binding::storage(params_),      Binding::storage(faces_),
+                                                          Binding::storage(positions),    Binding::storage(entryBuffer_),
+                                                          Binding::storage(tileFlags_),   Binding::storage(tiles_),
+                                                          Binding::storage(dispatchSizes_)};
+  batch_.dispatch(entries_, entriesBindings, entriesPass(2), faceGroups);
+  batch_.barrier();
   for (std::uint32_t pass = 0; pass < 2; ++pass) {
-    const RaycastEntriesPush entriesPush{std::uint32_t(faceCount_), pass, 0, 0};
-    batch_.dispatch(entries_,
-                    {Binding::storage(params_), Binding::storage(faces_), Binding::storage(positions_), Binding::storage(entryBuffer_),
-                     Binding::storage(tileFlags_)},
-                    entriesPush, faceGroups, chunks);
+    batch_.dispatchIndirect(entries_, entriesBindings, entriesPass(pass), dispatchSizes_, 4 * VOX_RAYCAST_DISPATCH_ENTRIES);
     batch_.barrier();
   }
   batch_.timestamp("entries");
-  batch_.fill(image_, p.background);
-  batch_.submitAndWait();
-  if (batch_.timings().size() == 4) {
-    const auto& ts = batch_.timings();
-    times_.prepareGpuMs = ts[2].ms - ts[1].ms;
-    times_.entriesGpuMs = ts[3].ms - ts[2].ms;
-  }
 
-  // The flagged tiles, in image order: one work group each.
-  const auto* flags = static_cast<const std::uint32_t*>(tileFlags_.mapped());
-  auto* list = static_cast<std::uint32_t*>(tiles_.mapped());
-  std::uint32_t active = 0;
-  for (std::uint32_t t = 0; t < tileCount_; ++t)
-    if (flags[t]) list[active++] = t;
+  // The flagged tiles: one work group each.
   const Buffer& s0 = slabs_[0];
   auto slab = [&](std::size_t i) { return Binding::storage(i < slabs_.size() ? slabs_[i] : s0); };
-  const std::uint32_t maxGroups = context_.info().maxWorkGroupCount[0];
-  batch_.timestamp("start");
-  batch_.dispatch(raycast_,
-                  {Binding::storage(params_), Binding::storage(nodes_), Binding::storage(faces_), Binding::storage(positions_),
-                   Binding::storage(factors_), Binding::storage(neighbors_), Binding::storage(rest_), Binding::storage(palette_),
-                   Binding::storage(entryBuffer_), Binding::storage(image_), Binding::storage(tiles_), slab(0), slab(1), slab(2),
-                   slab(3), slab(4), slab(5), slab(6), slab(7)},
-                  RaycastPush{active, 0, 0, 0}, std::min(active, maxGroups), (active + maxGroups - 1) / maxGroups);
+  batch_.dispatchIndirect(raycast_,
+                          {Binding::storage(params_), Binding::storage(nodes_), Binding::storage(faces_), Binding::storage(positions),
+                           Binding::storage(factors_), Binding::storage(neighbors_), Binding::storage(rest_), Binding::storage(palette_),
+                           Binding::storage(entryBuffer_), Binding::storage(image_), Binding::storage(tiles_), slab(0), slab(1),
+                           slab(2), slab(3), slab(4), slab(5), slab(6), slab(7)},
+                          nullptr, 0, dispatchSizes_, 4 * VOX_RAYCAST_DISPATCH_RAYS);
   batch_.barrier();
   batch_.timestamp("raycast");
-  times_.activeTiles = active;
 }
 
 }  // namespace vox::gpu

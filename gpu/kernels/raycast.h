@@ -6,14 +6,21 @@
 // in z-slabs of whole slices, one storage binding (at most 128 MiB) per slab,
 // up to VOX_RAYCAST_MAX_SLABS slabs (512 M voxels with 128 MiB bindings). The
 // mesh connectivity, neighbours, boundary faces and rest coordinates go once
-// too. Per frame only the deformed positions and the refitted boundary BVH
-// are uploaded; one compute pass recomputes the per-tet factors (eq. 5.1-5.2),
-// two rasterize the front boundary faces into the entry buffer (each pixel's
-// first entry face and the number of front faces its ray crosses, and which
-// 8x8 tiles hold such pixels), then one invocation per pixel of those tiles
-// casts its ray, querying the BVH only for re-entries. The tile list is made
-// on the host between two submissions: on CPU drivers an invocation of the
-// ray shader costs even when it exits at once, and most tiles see no mesh.
+// too, and so does the boundary BVH's topology. Per frame the host writes
+// only the deformed positions, as floats straight into one of two
+// persistently mapped host-visible buffers (frames alternate, so that a
+// frame's writes never touch the buffer the previous frame's passes read)
+// that the passes bind without a copy. Compute passes refit the BVH's boxes
+// (one per tree level: shaders/raycast_refit.comp) and recompute the per-tet
+// factors (eq. 5.1-5.2), two rasterize the front boundary faces into the
+// entry buffer (each pixel's first entry face and the number of front faces
+// its ray crosses, and which 8x8 tiles hold such pixels, listed on the GPU:
+// shaders/raycast_entries.comp), then one invocation per
+// pixel of those tiles casts its ray, querying the BVH only for re-entries:
+// on CPU drivers an invocation of the ray shader costs even when it exits at
+// once, and most tiles see no mesh. The entry passes also size their own
+// and the ray pass's dispatches (indirect dispatch), so a frame is one
+// submission that the host neither reads from nor waits on midway.
 //
 // lavapipe ends a shader invocation after 65535 loop iterations. The entry
 // pass splits large faces to stay below; a ray takes about three iterations
@@ -31,6 +38,7 @@
 #include "gpu/pipeline.h"
 
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 namespace vox::gpu {
@@ -39,16 +47,20 @@ struct RaycastKernelOptions {
   // Bytes per label slab; 0 = the context's largest binding. Tests set small
   // values so that several slabs are exercised on small grids.
   std::uint64_t slabBytes = 0;
+  // Work groups per row of the ray pass's dispatch; 0 = the device's limit.
+  // Tests set small values so that the dispatch spans several rows.
+  std::uint32_t rayGroupsPerRow = 0;
 };
 
-// Times of the last render() (ms). GPU times come from timestamps (0 when the
-// queue has none).
+// Times of the last frame (ms). Host times are the last call's; GPU times
+// come from timestamps (0 when the queue has none) of the last frame the host
+// waited for: renderTo's frame is waited for when the next frame starts or
+// at wait().
 struct RaycastFrameTimes {
-  double uploadMs = 0.0;     // host: positions, BVH and parameters into staging memory
-  double prepareGpuMs = 0.0; // GPU: per-tet factors
+  double uploadMs = 0.0;     // host: positions and parameters into mapped memory
+  double prepareGpuMs = 0.0; // GPU: BVH refit and per-tet factors
   double entriesGpuMs = 0.0; // GPU: entry buffer
   double raycastGpuMs = 0.0; // GPU: the rays
-  std::uint32_t activeTiles = 0;  // 8x8 tiles that ran the ray pass
   double totalMs = 0.0;      // host: render() from call to image
 };
 
@@ -59,12 +71,32 @@ public:
   // VOX_RAYCAST_MAX_SLABS slabs, or when a mesh array exceeds one binding.
   RaycastKernel(Context& context, const LabelGrid& source, const RaycastMesh& mesh, RaycastKernelOptions options = {});
 
+  // frame.positions go to the GPU; frame.bvh is not read (the kernel refits
+  // its own tree).
   RgbImage render(const RaycastFrame& frame, const RaycastView& view, const Palette& palette, const RaycastShading& shading = {},
                   const RaycastLimits& limits = {});
   // The same frame into a GPU image of the camera's size, not read back (the
-  // viewer blits it to the screen). Waits for the GPU.
+  // viewer blits it to the screen). Returns once the frame is submitted:
+  // later submissions to the queue see the image written (the frame ends
+  // with a barrier), and the next frame waits for this one before it reuses
+  // the kernel's buffers. The target must live until then (wait()).
   void renderTo(Image2D& target, const RaycastFrame& frame, const RaycastView& view, const Palette& palette,
                 const RaycastShading& shading = {}, const RaycastLimits& limits = {});
+
+  // The viewer's frame: `frame` from placeRaycastFrame (no positions or
+  // BVH) and `deformedPositions` (#V, grid frame), which go to the render
+  // frame on their way into the mapped positions buffer. The image equals
+  // renderTo's with prepareRaycastFrame's frame. Returns once submitted.
+  void renderTo(Image2D& target, const RaycastFrame& frame, const std::vector<Eigen::Vector3d>& deformedPositions,
+                const RaycastView& view, const Palette& palette, const RaycastShading& shading = {}, const RaycastLimits& limits = {});
+
+  // Waits for the last frame's GPU work.
+  void wait();
+
+  // The boundary BVH of the last frame as the GPU refitted it (float boxes
+  // padded for the tolerant face test; before any frame, the rest tree's).
+  // Waits for the frame.
+  std::vector<BvhNode> downloadBvh();
 
   const RaycastFrameTimes& lastTimes() const { return times_; }
   std::size_t slabCount() const { return slabs_.size(); }
@@ -73,15 +105,17 @@ public:
 private:
   // Records and runs everything up to the ray pass, whose dispatch stays
   // recorded for the caller to append its copy and call finishFrame().
-  void castRays(const RaycastFrame& frame, const RaycastView& view, const Palette& palette, const RaycastShading& shading,
-                const RaycastLimits& limits);
-  void finishFrame();
+  // `deformed`: grid-frame positions, or nullptr for frame.positions.
+  void castRays(const RaycastFrame& frame, const std::vector<Eigen::Vector3d>* deformed, const RaycastView& view, const Palette& palette,
+                const RaycastShading& shading, const RaycastLimits& limits);
+  // The GPU times of the frame the batch last waited for.
+  void readGpuTimes();
 
   Context& context_;
   GridGeometry source_;
   Index3 sourceShift_{0, 0, 0};
   std::size_t vertexCount_ = 0, tetCount_ = 0, nodeCount_ = 0, faceCount_ = 0;
-  std::vector<Tri> faceVertices_;  // host copy of the boundary faces, to bound their projections
+  ComputePipeline refit_;
   ComputePipeline prepare_;
   ComputePipeline entries_;
   ComputePipeline raycast_;
@@ -90,11 +124,20 @@ private:
   std::uint64_t gridBytes_ = 0;
   // Uploaded once.
   Buffer tets_, neighbors_, rest_, faces_;
-  // Per frame: staging (host visible) and device copies.
-  Buffer positionsStaging_, nodesStaging_, paramsStaging_, paletteStaging_;
-  Buffer positions_, nodes_, params_, palette_, factors_;
+  // The BVH (topology uploaded once, boxes refitted per frame), the refit
+  // order and its levels: [first, first + count) of the order per dispatch.
+  Buffer nodes_, refitOrder_;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> refitLevels_;
+  // Per frame: the positions (mapped, two for alternating frames), staging
+  // (host visible) and device copies of the rest.
+  Buffer positions_[2];
+  std::uint32_t frameIndex_ = 0;
+  Buffer paramsStaging_, paletteStaging_;
+  Buffer params_, palette_, factors_;
   Buffer entryBuffer_, image_, imageReadback_, tileFlags_, tiles_;
+  Buffer dispatchSizes_;  // indirect dispatch sizes the entry passes write
   std::uint32_t tileCount_ = 0;
+  std::uint32_t rayGroupsPerRow_ = 0;
   CommandBatch batch_;
   RaycastFrameTimes times_;
 };

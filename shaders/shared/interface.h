@@ -184,17 +184,33 @@ static_assert(sizeof(RasterReducePush) == 32);
 #define VOX_RAYCAST_PREPARE_BINDING_POSITIONS 1  // vec4[vertexCount]: render frame xyz
 #define VOX_RAYCAST_PREPARE_BINDING_FACTORS 2    // vec4[4 * tetCount]: planes 1..3 (xyz, w), anchor (xyz)
 
+// raycast_refit.comp: the boundary BVH's boxes for the deformed positions
+// (CPU reference: refitBoundaryBvh in geometry/render/boundary_bvh.cpp). The
+// rest tree's topology stays on the GPU; one dispatch boxes every leaf (its
+// faces' vertices, padded like the host's boxes: VOX_RAYCAST_REFIT_PAD cells
+// plus 2 VOX_RAYCAST_FACE_HIT_TOLERANCE of the box's extent), then one per
+// depth joins the inner nodes' children, deepest first.
+#define VOX_RAYCAST_REFIT_GROUP_SIZE 64
+#define VOX_RAYCAST_REFIT_PAD 1e-3
+#define VOX_RAYCAST_REFIT_BINDING_NODES 0      // RaycastNode[nodeCount]
+#define VOX_RAYCAST_REFIT_BINDING_FACES 1      // uvec4[faceCount]: vertices a, b, c and the tet
+#define VOX_RAYCAST_REFIT_BINDING_POSITIONS 2  // vec4[vertexCount]: render frame xyz
+#define VOX_RAYCAST_REFIT_BINDING_ORDER 3      // uint[nodeCount]: the leaves, then the inner nodes, deepest first
+
 // raycast_entries.comp: one invocation per boundary face; rasterizes the
 // front faces into the entry buffer (uint[3 * width * height], three planes):
 // the smallest hit parameter t >= 0 per pixel (float bits, pass 0), the
 // lowest face index hit at that t (pass 1), and the number of front faces
 // the pixel's ray hits (pass 0). Pass 0 also flags the image tiles
 // (VOX_RAYCAST_GROUP_X x VOX_RAYCAST_GROUP_Y pixels, row by row) that hold a
-// hit pixel: only those tiles run the ray pass.
+// hit pixel and appends each flagged tile to the tile list: only those tiles
+// run the ray pass, whose indirect dispatch size pass 0 sets too. Pass 2,
+// before the others, sets their dispatch size: the chunks of the face that
+// covers the most pixels. No step of the frame waits for the host.
 #define VOX_RAYCAST_ENTRIES_GROUP_SIZE 64
 // Pixels one invocation tests at most: lavapipe ends any invocation after
 // 65535 loop iterations, so faces that cover more pixels are split over the
-// dispatch's second dimension (the host bounds every face's pixel count).
+// dispatch's second dimension.
 #define VOX_RAYCAST_ENTRIES_CHUNK_PIXELS 16384
 #define VOX_RAYCAST_NEAR_DEPTH 1e-3  // faces are clipped to depth t >= this (mm)
 #define VOX_RAYCAST_ENTRIES_BINDING_PARAMS 0
@@ -202,6 +218,11 @@ static_assert(sizeof(RasterReducePush) == 32);
 #define VOX_RAYCAST_ENTRIES_BINDING_POSITIONS 2
 #define VOX_RAYCAST_ENTRIES_BINDING_ENTRIES 3
 #define VOX_RAYCAST_ENTRIES_BINDING_TILE_FLAGS 4  // uint[tile count]: 1 where a pixel is hit
+#define VOX_RAYCAST_ENTRIES_BINDING_TILES 5       // uint[1 + tile count]: the ray pass's tile list (raycast.comp)
+#define VOX_RAYCAST_ENTRIES_BINDING_DISPATCH 6    // uint[8]: indirect dispatch sizes, VOX_RAYCAST_DISPATCH_*
+// Offsets (in uints) of the indirect dispatch sizes (x, y, z) in the dispatch buffer.
+#define VOX_RAYCAST_DISPATCH_ENTRIES 0  // entry passes 0 and 1: face groups, chunks, 1
+#define VOX_RAYCAST_DISPATCH_RAYS 4     // ray pass: tiles per row (at most the device's limit), rows, 1
 
 // raycast.comp: one invocation per pixel of the flagged tiles, one work group
 // per tile; the other pixels keep the background the image was filled with.
@@ -220,7 +241,7 @@ static_assert(sizeof(RasterReducePush) == 32);
 #define VOX_RAYCAST_BINDING_PALETTE 7    // uint[labelCount]: RGBA8 (r in the low byte), alpha 0 = hidden
 #define VOX_RAYCAST_BINDING_ENTRIES 8    // uint[3 * width * height] (raycast_entries.comp)
 #define VOX_RAYCAST_BINDING_IMAGE 9      // uint[width * height]: RGBA8, row 0 at the top
-#define VOX_RAYCAST_BINDING_TILES 10     // uint[]: indices of the flagged tiles, one per work group
+#define VOX_RAYCAST_BINDING_TILES 10     // uint[1 + tile count]: the flagged tiles' count, then their indices, one per work group
 #define VOX_RAYCAST_BINDING_SLAB0 11     // uint[] x VOX_RAYCAST_MAX_SLABS: two uint16 labels per word
 
 struct RaycastPreparePush {
@@ -230,17 +251,17 @@ struct RaycastPreparePush {
   uint pad2;
 };
 
-struct RaycastPush {
-  uint tileCount;  // flagged tiles; work group g (row-major over the dispatch) takes tile tiles[g]
+struct RaycastRefitPush {
+  uint first;  // nodes order[first .. first + count) of the refit order
+  uint count;
   uint pad0;
   uint pad1;
-  uint pad2;
 };
 
 struct RaycastEntriesPush {
   uint faceCount;
-  uint pass;  // 0: depth and count, 1: face at the smallest depth
-  uint pad0;
+  uint pass;  // 0: depth and count, 1: face at the smallest depth, 2: dispatch size
+  uint maxGroupsX;  // the device's work group count limit in x (rows of the ray pass's dispatch)
   uint pad1;
 };
 
@@ -288,7 +309,6 @@ struct RaycastParams {
 static_assert(sizeof(RaycastPreparePush) == 16);
 static_assert(sizeof(RaycastNode) == 32);
 static_assert(sizeof(RaycastEntriesPush) == 16);
-static_assert(sizeof(RaycastPush) == 16);
 static_assert(sizeof(RaycastParams) == 368);
 #endif
 

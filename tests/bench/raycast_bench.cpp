@@ -4,14 +4,23 @@
 // run, what the renderer avoids: rasterizing the deformed grid after every
 // pose change and uploading it again.
 //
-// A frame is what a pose change costs: deformed positions -> render frame
-// and refitted BVH (CPU), then upload, per-tet factors, entry buffer, rays
-// and readback (GPU). Raycast/... reads the image back to the host (what
-// `voxmorph render` and a screenshot need); RaycastToImage/... is the same
-// frame left in a GPU image (gpu::RaycastKernel::renderTo), as the viewer
-// draws it, so the two differ by the read-back. Counters: cpu_ms is the
-// process's CPU time per frame (all lavapipe threads), which on a loaded
-// machine says more than wall time; gpu_ms the kernels' timestamps.
+// A frame is what a pose change costs. Raycast/... is `voxmorph render`'s
+// frame: prepareRaycastFrame (render-frame positions, and the host's BVH
+// refit, which the CPU reference reads and the kernel does not), then the
+// GPU passes and the image read back to the host (what `render` and a
+// screenshot need). RaycastToImage/... is the
+// viewer's frame: placeRaycastFrame and the deformed positions written
+// straight into the kernel's mapped buffer, the BVH refitted on the GPU,
+// the image left in a GPU image (gpu::RaycastKernel::renderTo), which
+// returns once the frame is submitted: the next frame waits for it after
+// writing its positions, so a frame's time is the larger of the host's and
+// the GPU's. Counters:
+// cpu_ms is the process's CPU time per frame (all lavapipe threads), which
+// on a loaded machine says more than wall time; frame_prep_cpu_ms the part
+// in prepareRaycastFrame or placeRaycastFrame; gpu_ms the kernels'
+// timestamps (RaycastToImage: those of the frame before, finished while
+// the host prepared the next). Google Benchmark's CPU column is the calling thread's time
+// alone: the host's share of the frame.
 //
 // The transfer mesh is the pipeline's (buildTransferMesh: CGAL Mesh_3 of the
 // foreground, default sizing field, built once per phantom on the original
@@ -164,15 +173,16 @@ void BM_RaycastFrame(benchmark::State& state, std::string name, test::Deformatio
   RgbImage image;
   for (auto _ : state) {
     const double c0 = cpuMs();
-    const RaycastFrame frame = prepareRaycastFrame(s.mesh, posed);
+    const RaycastFrame frame = readBack ? prepareRaycastFrame(s.mesh, posed) : placeRaycastFrame(s.mesh, posed);
     frameCpu += cpuMs() - c0;
     if (readBack) image = s.kernel->render(frame, makeRaycastView(frame, camera, cuts), s.palette, shading);
-    else s.kernel->renderTo(target, frame, makeRaycastView(frame, camera, cuts), s.palette, shading);
+    else s.kernel->renderTo(target, frame, posed, makeRaycastView(frame, camera, cuts), s.palette, shading);
     cpu += cpuMs() - c0;
     const gpu::RaycastFrameTimes& t = s.kernel->lastTimes();
     gpu += t.prepareGpuMs + t.entriesGpuMs + t.raycastGpuMs;
     benchmark::DoNotOptimize(image.pixels.data());
   }
+  s.kernel->wait();
   if (!readBack) image = target.download();  // after the timed frames, for the pixel count
   const std::size_t visible = countNotBackground(image, RaycastShading{}.background);
   const double n = double(state.iterations());

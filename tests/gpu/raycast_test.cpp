@@ -123,6 +123,112 @@ TEST(RaycastGpu, RenderingIntoAGpuImageGivesTheReadBackImage) {
   EXPECT_THROW(kernel.renderTo(wrongSize, f.frame, f.view, palette), RuntimeFailure);
 }
 
+TEST(RaycastGpu, DeformedPositionsRenderTheFramesImage) {
+  // The viewer's frame: placeRaycastFrame and the grid-frame positions, which
+  // the kernel converts and whose BVH it refits, against the frame that
+  // prepareRaycastFrame converted and refitted on the host.
+  const LabelGrid grid = stickFigure();
+  const TetMesh rest = buildTransferMesh(binaryGroupGrid(grid), defaultSizingField(grid.geometry()));
+  const RaycastMesh mesh = buildRaycastMesh(rest, grid.geometry());
+  gpu::RaycastKernel kernel(context(), grid, mesh);
+  const Palette palette(grid.maxLabel());
+  for (test::Deformation d : {test::Deformation::Twist, test::Deformation::Rest, test::Deformation::Bend}) {
+    const std::vector<Eigen::Vector3d> posed = test::deform(rest.positions, grid.geometry(), d);
+    const Frame f = makeFrame(mesh, posed, "azimuth=40,elevation=10", "y<14", 200, 150);
+    const RaycastFrame placed = placeRaycastFrame(mesh, posed);
+    EXPECT_TRUE(placed.positions.empty() && placed.bvh.empty());
+    EXPECT_EQ(placed.output.dims, f.frame.output.dims);
+    EXPECT_EQ(placed.renderOrigin, f.frame.renderOrigin);
+    EXPECT_EQ(placed.cellsLo, f.frame.cellsLo);
+    EXPECT_EQ(placed.cellsHi, f.frame.cellsHi);
+    gpu::Image2D a(context(), 200, 150), b(context(), 200, 150);
+    kernel.renderTo(a, f.frame, f.view, palette);
+    kernel.renderTo(b, placed, posed, f.view, palette);
+    const RgbImage fromFrame = a.download();
+    EXPECT_EQ(compareImages(fromFrame, b.download(), 0).differing, 0u) << test::deformationName(d);
+    EXPECT_GT(countNotBackground(fromFrame, RaycastShading{}.background), 300u);
+  }
+  gpu::Image2D target(context(), 200, 150);
+  const Frame f = makeFrame(mesh, rest.positions, "azimuth=40", "", 200, 150);
+  EXPECT_THROW(kernel.renderTo(target, f.frame, std::vector<Eigen::Vector3d>(3), f.view, palette), RuntimeFailure);
+  EXPECT_THROW(placeRaycastFrame(mesh, std::vector<Eigen::Vector3d>(3)), InputError);
+}
+
+TEST(RaycastGpu, FramesSubmittedBackToBackKeepTheirPoses) {
+  // renderTo returns before the GPU is done: frame N+1 writes its positions
+  // (into the other mapped buffer) and records its passes while frame N may
+  // still run. Each image equals the waited-for rendering of its pose.
+  const LabelGrid grid = stickFigure();
+  const TetMesh rest = coarseVoxelTransferMesh(grid, 3);
+  const RaycastMesh mesh = buildRaycastMesh(rest, grid.geometry());
+  gpu::RaycastKernel kernel(context(), grid, mesh);
+  const Palette palette(grid.maxLabel());
+  const test::Deformation poses[] = {test::Deformation::Twist, test::Deformation::Rest, test::Deformation::Bend, test::Deformation::Rotate,
+                                     test::Deformation::Twist};
+  std::vector<gpu::Image2D> targets;
+  std::vector<Frame> frames;
+  for (test::Deformation d : poses) {
+    const std::vector<Eigen::Vector3d> posed = test::deform(rest.positions, grid.geometry(), d);
+    frames.push_back(makeFrame(mesh, posed, "azimuth=30,elevation=10", "", 128, 96));
+    targets.emplace_back(context(), 128, 96);
+    kernel.renderTo(targets.back(), placeRaycastFrame(mesh, posed), posed, frames.back().view, palette);
+  }
+  kernel.wait();
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const RgbImage waited = kernel.render(frames[i].frame, frames[i].view, palette);
+    EXPECT_EQ(compareImages(targets[i].download(), waited, 0).differing, 0u) << "frame " << i << ", " << test::deformationName(poses[i]);
+    EXPECT_GT(countNotBackground(waited, RaycastShading{}.background), 300u);
+  }
+}
+
+TEST(RaycastGpu, BvhRefitOnTheGpuHoldsTheCpuRefit) {
+  // After each posed frame the GPU's boxes contain the host's refitted boxes
+  // (refitBoundaryBvh in double) and exceed them by no more than the padding
+  // the host gives its float boxes: the CPU refit is the GPU refit's
+  // reference. On the stick figure (Mesh_3 TM) and on a crop of the AM
+  // phantom (coarse voxel TM).
+  const LabelGrid& am = amPhantom();
+  GridGeometry crop = am.geometry();
+  crop.dims = {am.dims()[0], am.dims()[1], 60};
+  LabelGrid amCrop(crop);
+  std::copy(am.data(), am.data() + crop.voxelCount(), amCrop.data());
+  const LabelGrid stick = stickFigure();
+  struct Case {
+    const LabelGrid* grid;
+    TetMesh rest;
+  };
+  const Case cases[] = {{&stick, buildTransferMesh(binaryGroupGrid(stick), defaultSizingField(stick.geometry()))},
+                        {&amCrop, coarseVoxelTransferMesh(amCrop, 6)}};
+  for (const Case& c : cases) {
+    const RaycastMesh mesh = buildRaycastMesh(c.rest, c.grid->geometry());
+    gpu::RaycastKernel kernel(context(), *c.grid, mesh);
+    const Palette palette(c.grid->maxLabel());
+    gpu::Image2D target(context(), 64, 48);  // outlives the frames that write it
+    for (test::Deformation d : {test::Deformation::Twist, test::Deformation::Bend, test::Deformation::Rotate}) {
+      const std::vector<Eigen::Vector3d> posed = test::deform(c.rest.positions, c.grid->geometry(), d);
+      const Frame f = makeFrame(mesh, posed, "azimuth=20", "", 64, 48);
+      kernel.renderTo(target, placeRaycastFrame(mesh, posed), posed, f.view, palette);
+      const std::vector<BvhNode> gpuBvh = kernel.downloadBvh();
+      ASSERT_EQ(gpuBvh.size(), f.frame.bvh.size());
+      std::size_t outside = 0, loose = 0, topology = 0;
+      for (std::size_t n = 0; n < gpuBvh.size(); ++n) {
+        const BvhNode& g = gpuBvh[n];
+        const BvhNode& h = f.frame.bvh[n];
+        if (g.rightOrFirst != h.rightOrFirst || g.count != h.count) ++topology;
+        const double pad = 1e-3 + 2.0 * kFaceHitTolerance * (h.hi - h.lo).maxCoeff();
+        for (int a = 0; a < 3; ++a) {
+          const double slack = pad + 1e-5 * (1.0 + std::abs(h.lo[a]) + std::abs(h.hi[a]));
+          if (g.lo[a] > h.lo[a] || g.hi[a] < h.hi[a]) ++outside;
+          if (g.lo[a] < h.lo[a] - slack || g.hi[a] > h.hi[a] + slack) ++loose;
+        }
+      }
+      EXPECT_EQ(topology, 0u) << test::deformationName(d);
+      EXPECT_EQ(outside, 0u) << test::deformationName(d) << ": GPU boxes that miss part of the host's";
+      EXPECT_EQ(loose, 0u) << test::deformationName(d) << ": GPU boxes looser than the host's float boxes";
+    }
+  }
+}
+
 TEST(RaycastGpu, ManySlabsGiveTheSameImage) {
   // Slabs of 5 slices: the stick figure's 64 slices need 13 slabs, more than
   // the kernel binds; slabs of 8 slices need exactly 8.
@@ -142,6 +248,24 @@ TEST(RaycastGpu, ManySlabsGiveTheSameImage) {
   const RgbImage a = one.render(f.frame, f.view, palette);
   EXPECT_EQ(compareImages(a, eight.render(f.frame, f.view, palette), 0).differing, 0u);
   EXPECT_GT(countNotBackground(a, RaycastShading{}.background), 300u);
+}
+
+TEST(RaycastGpu, RayDispatchOverSeveralRowsGivesTheSameImage) {
+  // The entry pass lists the tiles and sizes the ray pass's dispatch on the
+  // GPU: with 7 work groups per row the flagged tiles span many rows, the
+  // last one partly filled.
+  const LabelGrid grid = stickFigure();
+  const TetMesh rest = coarseVoxelTransferMesh(grid, 3);
+  const RaycastMesh mesh = buildRaycastMesh(rest, grid.geometry());
+  gpu::RaycastKernel wide(context(), grid, mesh);
+  gpu::RaycastKernel narrow(context(), grid, mesh, {0, 7});
+  const Palette palette(grid.maxLabel());
+  for (test::Deformation d : {test::Deformation::Twist, test::Deformation::Rest}) {
+    const Frame f = makeFrame(mesh, test::deform(rest.positions, grid.geometry(), d), "azimuth=30,elevation=20", "", 160, 120);
+    const RgbImage a = wide.render(f.frame, f.view, palette);
+    EXPECT_EQ(compareImages(a, narrow.render(f.frame, f.view, palette), 0).differing, 0u) << test::deformationName(d);
+    EXPECT_GT(countNotBackground(a, RaycastShading{}.background), 300u);
+  }
 }
 
 TEST(RaycastGpu, OnlyPositionsChangeBetweenFrames) {
