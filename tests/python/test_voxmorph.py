@@ -100,6 +100,13 @@ def test_engines_take_a_borrowed_grid(figure):
     np.testing.assert_array_equal(image, voxmorph.render(grid, pose=figure["pose"], organs=figure["organs"], size=(32, 24), cpu=True))
     np.testing.assert_array_equal(grid.labels, before)
     assert np.shares_memory(borrowed.labels, grid.labels)
+    # The mesher reads it in place.
+    c = [n // 2 for n in grid.shape]
+    box = np.asfortranarray(grid.labels[c[0] - 12:c[0] + 12, c[1] - 12:c[1] + 12, c[2] - 12:c[2] + 12])
+    piece = voxmorph.Grid(box, spacing=grid.spacing)
+    assert np.shares_memory(piece.labels, box)
+    points, tets, labels, report = voxmorph.mesh(piece, 4.0, distances=False)
+    assert len(tets) > 0 and report["inverted_tets"] == 0 and report["topology"]["preserved"]
 
 
 def test_read_and_zeros_fill_the_grid_storage_in_place(figure):
