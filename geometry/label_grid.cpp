@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <string>
 
 namespace vox {
@@ -48,7 +49,38 @@ void GridGeometry::validate(const std::string& source) const {
 
 LabelGrid::LabelGrid(const GridGeometry& g, Label fill) : geom_(g), labels_(std::size_t(g.voxelCount()), fill) {}
 
+LabelGrid::LabelGrid(const GridGeometry& g, const Label* labels, std::shared_ptr<const void> owner)
+    : geom_(g), borrowed_(labels), owner_(std::move(owner)) {}
+
+LabelGrid::LabelGrid(const LabelGrid& other)
+    : geom_(other.geom_), labels_(other.borrowed_ ? std::vector<Label>(other.borrowed_, other.borrowed_ + other.voxelCount()) : other.labels_) {}
+
+LabelGrid& LabelGrid::operator=(const LabelGrid& other) {
+  if (this != &other) *this = LabelGrid(other);
+  return *this;
+}
+
+LabelGrid::LabelGrid(LabelGrid&& other) noexcept
+    : geom_(std::move(other.geom_)), labels_(std::move(other.labels_)), borrowed_(other.borrowed_), owner_(std::move(other.owner_)) {
+  other.borrowed_ = nullptr;
+}
+
+LabelGrid& LabelGrid::operator=(LabelGrid&& other) noexcept {
+  if (this == &other) return *this;
+  geom_ = std::move(other.geom_);
+  labels_ = std::move(other.labels_);
+  borrowed_ = other.borrowed_;
+  owner_ = std::move(other.owner_);
+  other.borrowed_ = nullptr;
+  return *this;
+}
+
+void LabelGrid::throwBorrowed() {
+  throw std::logic_error("LabelGrid: the labels are borrowed and read-only; read them through data(), or copy the grid to own them");
+}
+
 Label LabelGrid::maxLabel() const {
+  if (borrowed_) return voxelCount() == 0 ? Label(0) : *std::max_element(borrowed_, borrowed_ + voxelCount());
   return labels_.empty() ? Label(0) : *std::max_element(labels_.begin(), labels_.end());
 }
 

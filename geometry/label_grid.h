@@ -4,6 +4,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace vox {
@@ -70,10 +71,26 @@ struct GridGeometry {
   void validate(const std::string& source) const;
 };
 
+// The labels are the grid's own (a vector), or borrowed: another owner's
+// buffer that the grid reads and never writes (the Python module's numpy
+// arrays), kept alive by the grid. The mutable accessors throw
+// std::logic_error on a borrowed grid, and so does `labels()`, whose vector
+// it does not have: code that may be given one reads through data() and at().
+// A copy of a grid owns its labels (a borrowed grid is copied into a vector),
+// so whatever needs to write takes a copy; a move keeps the borrow.
 class LabelGrid {
 public:
   LabelGrid() = default;
   explicit LabelGrid(const GridGeometry& g, Label fill = 0);
+  // Borrows g.voxelCount() labels at `labels` (x fastest), valid while
+  // `owner` lives.
+  LabelGrid(const GridGeometry& g, const Label* labels, std::shared_ptr<const void> owner);
+
+  LabelGrid(const LabelGrid& other);
+  LabelGrid& operator=(const LabelGrid& other);
+  LabelGrid(LabelGrid&& other) noexcept;
+  LabelGrid& operator=(LabelGrid&& other) noexcept;
+  ~LabelGrid() = default;
 
   const GridGeometry& geometry() const { return geom_; }
   GridGeometry& geometry() { return geom_; }
@@ -81,24 +98,35 @@ public:
   const Eigen::Vector3d& spacing() const { return geom_.spacing; }
   const Eigen::Vector3d& origin() const { return geom_.origin; }
   std::int64_t voxelCount() const { return geom_.voxelCount(); }
+  bool borrowed() const { return borrowed_ != nullptr; }
 
-  Label at(std::int64_t i, std::int64_t j, std::int64_t k) const { return labels_[geom_.index(i, j, k)]; }
-  Label& at(std::int64_t i, std::int64_t j, std::int64_t k) { return labels_[geom_.index(i, j, k)]; }
+  Label at(std::int64_t i, std::int64_t j, std::int64_t k) const { return data()[geom_.index(i, j, k)]; }
+  Label& at(std::int64_t i, std::int64_t j, std::int64_t k) { return labels()[geom_.index(i, j, k)]; }
   // Label at (i,j,k), or `outside` when the index is off the grid.
   Label atOr(std::int64_t i, std::int64_t j, std::int64_t k, Label outside = 0) const {
     return geom_.contains(i, j, k) ? at(i, j, k) : outside;
   }
 
-  const std::vector<Label>& labels() const { return labels_; }
-  std::vector<Label>& labels() { return labels_; }
-  const Label* data() const { return labels_.data(); }
-  Label* data() { return labels_.data(); }
+  const std::vector<Label>& labels() const {
+    if (borrowed_) throwBorrowed();
+    return labels_;
+  }
+  std::vector<Label>& labels() {
+    if (borrowed_) throwBorrowed();
+    return labels_;
+  }
+  const Label* data() const { return borrowed_ ? borrowed_ : labels_.data(); }
+  Label* data() { return labels().data(); }
 
   Label maxLabel() const;
 
 private:
+  [[noreturn]] static void throwBorrowed();
+
   GridGeometry geom_;
   std::vector<Label> labels_;
+  const Label* borrowed_ = nullptr;     // the borrowed labels, or null when the grid owns them
+  std::shared_ptr<const void> owner_;  // keeps borrowed_ alive
 };
 
 }  // namespace vox

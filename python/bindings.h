@@ -19,18 +19,26 @@ namespace vox::python {
 namespace py = pybind11;
 
 // A label grid owned by Python; `source` names it in error messages (its
-// file, or "grid").
+// file, or "grid"). Its labels are its own, or borrowed from the numpy
+// array it was made from (`writeable` as that array is).
 struct Grid {
   LabelGrid grid;
   std::string source = "grid";
+  bool writeable = true;
 };
 using GridHandle = std::shared_ptr<Grid>;
 
 GridHandle makeGrid(LabelGrid grid, std::string source);
 
 // The labels of `owner` as a numpy array of shape (nx, ny, nz), x fastest
-// (Fortran order, as nibabel's arrays), viewing the grid's own storage.
+// (Fortran order, as nibabel's arrays), viewing the grid's storage (its own,
+// or the array it borrows).
 py::array labelView(const GridHandle& owner);
+
+// `grid` as the engines that read its labels as a vector take it (the
+// skeleton, the label groups of the deformation pipeline): itself when it
+// owns its labels, else a copy made in `copy`.
+const LabelGrid& ownedGrid(const LabelGrid& grid, std::optional<LabelGrid>& copy);
 
 // A report's JSON text as Python objects (dicts, lists, numbers).
 py::object fromJson(const std::string& json);

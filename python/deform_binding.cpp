@@ -220,8 +220,10 @@ py::tuple parts(const GridHandle& grid, const py::object& organsArgument, const 
     user = u.grid;
     partsSource = u.source;
   }
-  skeleton::Skeleton s = interruptible(
-      [&] { return skeleton::buildSkeleton(grid->grid, *organs.table, {grid->source, organs.source, partsSource}, std::move(user)); });
+  std::optional<LabelGrid> copy;
+  skeleton::Skeleton s = interruptible([&] {
+    return skeleton::buildSkeleton(ownedGrid(grid->grid, copy), *organs.table, {grid->source, organs.source, partsSource}, std::move(user));
+  });
   const py::object report = fromJson(skeleton::skeletonReportJson(s, grid->grid.geometry(), grid->source, ""));
   return py::make_tuple(makeGrid(std::move(s.parts.parts), "body parts"), report["joints"]);
 }

@@ -72,6 +72,13 @@ GridGeometry geometryOf(const Index3& dims, const std::optional<Eigen::Vector3d>
   return g;
 }
 
+// A uint16 array in Fortran order (x fastest: nibabel's array of a uint16
+// image) is laid out as a grid's labels: the grid borrows it, keeping the
+// array alive, and reads it in place.
+bool borrowable(const py::array& labels) {
+  return py::isinstance<py::array_t<Label, py::array::f_style>>(labels) && (labels.flags() & py::detail::npy_api::NPY_ARRAY_ALIGNED_) != 0;
+}
+
 GridHandle gridFromArray(const py::array& labels, const std::optional<Eigen::Vector3d>& spacing,
                          const std::optional<Eigen::Matrix4d>& affine) {
   const char kind = labels.dtype().kind();
@@ -80,8 +87,20 @@ GridHandle gridFromArray(const py::array& labels, const std::optional<Eigen::Vec
                                    " array; labels are integers (nibabel: np.asarray(img.dataobj), not img.get_fdata())");
   if (labels.ndim() != 3) throw InputError("labels", "a label grid is a 3-D array; got " + std::to_string(labels.ndim()) + " dimensions");
   const Index3 dims{labels.shape(0), labels.shape(1), labels.shape(2)};
-  GridHandle grid = makeGrid(LabelGrid(geometryOf(dims, spacing, affine, "labels")), "grid");
-  copyLabels(labels, grid);
+  const GridGeometry geometry = geometryOf(dims, spacing, affine, "labels");
+  if (!borrowable(labels)) {
+    GridHandle grid = makeGrid(LabelGrid(geometry), "grid");
+    copyLabels(labels, grid);
+    return grid;
+  }
+  // The grid (or the one it is moved to) drops the array where it dies,
+  // maybe on a worker thread: with the GIL.
+  std::shared_ptr<const void> keep(new py::object(labels), [](const py::object* array) {
+    py::gil_scoped_acquire gil;
+    delete array;
+  });
+  GridHandle grid = makeGrid(LabelGrid(geometry, static_cast<const Label*>(labels.data()), std::move(keep)), "grid");
+  grid->writeable = labels.writeable();
   return grid;
 }
 
@@ -124,10 +143,19 @@ GridHandle makeGrid(LabelGrid grid, std::string source) {
 }
 
 py::array labelView(const GridHandle& owner) {
-  const Index3& d = owner->grid.dims();
+  const LabelGrid& grid = owner->grid;
+  const Index3& d = grid.dims();
   const auto s = py::ssize_t(sizeof(Label));
-  return py::array(py::dtype::of<Label>(), {py::ssize_t(d[0]), py::ssize_t(d[1]), py::ssize_t(d[2])},
-                   {s, s * py::ssize_t(d[0]), s * py::ssize_t(d[0] * d[1])}, owner->grid.data(), py::cast(owner));
+  py::array view(py::dtype::of<Label>(), {py::ssize_t(d[0]), py::ssize_t(d[1]), py::ssize_t(d[2])},
+                 {s, s * py::ssize_t(d[0]), s * py::ssize_t(d[0] * d[1])}, grid.data(), py::cast(owner));
+  if (!owner->writeable) view.attr("setflags")(py::arg("write") = false);
+  return view;
+}
+
+const LabelGrid& ownedGrid(const LabelGrid& grid, std::optional<LabelGrid>& copy) {
+  if (!grid.borrowed()) return grid;
+  copy.emplace(grid);
+  return *copy;
 }
 
 py::object fromJson(const std::string& json) { return py::module_::import("json").attr("loads")(json); }
@@ -198,15 +226,18 @@ A segmented volume: labels (uint16) on a voxel grid with its spacing (mm) and it
 voxel-to-world affine (nibabel's: world = affine @ [i, j, k, 1], RAS mm).
 
 Grid(labels, spacing=None, affine=None)
-    labels: a 3-D integer array indexed [i, j, k] (nibabel's np.asarray(img.dataobj));
-        its values are copied once, widened to uint16, into the grid's storage
+    labels: a 3-D integer array indexed [i, j, k] (nibabel's np.asarray(img.dataobj)).
+        A uint16 array in Fortran order (x fastest) is the grid's storage: the grid
+        borrows it, keeps it alive and reads it in place, no copy. Any other integer
+        array is copied once, widened to uint16, into the grid's own storage
         (Grid.zeros and Grid.read fill that storage without an intermediate array).
     spacing: voxel size in mm (3 numbers); default the affine's, else 1 mm.
     affine: 4 x 4 voxel-to-world matrix (img.affine); default diag(spacing).
 Grid.read(path) reads any supported format (.nii, .nii.gz, .mha, .mhd, .nrrd, .nhdr, .inr).
 
-.labels is a numpy view of the grid's own storage (no copy; writes go to the grid),
-shape (nx, ny, nz), Fortran order.)doc")
+.labels is a numpy view of the grid's storage, its own or the array it borrows (no
+copy; writes go to the grid; read-only when the borrowed array is), shape
+(nx, ny, nz), Fortran order.)doc")
       .def(py::init(&gridFromArray), py::arg("labels"), py::arg("spacing") = py::none(), py::arg("affine") = py::none())
       .def_static(
           "zeros",
@@ -224,7 +255,7 @@ shape (nx, ny, nz), Fortran order.)doc")
           "Writes the grid (format from the extension), atomically: an interrupted write leaves no file.")
       .def_property_readonly(
           "labels", [](const GridHandle& g) { return labelView(g); },
-          "The labels, shape (nx, ny, nz), uint16: a view of the grid's storage (no copy).")
+          "The labels, shape (nx, ny, nz), uint16: a view of the grid's storage (no copy), or of the array it borrows.")
       .def_property_readonly("affine", [](const Grid& g) { return Eigen::Matrix4d(g.grid.geometry().indexToWorld()); },
                              "4 x 4 voxel-to-world matrix (mm, RAS; nibabel's affine).")
       .def_property_readonly(

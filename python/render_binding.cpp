@@ -49,10 +49,12 @@ py::array_t<std::uint8_t> render(const GridHandle& gridHandle, const py::object&
       restMesh = boxTransferMesh(grid, gridHandle->source);
       posed = restMesh.positions;
     } else {
-      PipelineOptions options = skeleton::skeletalPoseOptions(pose->pose, pose->source, grid, organs.table,
+      std::optional<LabelGrid> copy;
+      const LabelGrid& owned = ownedGrid(grid, copy);
+      PipelineOptions options = skeleton::skeletalPoseOptions(pose->pose, pose->source, owned, organs.table,
                                                               {gridHandle->source, organs.source, "body parts"}, std::nullopt);
       options.envelope = false;
-      DeformationPipeline pipeline(grid, options);
+      DeformationPipeline pipeline(owned, options);
       pipeline.deform();
       restMesh = pipeline.transferMesh();
       posed = pipeline.deformedTransferMesh();

@@ -36,7 +36,8 @@ class Grid:
         spacing: Sequence[float] | None = None,
         affine: npt.ArrayLike | None = None,
     ) -> None:
-        """labels: 3-D integer array indexed [i, j, k], copied once (widened to uint16) into the grid;
+        """labels: 3-D integer array indexed [i, j, k]; a uint16 array in Fortran order is the grid's storage
+        (borrowed and kept alive, not copied), any other is copied once (widened to uint16) into the grid;
         spacing: voxel size in mm (default the affine's, else 1); affine: 4 x 4 voxel-to-world matrix."""
     @staticmethod
     def zeros(
@@ -52,7 +53,8 @@ class Grid:
         """Writes the grid (format from the extension), atomically."""
     @property
     def labels(self) -> npt.NDArray[np.uint16]:
-        """(nx, ny, nz) view of the grid's own storage, Fortran order: no copy; writes go to the grid."""
+        """(nx, ny, nz) view of the grid's storage (its own, or the array it borrows), Fortran order: no copy;
+        writes go to the grid; read-only when the borrowed array is."""
     @property
     def affine(self) -> npt.NDArray[np.float64]:
         """4 x 4 voxel-to-world matrix (mm, RAS)."""

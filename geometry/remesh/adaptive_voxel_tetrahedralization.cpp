@@ -1,5 +1,6 @@
 #include "geometry/remesh/adaptive_voxel_tetrahedralization.h"
 
+#include "geometry/cancellation.h"
 #include "geometry/error.h"
 #include "geometry/progress.h"
 
@@ -53,7 +54,7 @@ public:
     levels_ = std::max(0, options.coarsestLevel);
     const Index3 d = grid.dims();
     std::int64_t lo[3] = {d[0], d[1], d[2]}, hi[3] = {-1, -1, -1};
-    for (std::int64_t k = 0; k < d[2]; ++k)
+    for (std::int64_t k = 0; k < d[2]; ++k, throwIfCancelled())
       for (std::int64_t j = 0; j < d[1]; ++j)
         for (std::int64_t i = 0; i < d[0]; ++i)
           if (grid.at(i, j, k) != 0) {
@@ -90,7 +91,9 @@ public:
       if (round > 16 * (finest + 2)) throw RuntimeFailure("adaptive tetrahedralization: conforming closure did not end");
       next.clear();
       bool bisected = false;
+      std::size_t visited = 0;
       for (Simplex& t : pending) {
+        if (++visited % 65536 == 0) throwIfCancelled();
         if (t.depth == finest) {
           done.push_back(t);
           continue;
@@ -192,7 +195,7 @@ private:
     pyramid_.resize(std::size_t(levels_) + 1);
     auto& fine = pyramid_[std::size_t(levels_)];
     fine.resize(std::size_t(dims_[0] * dims_[1] * dims_[2]));
-    for (std::int64_t k = 0; k < dims_[2]; ++k)
+    for (std::int64_t k = 0; k < dims_[2]; ++k, throwIfCancelled())
       for (std::int64_t j = 0; j < dims_[1]; ++j)
         for (std::int64_t i = 0; i < dims_[0]; ++i)
           fine[std::size_t(i + dims_[0] * (j + dims_[1] * k))] =
@@ -329,6 +332,7 @@ private:
     std::vector<std::int32_t> remap(exists_.size(), -1);
     std::vector<std::int32_t> labels(simplices.size());
     for (std::size_t i = 0; i < simplices.size(); ++i) {
+      if (i % 65536 == 0) throwIfCancelled();
       const Simplex& t = simplices[i];
       const std::int32_t label = regionLabel(t);
       if (label == kMixed) throw RuntimeFailure("adaptive tetrahedralization: a final tet covers several labels");

@@ -63,6 +63,52 @@ def test_labels_are_a_view_of_the_grid_storage(am_crop):
     assert a[1, 2, 3] == 7
 
 
+def test_a_uint16_fortran_array_is_borrowed_not_copied():
+    data = np.asfortranarray(np.arange(60, dtype=np.uint16).reshape(3, 4, 5))
+    g = voxmorph.Grid(data, spacing=(1, 2, 3))
+    assert np.shares_memory(g.labels, data) and g.labels.ctypes.data == data.ctypes.data
+    np.testing.assert_array_equal(g.labels, data)
+    assert g.labels.flags.writeable
+    # The grid reads the array in place: its writes are the grid's.
+    data[2, 3, 4] = 1000
+    assert g.statistics()["label"][-1] == 1000
+    # The grid keeps the array alive.
+    view = g.labels
+    del data, g
+    assert view[2, 3, 4] == 1000
+    # A read-only array gives a read-only view.
+    frozen = np.zeros((2, 3, 4), np.uint16, order="F")
+    frozen.flags.writeable = False
+    f = voxmorph.Grid(frozen)
+    assert np.shares_memory(f.labels, frozen) and not f.labels.flags.writeable
+    # Any other layout or type is copied once, into the grid's own uint16 storage.
+    for other in (np.zeros((3, 4, 5), np.uint16), np.zeros((3, 4, 5), np.uint8, order="F"),
+                  np.zeros((3, 4, 5), ">u2", order="F"), np.zeros((6, 4, 5), np.uint16, order="F")[::2]):
+        copied = voxmorph.Grid(other)
+        assert not np.shares_memory(copied.labels, other) and copied.labels.dtype == np.uint16
+
+
+def test_engines_take_a_borrowed_grid(figure):
+    grid = voxmorph.Grid.read(figure["grid"])
+    borrowed = voxmorph.Grid(grid.labels, affine=grid.affine)
+    assert np.shares_memory(borrowed.labels, grid.labels)
+    # The engines that write their own labels work on a copy; the grid is untouched.
+    before = grid.labels.copy()
+    parts, _ = voxmorph.parts(borrowed, figure["organs"])
+    np.testing.assert_array_equal(parts.labels, voxmorph.parts(grid, figure["organs"])[0].labels)
+    image = voxmorph.render(borrowed, pose=figure["pose"], organs=figure["organs"], size=(32, 24), cpu=True)
+    np.testing.assert_array_equal(image, voxmorph.render(grid, pose=figure["pose"], organs=figure["organs"], size=(32, 24), cpu=True))
+    np.testing.assert_array_equal(grid.labels, before)
+    assert np.shares_memory(borrowed.labels, grid.labels)
+    # The mesher reads it in place.
+    c = [n // 2 for n in grid.shape]
+    box = np.asfortranarray(grid.labels[c[0] - 12:c[0] + 12, c[1] - 12:c[1] + 12, c[2] - 12:c[2] + 12])
+    piece = voxmorph.Grid(box, spacing=grid.spacing)
+    assert np.shares_memory(piece.labels, box)
+    points, tets, labels, report = voxmorph.mesh(piece, 4.0, distances=False)
+    assert len(tets) > 0 and report["inverted_tets"] == 0 and report["topology"]["preserved"]
+
+
 def test_read_and_zeros_fill_the_grid_storage_in_place(figure):
     g = voxmorph.Grid.read(figure["grid"])
     assert g.labels.ctypes.data == g.labels.ctypes.data
@@ -108,7 +154,10 @@ def test_deform_is_byte_identical_to_the_cli(figure, tmp_path):
         pose = json.load(f)
     posed, report = voxmorph.deform(grid, pose, organs=voxmorph.OrganTable(figure["organs"]), preserve_volumes=True, cpu=True,
                                    force=True)
-    posed.write(str(tmp_path / "python.nii.gz"))
+    # The posed grid out, and into a Grid again, without a copy.
+    again = voxmorph.Grid(posed.labels, affine=posed.affine)
+    assert np.shares_memory(again.labels, posed.labels)
+    again.write(str(tmp_path / "python.nii.gz"))
     assert (tmp_path / "python.nii.gz").read_bytes() == (tmp_path / "cli.nii.gz").read_bytes()
     # Paths in and out: the CLI's own run.
     voxmorph.deform(figure["grid"], figure["pose"], organs=figure["organs"], preserve_volumes=True, cpu=True, force=True,
