@@ -6,6 +6,7 @@
 #include "geometry/io/mesh_io.h"
 #include "geometry/remesh/mesh_topology.h"
 #include "geometry/remesh/remesh_complex.h"
+#include "geometry/remesh/sizing_field.h"
 
 #include <chrono>
 #include <cstdio>
@@ -30,6 +31,8 @@ void addRemeshCommand(CLI::App& app) {
     remesh::checkNoFlatTets(input, o->input);
     const Provenance provenance = commandProvenance({{"mesh", o->input}});
     checkRemeshEstimate(*o, remesh::estimateMeshing(input, o->remesh.targetLength));
+    setSizing(*o, Eigen::Matrix3d::Identity(),
+              [&](double boundary, double interior) { return remesh::interfaceSizingField(input, boundary, interior); });
     const double setupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     runRemesh(*o, input, [&] { return remesh::computeMeshTopology(input); }, setupSeconds, provenance);
   });
