@@ -2,12 +2,7 @@
 // Edge length thresholds of the remesher (thesis 2.2.1): an edge is split
 // above e_max = 4/3 l and collapsed below e_min = 4/5 l, the values that
 // reduce the deviation from the target length l [Bot05]. Uniform: one l.
-// Adaptive (2.3.7, eq. 2.2): l of an edge is the mean of the sizing field at
-// its two end points. The thesis reads the field at the mid-point; but the
-// chord of a bent interface has its mid-point off the interface, where l is
-// longer, and interface edges then grow past l_B (on the AF crop at
-// l_B = 4 voxels the interfaces moved 1.67 l instead of 1.08 l uniform:
-// docs/BENCHMARKS.md, "Adaptive sizing"). End points on an interface keep l_B.
+// Adaptive (2.3.7, eq. 2.2): l is the sizing field at the edge's mid-point.
 
 #include "geometry/remesh/sizing_field.h"
 
@@ -31,17 +26,13 @@ struct EdgeLengthBounds {
   // e_max and e_min of the edge (a, b), squared.
   double emax2(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const {
     if (!sizing) return emax * emax;
-    const double e = 4.0 * edgeTarget(a, b) / 3.0;
+    const double e = 4.0 * sizing->at(0.5 * (a + b)) / 3.0;
     return e * e;
   }
   double emin2(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const {
     if (!sizing) return emin * emin;
-    const double e = 4.0 * edgeTarget(a, b) / 5.0;
+    const double e = 4.0 * sizing->at(0.5 * (a + b)) / 5.0;
     return e * e;
-  }
-  // l of the edge (a, b) under the sizing field.
-  double edgeTarget(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const {
-    return 0.5 * (sizing->at(a) + sizing->at(b));
   }
 };
 

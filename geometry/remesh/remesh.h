@@ -12,7 +12,7 @@
 //   insert Steiner points at the tets still poor
 //
 // with e_max = 4/3 l and e_min = 4/5 l for the target length l, uniform or
-// the sizing field's at each edge's end points (their mean).
+// the sizing field's at each edge's mid-point.
 
 #include "geometry/remesh/flip_edges.h"
 #include "geometry/remesh/insert_steiner_points.h"

@@ -6,8 +6,8 @@
 //
 // with D the distance to the label interfaces normalized to [0, 1], so that
 // edges on the interfaces aim at l_B and edges deep inside the labels at l_I.
-// Splits and collapses compare an edge with 4/3 and 4/5 of the mean of l at
-// its end points (EdgeLengthBounds). The field is a grid of lengths in mm,
+// Splits and collapses compare an edge with 4/3 and 4/5 of l at its
+// mid-point (EdgeLengthBounds). The field is a grid of lengths in mm,
 // sampled trilinearly; a user may give that grid directly (mm values).
 
 #include "geometry/label_grid.h"

@@ -2,7 +2,6 @@
 // l_I at the deepest point, bad lengths refused; the adaptive remesher makes
 // fewer tets than the uniform one at l_B with the same topology and
 // interface bound, and a constant field reproduces the uniform remesher.
-// Edges take the mean of the field at their end points.
 
 #include "geometry/error.h"
 #include "geometry/mesh_quality.h"
@@ -147,7 +146,7 @@ TEST(SizingField, AdaptiveMakesFewerTetsWithExactTopology) {
 }
 
 TEST(SizingField, ConstantFieldReproducesTheUniformRemesher) {
-  // The split and collapse tests read l at each edge's end points; a field
+  // The split and collapse tests read l at each edge's mid-point; a field
   // holding l everywhere must give the uniform result bit for bit.
   const LabelGrid grid = synthesize(SynthKind::JunctionSphere, 16);
   const double l = 2.5;
@@ -165,21 +164,18 @@ TEST(SizingField, ConstantFieldReproducesTheUniformRemesher) {
   EXPECT_EQ(sized.labels, uniform.output.labels);
 }
 
-TEST(SizingField, EdgeBoundsReadTheFieldAtTheEndPoints) {
+TEST(SizingField, EdgeBoundsReadTheFieldAtTheMidpoint) {
   const LabelGrid grid = cubeWithInclusion();
   const SizingField field = interfaceSizingField(grid, 2.0, 8.0);
   const EdgeLengthBounds uniform = EdgeLengthBounds::forTarget(2.0);
   const EdgeLengthBounds sized = EdgeLengthBounds::forSizing(2.0, &field);
-  // An edge along the interface plane x = 3.5: l_B, as uniform.
-  const Eigen::Vector3d a(3.5, 10.0, 16.0), b(3.5, 16.0, 16.0);
-  EXPECT_DOUBLE_EQ(uniform.emax2(a, b), sized.emax2(a, b));
+  const Eigen::Vector3d a(3.0, 16.0, 16.0), b(4.0, 16.0, 16.0);
+  EXPECT_DOUBLE_EQ(uniform.emax2(a, b), sized.emax2(a, b));  // mid-point on the interface
   EXPECT_DOUBLE_EQ(uniform.emin2(a, b), sized.emin2(a, b));
-  // From the interface inwards: the mean of the two ends' lengths.
-  const Eigen::Vector3d c(18.0, 18.0, 18.0);
-  const double l = 0.5 * (2.0 + field.at(c));
-  EXPECT_GT(field.at(c), 6.0);
-  EXPECT_DOUBLE_EQ(sized.emax2(a, c), std::pow(4.0 * l / 3.0, 2));
-  EXPECT_DOUBLE_EQ(sized.emin2(a, c), std::pow(4.0 * l / 5.0, 2));
+  const double l = field.at({18.5, 18.5, 18.5});
+  EXPECT_GT(l, 6.0);
+  EXPECT_DOUBLE_EQ(sized.emax2({18.0, 18.0, 18.0}, {19.0, 19.0, 19.0}), std::pow(4.0 * l / 3.0, 2));
+  EXPECT_DOUBLE_EQ(sized.emin2({18.0, 18.0, 18.0}, {19.0, 19.0, 19.0}), std::pow(4.0 * l / 5.0, 2));
 }
 
 }  // namespace
