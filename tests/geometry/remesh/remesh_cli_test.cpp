@@ -126,8 +126,10 @@ TEST(RemeshCli, BadInputIsOneLineAndLeavesNoFile) {
   EXPECT_FALSE(fs::exists(out));
 }
 
-// A plain NIfTI-1 file of float32 values (pixdim spacing, no sform or qform).
-void writeFloatNifti(const std::string& path, int nx, int ny, int nz, float spacing, const std::vector<float>& values) {
+// A NIfTI-1 file of float32 values: pixdim spacing, and the affine rows
+// `sform` (3 x 4, sform_code 1) when given.
+void writeFloatNifti(const std::string& path, int nx, int ny, int nz, float spacing, const std::vector<float>& values,
+                     const std::vector<float>& sform = {}) {
   char header[352] = {};
   auto put = [&](int offset, auto value) { std::memcpy(header + offset, &value, sizeof value); };
   put(0, std::int32_t(348));
@@ -138,6 +140,10 @@ void writeFloatNifti(const std::string& path, int nx, int ny, int nz, float spac
   const float pixdim[8] = {1.0f, spacing, spacing, spacing, 1.0f, 1.0f, 1.0f, 1.0f};
   std::memcpy(header + 76, pixdim, sizeof pixdim);
   put(108, 352.0f);
+  if (!sform.empty()) {
+    put(254, std::int16_t(1));
+    std::memcpy(header + 280, sform.data(), 12 * sizeof(float));
+  }
   std::memcpy(header + 344, "n+1", 4);
   std::ofstream out(path, std::ios::binary);
   out.write(header, sizeof header);
@@ -184,6 +190,31 @@ TEST(RemeshCli, AdaptiveSizingFromInterfacesOrAGrid) {
                           quote(dir + "/grid2.mesh")));
   ASSERT_EQ(r.exitCode, 0) << r.err;
   EXPECT_EQ(slurp(dir + "/l2.mesh"), slurp(dir + "/grid2.mesh"));
+
+  // Sampled in world mm through the grid's affine: two voxels of 12 mm,
+  // mirrored along x, voxel 0 (1.5 mm) at x = 18 and voxel 1 (6 mm) at
+  // x = 6. Edges at low x come out longer than at high x.
+  writeFloatNifti(dir + "/ramp.nii", 2, 1, 1, 12.0f, {1.5f, 6.0f},
+                  {-12.0f, 0.0f, 0.0f, 18.0f, 0.0f, 12.0f, 0.0f, 0.0f, 0.0f, 0.0f, 12.0f, 0.0f});
+  r = runCommand(voxmorph("mesh " + quote(grid) + " --size-grid " + quote(dir + "/ramp.nii") + " -q --no-distance -o " +
+                          quote(dir + "/ramp.mesh") + " --report " + quote(dir + "/ramp.json")));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_TRUE(nlohmann::json::parse(slurp(dir + "/ramp.json"))["topology"]["preserved"].get<bool>());
+  const TetMesh ramp = readTetMesh(dir + "/ramp.mesh");
+  double sum[2] = {0.0, 0.0}, count[2] = {0.0, 0.0};
+  for (const Tet& t : ramp.tets)
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) {
+        const Eigen::Vector3d a = ramp.positions[std::size_t(t[i])], b = ramp.positions[std::size_t(t[j])];
+        const double x = 0.5 * (a.x() + b.x());
+        if (x < 6.0 || x > 18.0) {
+          sum[x > 18.0] += (a - b).norm();
+          count[x > 18.0] += 1.0;
+        }
+      }
+  ASSERT_GT(count[0], 0.0);
+  ASSERT_GT(count[1], 0.0);
+  EXPECT_GT(sum[0] / count[0], 1.5 * sum[1] / count[1]) << sum[0] / count[0] << " mm at low x, " << sum[1] / count[1];
 }
 
 TEST(RemeshCli, BadSizingIsRefused) {
