@@ -125,10 +125,10 @@ bool EdgeCollapser::anyPositionKeepsEdgesShort() const {
       for (std::int32_t w : complex_.tet(q)) {
         if (w == self || w == other || w == dummy) continue;
         const Eigen::Vector3d& pw = complex_.position(w);
-        if (toMid && (pw - mid).squaredNorm() >= bounds_.emax2(pw, mid)) toMid = false;
+        if (toMid && bounds_.reachesEmax(pw, mid, (pw - mid).squaredNorm())) toMid = false;
         // Moving `self` onto `other` creates (other, w) unless it exists.
         const Eigen::Vector3d& po = complex_.position(other);
-        if (toOther && (pw - po).squaredNorm() >= bounds_.emax2(pw, po) && !holds(otherTets, w)) toOther = false;
+        if (toOther && bounds_.reachesEmax(pw, po, (pw - po).squaredNorm()) && !holds(otherTets, w)) toOther = false;
       }
     }
   };
@@ -273,13 +273,13 @@ bool EdgeCollapser::test2NoLongEdges(const VertexNeighborhood& r, const VertexNe
     if (w == dummy || w == k.vertex) continue;
     if (!keptMoves && k.find(w) >= 0) continue;  // an existing, unchanged edge of k
     const Eigen::Vector3d& pw = complex_.position(w);
-    if ((pw - p).squaredNorm() >= bounds_.emax2(pw, p)) return false;
+    if (bounds_.reachesEmax(pw, p, (pw - p).squaredNorm())) return false;
   }
   if (keptMoves)
     for (std::int32_t w : k.neighbors) {
       if (w == dummy || w == r.vertex) continue;
       const Eigen::Vector3d& pw = complex_.position(w);
-      if ((pw - p).squaredNorm() >= bounds_.emax2(pw, p)) return false;
+      if (bounds_.reachesEmax(pw, p, (pw - p).squaredNorm())) return false;
     }
   return true;
 }
@@ -340,7 +340,7 @@ void EdgeCollapser::collapse(const VertexNeighborhood& r, const VertexNeighborho
 std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull,
                                int threads) {
   auto tooShort = [&](std::int32_t a, std::int32_t b, double l2) {
-    return l2 < bounds.emin2(complex.position(a), complex.position(b));
+    return bounds.belowEmin(complex.position(a), complex.position(b), l2);
   };
   auto shorter = [](const WeightedEdge& x, const WeightedEdge& y) {
     return std::tie(x.length2, x.a, x.b) < std::tie(y.length2, y.a, y.b);

@@ -34,6 +34,29 @@ struct EdgeLengthBounds {
     const double e = 4.0 * sizing->at(0.5 * (a + b)) / 5.0;
     return e * e;
   }
+
+  // The tests on the edge (a, b) of squared length l2: above e_max, at
+  // least e_max, below e_min. With a sizing field, lengths outside the
+  // field's range of thresholds are decided without sampling it (most
+  // edges: the field is read only between 4/3 of its minimum and maximum).
+  bool aboveEmax(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double l2) const {
+    if (sizing && l2 <= square(4.0 * sizing->minimum() / 3.0)) return false;
+    if (sizing && l2 > square(4.0 * sizing->maximum() / 3.0)) return true;
+    return l2 > emax2(a, b);
+  }
+  bool reachesEmax(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double l2) const {
+    if (sizing && l2 < square(4.0 * sizing->minimum() / 3.0)) return false;
+    if (sizing && l2 >= square(4.0 * sizing->maximum() / 3.0)) return true;
+    return l2 >= emax2(a, b);
+  }
+  bool belowEmin(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double l2) const {
+    if (sizing && l2 < square(4.0 * sizing->minimum() / 5.0)) return true;
+    if (sizing && l2 >= square(4.0 * sizing->maximum() / 5.0)) return false;
+    return l2 < emin2(a, b);
+  }
+
+private:
+  static double square(double x) { return x * x; }
 };
 
 }  // namespace vox::remesh

@@ -65,7 +65,7 @@ std::size_t splitLongEdges(RemeshComplex& complex, const EdgeLengthBounds& bound
   collectEdges(
       complex,
       [&](std::int32_t a, std::int32_t b, double length2) {
-        return length2 > bounds.emax2(complex.position(a), complex.position(b));
+        return bounds.aboveEmax(complex.position(a), complex.position(b), length2);
       },
       edges, threads);
   auto longer = [](const WeightedEdge& x, const WeightedEdge& y) {
@@ -107,7 +107,7 @@ std::size_t splitLongEdges(RemeshComplex& complex, const EdgeLengthBounds& bound
       for (std::int32_t w : complex.tet(q)) {
         if (w == m || w == dummy) continue;
         const double l2 = (complex.position(w) - pm).squaredNorm();
-        if (l2 > bounds.emax2(complex.position(w), pm)) queue.push({std::min(m, w), std::max(m, w), l2});
+        if (bounds.aboveEmax(complex.position(w), pm, l2)) queue.push({std::min(m, w), std::max(m, w), l2});
       }
   }
   return splits;

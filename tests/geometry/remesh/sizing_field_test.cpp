@@ -176,6 +176,21 @@ TEST(SizingField, EdgeBoundsReadTheFieldAtTheMidpoint) {
   EXPECT_GT(l, 6.0);
   EXPECT_DOUBLE_EQ(sized.emax2({18.0, 18.0, 18.0}, {19.0, 19.0, 19.0}), std::pow(4.0 * l / 3.0, 2));
   EXPECT_DOUBLE_EQ(sized.emin2({18.0, 18.0, 18.0}, {19.0, 19.0, 19.0}), std::pow(4.0 * l / 5.0, 2));
+  // The tests that skip the field outside its range agree with it, for
+  // edges of every length across the field.
+  int decidedByTheField = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const Eigen::Vector3d a(4.0 + (i * 7 % 24), 4.0 + (i * 11 % 24), 4.0 + (i * 13 % 24));
+    const Eigen::Vector3d b = a + Eigen::Vector3d(0.37 * (i % 5), 0.21 * (i % 31), 0.05 * (i % 17));
+    const double l2 = (a - b).squaredNorm();
+    EXPECT_EQ(sized.aboveEmax(a, b, l2), l2 > sized.emax2(a, b)) << i;
+    EXPECT_EQ(sized.reachesEmax(a, b, l2), l2 >= sized.emax2(a, b)) << i;
+    EXPECT_EQ(sized.belowEmin(a, b, l2), l2 < sized.emin2(a, b)) << i;
+    EXPECT_EQ(uniform.aboveEmax(a, b, l2), l2 > uniform.emax * uniform.emax) << i;
+    EXPECT_EQ(uniform.belowEmin(a, b, l2), l2 < uniform.emin * uniform.emin) << i;
+    if (l2 > std::pow(4.0 * 2.0 / 5.0, 2) && l2 < std::pow(4.0 * 8.0 / 3.0, 2)) ++decidedByTheField;
+  }
+  EXPECT_GT(decidedByTheField, 500);
 }
 
 }  // namespace
