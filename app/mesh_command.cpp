@@ -25,7 +25,7 @@ void addMeshCommand(CLI::App& app) {
     const auto t0 = std::chrono::steady_clock::now();
     checkGridFitsMemory(o->input, o->maxMemoryMb, kMeshGridMemory, "read the grid for meshing", "");
     const LabelGrid grid = readGrid(o->input);
-    const Provenance provenance = commandProvenance({{"grid", o->input}});
+    const Provenance provenance = commandProvenance(remeshInputs(*o, "grid"));
     checkRemeshEstimate(*o, remesh::estimateMeshing(grid, o->remesh.targetLength));
     setSizing(*o, grid.geometry().direction,
               [&](double boundary, double interior) { return remesh::interfaceSizingField(grid, boundary, interior); });

@@ -23,6 +23,8 @@
 #include <iostream>
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace vox::app {
 
@@ -127,6 +129,14 @@ inline void checkRemeshArguments(RemeshCliOptions& o) {
     remesh::checkSizingGrid(o.sizeGridLengths, o.sizeGrid);
     o.remesh.targetLength = double(*std::min_element(o.sizeGridLengths.values.begin(), o.sizeGridLengths.values.end()));
   }
+}
+
+// The files whose digests the report's provenance records: the input (as
+// `role`), and the sizing grid when one was given.
+inline std::vector<std::pair<std::string, std::string>> remeshInputs(const RemeshCliOptions& o, const std::string& role) {
+  std::vector<std::pair<std::string, std::string>> files{{role, o.input}};
+  if (!o.sizeGrid.empty()) files.emplace_back("size_grid", o.sizeGrid);
+  return files;
 }
 
 // Sets the remesher's sizing field from the options, for a mesh whose frame

@@ -29,7 +29,7 @@ void addRemeshCommand(CLI::App& app) {
     if (const std::size_t turned = orientPositively(input); turned > 0 && !o->quiet && o->report != "-")
       std::fprintf(stderr, "%s: %zu of %zu tets were negatively oriented; turned over\n", o->input.c_str(), turned, input.tetCount());
     remesh::checkNoFlatTets(input, o->input);
-    const Provenance provenance = commandProvenance({{"mesh", o->input}});
+    const Provenance provenance = commandProvenance(remeshInputs(*o, "mesh"));
     checkRemeshEstimate(*o, remesh::estimateMeshing(input, o->remesh.targetLength));
     setSizing(*o, Eigen::Matrix3d::Identity(),
               [&](double boundary, double interior) { return remesh::interfaceSizingField(input, boundary, interior); });

@@ -199,7 +199,13 @@ TEST(RemeshCli, AdaptiveSizingFromInterfacesOrAGrid) {
   r = runCommand(voxmorph("mesh " + quote(grid) + " --size-grid " + quote(dir + "/ramp.nii") + " -q --no-distance -o " +
                           quote(dir + "/ramp.mesh") + " --report " + quote(dir + "/ramp.json")));
   ASSERT_EQ(r.exitCode, 0) << r.err;
-  EXPECT_TRUE(nlohmann::json::parse(slurp(dir + "/ramp.json"))["topology"]["preserved"].get<bool>());
+  const auto rampReport = nlohmann::json::parse(slurp(dir + "/ramp.json"));
+  EXPECT_TRUE(rampReport["topology"]["preserved"].get<bool>());
+  // The sizing grid is one of the run's inputs.
+  bool sizeGridRecorded = false;
+  for (const auto& input : rampReport["provenance"]["inputs"])
+    sizeGridRecorded |= input["role"] == "size_grid" && input["sha256"].get<std::string>().size() == 64;
+  EXPECT_TRUE(sizeGridRecorded) << rampReport["provenance"].dump();
   const TetMesh ramp = readTetMesh(dir + "/ramp.mesh");
   double sum[2] = {0.0, 0.0}, count[2] = {0.0, 0.0};
   for (const Tet& t : ramp.tets)
