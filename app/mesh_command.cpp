@@ -8,6 +8,7 @@
 #include "geometry/remesh/adaptive_voxel_tetrahedralization.h"
 #include "geometry/remesh/mesh_topology.h"
 #include "geometry/remesh/meshing_estimate.h"
+#include "geometry/remesh/sizing_field.h"
 
 #include <chrono>
 #include <cstdio>
@@ -24,10 +25,16 @@ void addMeshCommand(CLI::App& app) {
     const auto t0 = std::chrono::steady_clock::now();
     checkGridFitsMemory(o->input, o->maxMemoryMb, kMeshGridMemory, "read the grid for meshing", "");
     const LabelGrid grid = readGrid(o->input);
-    const Provenance provenance = commandProvenance({{"grid", o->input}});
+    const Provenance provenance = commandProvenance(remeshInputs(*o, "grid"));
     checkRemeshEstimate(*o, remesh::estimateMeshing(grid, o->remesh.targetLength));
-    const remesh::AdaptiveTetrahedralizationOptions decomposition =
+    setSizing(*o, grid.geometry().direction,
+              [&](double boundary, double interior) { return remesh::interfaceSizingField(grid, boundary, interior); });
+    remesh::AdaptiveTetrahedralizationOptions decomposition =
         remesh::adaptiveOptionsForTarget(grid.geometry(), o->remesh.targetLength);
+    // Adaptive: the coarsest cubes follow the longest target; splits refine
+    // them towards the interfaces (the imaginary layer stays l_B thick).
+    if (o->sizing)
+      decomposition.coarsestLevel = remesh::adaptiveOptionsForTarget(grid.geometry(), o->sizing->maximum()).coarsestLevel;
     const TetMesh initial = remesh::tetrahedralizeVoxelsAdaptive(grid, decomposition);
     const double setupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     runRemesh(*o, initial, [&] { return remesh::computeGridTopology(grid); }, setupSeconds, provenance, &grid.geometry());

@@ -7,18 +7,24 @@
 #include "geometry/io/mesh_io.h"
 #include "geometry/io/png_io.h"
 #include "geometry/io/output_path.h"
+#include "geometry/io/sizing_grid_io.h"
 #include "geometry/error.h"
 #include "geometry/organ_table.h"
 #include "geometry/remesh/meshing_estimate.h"
 #include "geometry/remesh/remesh.h"
 #include "geometry/remesh/remesh_report.h"
+#include "geometry/remesh/sizing_field.h"
 #include "geometry/world_frame.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <functional>
 #include <iostream>
+#include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace vox::app {
 
@@ -26,6 +32,11 @@ struct RemeshCliOptions {
   std::string input, output, report, organs;
   OrganTable organTable;  // read from `organs` by checkRemeshArguments
   remesh::RemeshOptions remesh;
+  // Adaptive sizing: l_B and l_I of eq. 2.2 (0: uniform), or a grid of lengths.
+  double sizeBoundary = 0.0, sizeInterior = 0.0;
+  std::string sizeGrid;
+  ScalarGrid sizeGridLengths;  // read from `sizeGrid` by checkRemeshArguments
+  std::shared_ptr<const remesh::SizingField> sizing;  // what remesh.sizing points to
   std::string surface = "hpss";
   bool keepImaginary = false;
   bool noDistances = false;
@@ -39,9 +50,26 @@ inline void addRemeshOptions(CLI::App& cmd, RemeshCliOptions& o) {
         return hasTetMeshExtension(path) ? std::string() : "unknown mesh format '" + path + "' (use .mesh, .vtu or .msh)";
       },
       "MESH");
-  cmd.add_option("-l,--length", o.remesh.targetLength, "Target edge length l (mm); e_min = 4/5 l, e_max = 4/3 l")
-      ->required()
-      ->check(numberIn(0, 100000, "mm", true));
+  CLI::Option* length =
+      cmd.add_option("-l,--length", o.remesh.targetLength,
+                     "Target edge length l (mm); e_min = 4/5 l, e_max = 4/3 l (required unless the sizing is adaptive)")
+          ->check(numberIn(0, 100000, "mm", true));
+  CLI::Option* boundary =
+      cmd.add_option("--size-boundary", o.sizeBoundary,
+                     "Adaptive sizing: target edge length l_B on the label interfaces (mm), with --size-interior; "
+                     "l = (l_I - l_B) D + l_B, D the distance to the interfaces normalized to [0, 1]")
+          ->check(numberIn(0, 100000, "mm", true));
+  CLI::Option* interior = cmd.add_option("--size-interior", o.sizeInterior,
+                                         "Adaptive sizing: target edge length l_I farthest from the interfaces (mm), at "
+                                         "least l_B")
+                              ->check(numberIn(0, 100000, "mm", true));
+  CLI::Option* grid = cmd.add_option("--size-grid", o.sizeGrid,
+                                     "Adaptive sizing from a grid of target edge lengths (NIfTI, mm, all > 0), sampled in "
+                                     "world mm (any extent and affine)");
+  boundary->needs(interior);
+  interior->needs(boundary);
+  length->excludes(boundary)->excludes(interior)->excludes(grid);
+  grid->excludes(boundary)->excludes(interior);
   cmd.add_option("-o,--output", o.output, "Output tet mesh (.mesh .vtu .msh), domain tets (label > 0)")
       ->required()
       ->check(meshExtension);
@@ -83,9 +111,46 @@ inline std::string dihedralHistogramPath(const std::string& reportPath) {
 // Checks the output and report paths and reads the organ table, before the
 // input is read.
 inline void checkRemeshArguments(RemeshCliOptions& o) {
+  if (o.remesh.targetLength == 0.0 && o.sizeBoundary == 0.0 && o.sizeGrid.empty())
+    throw UsageError("--length", "a target edge length is required (or --size-boundary with --size-interior, or --size-grid)");
+  if (o.sizeBoundary > 0.0) {
+    if (o.sizeInterior < o.sizeBoundary) {
+      char text[160];
+      std::snprintf(text, sizeof text, "l_I = %g mm is shorter than --size-boundary l_B = %g mm", o.sizeInterior, o.sizeBoundary);
+      throw UsageError("--size-interior", text);
+    }
+    o.remesh.targetLength = o.sizeBoundary;
+  }
   checkOutputPath(o.output, OutputKind::TetMesh, "--output");
   checkOutputPath(o.report, OutputKind::Json, "--report");
   if (!o.organs.empty()) o.organTable = OrganTable::read(o.organs);
+  if (!o.sizeGrid.empty()) {
+    o.sizeGridLengths = readSizingGrid(o.sizeGrid);
+    remesh::checkSizingGrid(o.sizeGridLengths, o.sizeGrid);
+    o.remesh.targetLength = double(*std::min_element(o.sizeGridLengths.values.begin(), o.sizeGridLengths.values.end()));
+  }
+}
+
+// The files whose digests the report's provenance records: the input (as
+// `role`), and the sizing grid when one was given.
+inline std::vector<std::pair<std::string, std::string>> remeshInputs(const RemeshCliOptions& o, const std::string& role) {
+  std::vector<std::pair<std::string, std::string>> files{{role, o.input}};
+  if (!o.sizeGrid.empty()) files.emplace_back("size_grid", o.sizeGrid);
+  return files;
+}
+
+// Sets the remesher's sizing field from the options, for a mesh whose frame
+// is the world rotated by `meshDirection` (world = meshDirection * p).
+// `interfaces` builds the field of eq. 2.2 for l_B and l_I in that frame.
+inline void setSizing(RemeshCliOptions& o, const Eigen::Matrix3d& meshDirection,
+                      const std::function<remesh::SizingField(double, double)>& interfaces) {
+  if (o.sizeBoundary > 0.0) {
+    o.sizing = std::make_shared<remesh::SizingField>(interfaces(o.sizeBoundary, o.sizeInterior));
+  } else if (!o.sizeGrid.empty()) {
+    const Eigen::Matrix3d meshToGrid = o.sizeGridLengths.geometry.direction.transpose() * meshDirection;
+    o.sizing = std::make_shared<remesh::SizingField>(std::move(o.sizeGridLengths), meshToGrid);
+  }
+  o.remesh.sizing = o.sizing.get();
 }
 
 // Names of the labels `mesh` holds: the organ table's when one was given,
@@ -149,6 +214,10 @@ inline void runRemesh(RemeshCliOptions& o, const TetMesh& initial, const std::fu
   remesh::RemeshReport report =
       remesh::buildRemeshReport(initial, initialTopology(), output, o.remesh.targetLength, stats, reportOptions);
   report.setupSeconds = setupSeconds;
+  if (o.sizing) {
+    report.sizingMin = o.sizing->minimum();
+    report.sizingMax = o.sizing->maximum();
+  }
   report.provenance = provenance;
   if (o.report == "-") {
     std::cout << remesh::reportJson(report);

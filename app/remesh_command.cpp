@@ -6,6 +6,7 @@
 #include "geometry/io/mesh_io.h"
 #include "geometry/remesh/mesh_topology.h"
 #include "geometry/remesh/remesh_complex.h"
+#include "geometry/remesh/sizing_field.h"
 
 #include <chrono>
 #include <cstdio>
@@ -28,8 +29,10 @@ void addRemeshCommand(CLI::App& app) {
     if (const std::size_t turned = orientPositively(input); turned > 0 && !o->quiet && o->report != "-")
       std::fprintf(stderr, "%s: %zu of %zu tets were negatively oriented; turned over\n", o->input.c_str(), turned, input.tetCount());
     remesh::checkNoFlatTets(input, o->input);
-    const Provenance provenance = commandProvenance({{"mesh", o->input}});
+    const Provenance provenance = commandProvenance(remeshInputs(*o, "mesh"));
     checkRemeshEstimate(*o, remesh::estimateMeshing(input, o->remesh.targetLength));
+    setSizing(*o, Eigen::Matrix3d::Identity(),
+              [&](double boundary, double interior) { return remesh::interfaceSizingField(input, boundary, interior); });
     const double setupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     runRemesh(*o, input, [&] { return remesh::computeMeshTopology(input); }, setupSeconds, provenance);
   });

@@ -111,7 +111,6 @@ bool EdgeCollapser::anyPositionKeepsEdgesShort() const {
   // the mid-point), from the two stars alone: most short edges that cannot
   // be collapsed fail here, before any classification.
   const std::int32_t u = ring_.a, v = ring_.b, dummy = complex_.dummyVertex();
-  const double emax2 = bounds_.emax * bounds_.emax;
   const Eigen::Vector3d pu = complex_.position(u), pv = complex_.position(v), mid = 0.5 * (pu + pv);
   bool toV = true, toU = true, toMid = true;
   auto holds = [&](const std::vector<std::int32_t>& tets, std::int32_t w) {
@@ -126,9 +125,10 @@ bool EdgeCollapser::anyPositionKeepsEdgesShort() const {
       for (std::int32_t w : complex_.tet(q)) {
         if (w == self || w == other || w == dummy) continue;
         const Eigen::Vector3d& pw = complex_.position(w);
-        if (toMid && (pw - mid).squaredNorm() >= emax2) toMid = false;
+        if (toMid && bounds_.reachesEmax(pw, mid, (pw - mid).squaredNorm())) toMid = false;
         // Moving `self` onto `other` creates (other, w) unless it exists.
-        if (toOther && (pw - complex_.position(other)).squaredNorm() >= emax2 && !holds(otherTets, w)) toOther = false;
+        const Eigen::Vector3d& po = complex_.position(other);
+        if (toOther && bounds_.reachesEmax(pw, po, (pw - po).squaredNorm()) && !holds(otherTets, w)) toOther = false;
       }
     }
   };
@@ -267,18 +267,19 @@ double EdgeCollapser::worstBefore(const VertexNeighborhood& nb) const {
 
 bool EdgeCollapser::test2NoLongEdges(const VertexNeighborhood& r, const VertexNeighborhood& k,
                                      const Eigen::Vector3d& p) const {
-  const double emax2 = bounds_.emax * bounds_.emax;
   const std::int32_t dummy = complex_.dummyVertex();
   const bool keptMoves = p != complex_.position(k.vertex);
   for (std::int32_t w : r.neighbors) {
     if (w == dummy || w == k.vertex) continue;
     if (!keptMoves && k.find(w) >= 0) continue;  // an existing, unchanged edge of k
-    if ((complex_.position(w) - p).squaredNorm() >= emax2) return false;
+    const Eigen::Vector3d& pw = complex_.position(w);
+    if (bounds_.reachesEmax(pw, p, (pw - p).squaredNorm())) return false;
   }
   if (keptMoves)
     for (std::int32_t w : k.neighbors) {
       if (w == dummy || w == r.vertex) continue;
-      if ((complex_.position(w) - p).squaredNorm() >= emax2) return false;
+      const Eigen::Vector3d& pw = complex_.position(w);
+      if (bounds_.reachesEmax(pw, p, (pw - p).squaredNorm())) return false;
     }
   return true;
 }
@@ -338,12 +339,14 @@ void EdgeCollapser::collapse(const VertexNeighborhood& r, const VertexNeighborho
 
 std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull,
                                int threads) {
-  const double emin2 = bounds.emin * bounds.emin;
+  auto tooShort = [&](std::int32_t a, std::int32_t b, double l2) {
+    return bounds.belowEmin(complex.position(a), complex.position(b), l2);
+  };
   auto shorter = [](const WeightedEdge& x, const WeightedEdge& y) {
     return std::tie(x.length2, x.a, x.b) < std::tie(y.length2, y.a, y.b);
   };
   std::vector<WeightedEdge> edges;
-  collectEdges(complex, [&](std::int32_t, std::int32_t, double l2) { return l2 < emin2; }, edges, threads);
+  collectEdges(complex, tooShort, edges, threads);
 
   // Waves, shortest edge first within each. A wave's candidates are screened
   // on all threads (read-only: most cannot be collapsed), then the promising
@@ -390,7 +393,7 @@ std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& b
       if (!complex.vertexAlive(e.a) || !complex.vertexAlive(e.b)) continue;
       std::int32_t survivor = -1;
       if (touched[std::size_t(e.a)] || touched[std::size_t(e.b)]) {
-        if ((complex.position(e.a) - complex.position(e.b)).squaredNorm() >= emin2) continue;
+        if (!tooShort(e.a, e.b, (complex.position(e.a) - complex.position(e.b)).squaredNorm())) continue;
         survivor = collapser.tryCollapse(e.a, e.b);
         if (survivor < 0) continue;
       } else {
@@ -405,7 +408,7 @@ std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& b
       const Eigen::Vector3d pk = complex.position(survivor);
       for (std::int32_t w : ring) {
         const double l2 = (complex.position(w) - pk).squaredNorm();
-        if (l2 < emin2) next.push_back({std::min(survivor, w), std::max(survivor, w)});
+        if (tooShort(survivor, w, l2)) next.push_back({std::min(survivor, w), std::max(survivor, w)});
       }
     }
     // Deferred edges: alive and still short, at their current lengths.
@@ -413,7 +416,7 @@ std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& b
     for (const auto& [a, b] : next) {
       if (!complex.vertexAlive(a) || !complex.vertexAlive(b)) continue;
       const double l2 = (complex.position(a) - complex.position(b)).squaredNorm();
-      if (l2 < emin2) edges.push_back({a, b, l2});
+      if (tooShort(a, b, l2)) edges.push_back({a, b, l2});
     }
   }
   return collapses;

@@ -42,7 +42,7 @@ void remeshComplex(RemeshComplex& complex, const RemeshOptions& options, RemeshS
   if (!(options.targetLength > 0.0) || !std::isfinite(options.targetLength))
     throw InputError("remesh", "the target edge length must be positive");
   const auto start = std::chrono::steady_clock::now();
-  const EdgeLengthBounds bounds = EdgeLengthBounds::forTarget(options.targetLength);
+  const EdgeLengthBounds bounds = EdgeLengthBounds::forSizing(options.targetLength, options.sizing);
   const HullConstraint hull(complex);
 
   std::unique_ptr<InterfaceSurfaces> surfaces;

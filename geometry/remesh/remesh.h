@@ -11,11 +11,13 @@
 //   insert once more
 //   insert Steiner points at the tets still poor
 //
-// with e_max = 4/3 l and e_min = 4/5 l for the target length l.
+// with e_max = 4/3 l and e_min = 4/5 l for the target length l, uniform or
+// the sizing field's at each edge's mid-point.
 
 #include "geometry/remesh/flip_edges.h"
 #include "geometry/remesh/insert_steiner_points.h"
 #include "geometry/remesh/remesh_complex.h"
+#include "geometry/remesh/sizing_field.h"
 #include "geometry/tet_mesh.h"
 
 #include <cstddef>
@@ -25,7 +27,10 @@
 namespace vox::remesh {
 
 struct RemeshOptions {
-  double targetLength = 0.0;   // l in mm (required, > 0)
+  double targetLength = 0.0;   // l in mm (required, > 0); l_B with a sizing field
+  // Adaptive target lengths (thesis 2.3.7, eq. 2.2) in the complex's frame;
+  // null: the uniform targetLength. Not owned.
+  const SizingField* sizing = nullptr;
   // Split-collapse-flip-smooth rounds. The thesis uses 5 (+ 2-3 flip-smooth
   // cycles) in its examples and calls 5-10 typical; 10 were measured to add
   // no quality worth their time (docs/BENCHMARKS.md, "Rounds against quality").

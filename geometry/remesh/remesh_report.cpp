@@ -85,6 +85,7 @@ std::string reportText(const RemeshReport& r) {
   };
   add("target edge length   %.4g mm (e_min %.4g, e_max %.4g)\n", r.targetLength, 0.8 * r.targetLength,
       4.0 / 3.0 * r.targetLength);
+  if (r.sizingMax > 0.0) add("sizing field         adaptive, l from %.4g to %.4g mm\n", r.sizingMin, r.sizingMax);
   add("tets                 %zu (input %zu), %zu vertices\n", r.outputTets, r.inputTets, r.outputVertices);
   add("dihedral angles      min %.2f, max %.2f degrees; mean |angle - 70.5| %.2f\n", r.quality.minDihedral,
       r.quality.maxDihedral, r.quality.meanDeviationFrom70);
@@ -145,6 +146,7 @@ std::string reportText(const RemeshReport& r) {
 std::string reportJson(const RemeshReport& r) {
   nlohmann::json j;
   j["target_edge_length_mm"] = r.targetLength;
+  if (r.sizingMax > 0.0) j["sizing_field_mm"] = {{"min", r.sizingMin}, {"max", r.sizingMax}};
   j["tets"] = {{"input", r.inputTets}, {"output", r.outputTets}};
   j["vertices"] = r.outputVertices;
   j["dihedral_degrees"] = {{"min", r.quality.minDihedral},

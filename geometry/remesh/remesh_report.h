@@ -34,7 +34,9 @@ struct LabelReport {
 };
 
 struct RemeshReport {
-  double targetLength = 0.0;
+  double targetLength = 0.0;  // l, or l_B with a sizing field
+  // The sizing field's shortest and longest target (mm); 0: uniform l.
+  double sizingMin = 0.0, sizingMax = 0.0;
   std::size_t inputTets = 0;  // domain tets of the input
   std::size_t outputTets = 0, outputVertices = 0;
   TetQualitySummary quality;

@@ -59,11 +59,15 @@ bool splitChangesAContact(const RemeshComplex& complex, const EdgeRing& ring) {
 }
 
 std::size_t splitLongEdges(RemeshComplex& complex, const EdgeLengthBounds& bounds, int threads) {
-  const double emax2 = bounds.emax * bounds.emax;
   // Longest first: the initial candidates sorted once (ties by vertex ids),
   // the edges of new vertices that are still too long in a heap.
   std::vector<WeightedEdge> edges;
-  collectEdges(complex, [&](std::int32_t, std::int32_t, double length2) { return length2 > emax2; }, edges, threads);
+  collectEdges(
+      complex,
+      [&](std::int32_t a, std::int32_t b, double length2) {
+        return bounds.aboveEmax(complex.position(a), complex.position(b), length2);
+      },
+      edges, threads);
   auto longer = [](const WeightedEdge& x, const WeightedEdge& y) {
     return x.length2 > y.length2 || (x.length2 == y.length2 && std::tie(x.a, x.b) < std::tie(y.a, y.b));
   };
@@ -103,7 +107,7 @@ std::size_t splitLongEdges(RemeshComplex& complex, const EdgeLengthBounds& bound
       for (std::int32_t w : complex.tet(q)) {
         if (w == m || w == dummy) continue;
         const double l2 = (complex.position(w) - pm).squaredNorm();
-        if (l2 > emax2) queue.push({std::min(m, w), std::max(m, w), l2});
+        if (bounds.aboveEmax(complex.position(w), pm, l2)) queue.push({std::min(m, w), std::max(m, w), l2});
       }
   }
   return splits;

@@ -9,9 +9,11 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 namespace vox::remesh {
 namespace {
@@ -121,6 +123,138 @@ TEST(RemeshCli, BadInputIsOneLineAndLeavesNoFile) {
   EXPECT_EQ(r.exitCode, 1);
   EXPECT_NE(r.err.find("flat.mesh: tet 0 has zero volume"), std::string::npos) << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+// A NIfTI-1 file of float32 values: pixdim spacing, and the affine rows
+// `sform` (3 x 4, sform_code 1) when given.
+void writeFloatNifti(const std::string& path, int nx, int ny, int nz, float spacing, const std::vector<float>& values,
+                     const std::vector<float>& sform = {}) {
+  char header[352] = {};
+  auto put = [&](int offset, auto value) { std::memcpy(header + offset, &value, sizeof value); };
+  put(0, std::int32_t(348));
+  const std::int16_t dims[8] = {3, std::int16_t(nx), std::int16_t(ny), std::int16_t(nz), 1, 1, 1, 1};
+  std::memcpy(header + 40, dims, sizeof dims);
+  put(70, std::int16_t(16));  // DT_FLOAT32
+  put(72, std::int16_t(32));
+  const float pixdim[8] = {1.0f, spacing, spacing, spacing, 1.0f, 1.0f, 1.0f, 1.0f};
+  std::memcpy(header + 76, pixdim, sizeof pixdim);
+  put(108, 352.0f);
+  if (!sform.empty()) {
+    put(254, std::int16_t(1));
+    std::memcpy(header + 280, sform.data(), 12 * sizeof(float));
+  }
+  std::memcpy(header + 344, "n+1", 4);
+  std::ofstream out(path, std::ios::binary);
+  out.write(header, sizeof header);
+  out.write(reinterpret_cast<const char*>(values.data()), std::streamsize(values.size() * sizeof(float)));
+}
+
+// Adaptive sizing (eq. 2.2): fewer tets than the uniform mesh at l_B, the
+// same topology; a constant sizing grid gives the uniform mesh itself.
+TEST(RemeshCli, AdaptiveSizingFromInterfacesOrAGrid) {
+  const std::string dir = test::tempDir();
+  const std::string grid = dir + "/spheres.nii.gz";
+  ASSERT_EQ(runCommand(voxmorph("synth spheres --size 24 -o " + quote(grid))).exitCode, 0);
+  auto r = runCommand(voxmorph("mesh " + quote(grid) + " -l 1.5 -q --no-distance -o " + quote(dir + "/uniform.mesh") +
+                               " --report " + quote(dir + "/uniform.json")));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  r = runCommand(voxmorph("mesh " + quote(grid) + " --size-boundary 1.5 --size-interior 6 -q -o " +
+                          quote(dir + "/adaptive.mesh") + " --report " + quote(dir + "/adaptive.json")));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NE(r.out.find("sizing field         adaptive, l from 1.5 to 6 mm"), std::string::npos) << r.out;
+  const auto uniform = nlohmann::json::parse(slurp(dir + "/uniform.json"));
+  const auto adaptive = nlohmann::json::parse(slurp(dir + "/adaptive.json"));
+  EXPECT_TRUE(adaptive["topology"]["preserved"].get<bool>());
+  EXPECT_EQ(adaptive["inverted_tets"].get<int>(), 0);
+  EXPECT_EQ(adaptive["target_edge_length_mm"].get<double>(), 1.5);
+  EXPECT_EQ(adaptive["sizing_field_mm"]["min"].get<double>(), 1.5);
+  EXPECT_EQ(adaptive["sizing_field_mm"]["max"].get<double>(), 6.0);
+  EXPECT_FALSE(uniform.contains("sizing_field_mm"));
+  EXPECT_LT(adaptive["tets"]["output"].get<double>(), 0.8 * uniform["tets"]["output"].get<double>());
+
+  // remesh: the field from the mesh's own interfaces.
+  r = runCommand(voxmorph("remesh " + quote(dir + "/uniform.mesh") + " --size-boundary 1.5 --size-interior 6 -q " +
+                          "--iterations 3 --no-distance -o " + quote(dir + "/remeshed.mesh") + " --report " +
+                          quote(dir + "/remeshed.json")));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const auto remeshed = nlohmann::json::parse(slurp(dir + "/remeshed.json"));
+  EXPECT_TRUE(remeshed["topology"]["preserved"].get<bool>());
+  EXPECT_LT(remeshed["tets"]["output"].get<double>(), uniform["tets"]["output"].get<double>());
+
+  // A grid of 2 mm everywhere, coarser than the label grid and elsewhere:
+  // the same bytes as -l 2.
+  writeFloatNifti(dir + "/two.nii", 5, 5, 5, 9.0f, std::vector<float>(125, 2.0f));
+  ASSERT_EQ(runCommand(voxmorph("mesh " + quote(grid) + " -l 2 -q -o " + quote(dir + "/l2.mesh"))).exitCode, 0);
+  r = runCommand(voxmorph("mesh " + quote(grid) + " --size-grid " + quote(dir + "/two.nii") + " -q -o " +
+                          quote(dir + "/grid2.mesh")));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_EQ(slurp(dir + "/l2.mesh"), slurp(dir + "/grid2.mesh"));
+
+  // Sampled in world mm through the grid's affine: two voxels of 12 mm,
+  // mirrored along x, voxel 0 (1.5 mm) at x = 18 and voxel 1 (6 mm) at
+  // x = 6. Edges at low x come out longer than at high x.
+  writeFloatNifti(dir + "/ramp.nii", 2, 1, 1, 12.0f, {1.5f, 6.0f},
+                  {-12.0f, 0.0f, 0.0f, 18.0f, 0.0f, 12.0f, 0.0f, 0.0f, 0.0f, 0.0f, 12.0f, 0.0f});
+  r = runCommand(voxmorph("mesh " + quote(grid) + " --size-grid " + quote(dir + "/ramp.nii") + " -q --no-distance -o " +
+                          quote(dir + "/ramp.mesh") + " --report " + quote(dir + "/ramp.json")));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const auto rampReport = nlohmann::json::parse(slurp(dir + "/ramp.json"));
+  EXPECT_TRUE(rampReport["topology"]["preserved"].get<bool>());
+  // The sizing grid is one of the run's inputs.
+  bool sizeGridRecorded = false;
+  for (const auto& input : rampReport["provenance"]["inputs"])
+    sizeGridRecorded |= input["role"] == "size_grid" && input["sha256"].get<std::string>().size() == 64;
+  EXPECT_TRUE(sizeGridRecorded) << rampReport["provenance"].dump();
+  const TetMesh ramp = readTetMesh(dir + "/ramp.mesh");
+  double sum[2] = {0.0, 0.0}, count[2] = {0.0, 0.0};
+  for (const Tet& t : ramp.tets)
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) {
+        const Eigen::Vector3d a = ramp.positions[std::size_t(t[i])], b = ramp.positions[std::size_t(t[j])];
+        const double x = 0.5 * (a.x() + b.x());
+        if (x < 6.0 || x > 18.0) {
+          sum[x > 18.0] += (a - b).norm();
+          count[x > 18.0] += 1.0;
+        }
+      }
+  ASSERT_GT(count[0], 0.0);
+  ASSERT_GT(count[1], 0.0);
+  EXPECT_GT(sum[0] / count[0], 1.5 * sum[1] / count[1]) << sum[0] / count[0] << " mm at low x, " << sum[1] / count[1];
+}
+
+TEST(RemeshCli, BadSizingIsRefused) {
+  const std::string dir = test::tempDir();
+  const std::string grid = dir + "/spheres.nii.gz";
+  ASSERT_EQ(runCommand(voxmorph("synth spheres --size 12 -o " + quote(grid))).exitCode, 0);
+  const std::string out = dir + "/out.mesh";
+  const std::string mesh = voxmorph("mesh " + quote(grid) + " -q -o " + quote(out) + " ");
+  // Usage errors: exit 2 (the option parser's, and the checks after it).
+  for (const char* options : {"--size-boundary 3 --size-interior 2", "--size-boundary 0 --size-interior 2",
+                              "--size-boundary -1 --size-interior 2", "--size-boundary 2", "--size-interior 2",
+                              "-l 2 --size-boundary 2 --size-interior 4", "", "-l 2 --size-grid x.nii"}) {
+    const auto r = runCommand(mesh + options);
+    EXPECT_EQ(r.exitCode, 2) << options << ": " << r.err;
+  }
+  auto r = runCommand(mesh + "--size-boundary 3 --size-interior 2");
+  EXPECT_EQ(r.err, "voxmorph: error: --size-interior: l_I = 2 mm is shorter than --size-boundary l_B = 3 mm\n");
+  r = runCommand(mesh);
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_NE(r.err.find("--length: a target edge length is required"), std::string::npos) << r.err;
+  // A size grid with a non-positive value: the file's fault, exit 1.
+  std::vector<float> sizes(27, 2.0f);
+  sizes[13] = -0.5f;
+  writeFloatNifti(dir + "/bad.nii", 3, 3, 3, 10.0f, sizes);
+  r = runCommand(mesh + "--size-grid " + quote(dir + "/bad.nii"));
+  EXPECT_EQ(r.exitCode, 1);
+  EXPECT_NE(r.err.find("bad.nii: voxel 13 (1, 1, 1) holds -0.5: sizes must be finite and positive (mm)"), std::string::npos)
+      << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  // Not a NIfTI file.
+  { std::ofstream(dir + "/junk.nii") << "not a grid"; }
+  r = runCommand(mesh + "--size-grid " + quote(dir + "/junk.nii"));
+  EXPECT_EQ(r.exitCode, 1);
+  EXPECT_NE(r.err.find("junk.nii"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(out));
 }
 
