@@ -98,10 +98,10 @@ std::string deformationReportJson(const DeformationReport& r) {
                      {"tets", s.tets},
                      {"mean_error", s.meanError},
                      {"max_error", s.maxError},
-                     {"split_edges", s.splitEdges},
+                     {"update_strength", s.strength},
                      {"seconds", s.seconds}});
   }
-  root["refinement"] = {{"iterations", steps}, {"kept", r.refinement.kept}, {"stop", r.refinement.stopReason}};
+  root["refinement"] = {{"iterations", steps}, {"stop", r.refinement.stopReason}};
   root["distortion"] = {{"volume_mm3", r.distortion.volume},
                         {"angle_deg", toJson(r.distortion.angle)},
                         {"stretch", toJson(r.distortion.stretch)}};
