@@ -152,14 +152,9 @@ void ArticulatedPoser::predict(InjectiveSolver& solver, std::span<const Eigen::I
   const std::vector<Eigen::Vector3d>& current = solver.positions();
   std::vector<Eigen::Vector3d> predicted(current.size());
   for (std::size_t i = 0; i < current.size(); ++i) predicted[i] = blended(i, step, current[i]);
-  moveTowards(solver, predicted);
-}
-
-void ArticulatedPoser::moveTowards(InjectiveSolver& solver, const std::vector<Eigen::Vector3d>& predicted) const {
-  const std::vector<Eigen::Vector3d>& current = solver.positions();
   // As far along as no tet inverts, vertex by vertex: the vertices of a tet
-  // the move would squeeze go half as far, again until none is (a squeezed
-  // tet at the shoulder does not hold back the hand).
+  // the prediction would squeeze go half as far, again until none is (a
+  // squeezed tet at the shoulder does not hold back the hand).
   std::vector<double> share(current.size(), 1.0);
   std::vector<Eigen::Vector3d> trial(current.size());
   std::vector<double> floor = solver.relativeVolumes(current);
@@ -286,13 +281,11 @@ ArticulatedPoseReport ArticulatedPoser::pose(std::span<const Eigen::Isometry3d> 
     // The bones onto their motions exactly: put there when no tet inverts,
     // else chased from where the approach left them (hard constraints); then
     // the tissue relaxes around them.
-    // Every vertex moved by its parts' corrections as far as no tet is
-    // squeezed (a tight crease holds back only the vertices around it).
     targets(approach_, motions, 1.0);
     std::vector<Eigen::Vector3d> placed = corrected(approach_.positions(), motions);
     for (std::size_t c = 0; c < constrained_.size(); ++c) placed[std::size_t(constrained_[c])] = constrainedTargets_[c];
-    solver_.setPositions(approach_.positions());
-    moveTowards(solver_, placed);
+    const std::vector<double> volumes = solver_.relativeVolumes(placed);
+    solver_.setPositions(*std::min_element(volumes.begin(), volumes.end()) > 0.0 ? placed : approach_.positions());
     const InjectiveStepReport r = solver_.solveStep(constrainedTargets_, slidingTargets_);
     report.iterations += r.iterations;
     report.minRelativeVolume = std::min(report.minRelativeVolume, r.minRelativeVolume);

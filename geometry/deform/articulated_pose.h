@@ -16,9 +16,8 @@
 //    and carried to the step's pose, so it may slide along the surface
 //    whether the bones lead or lag;
 //  - a last step puts the bones on their motions exactly: every vertex is
-//    moved by its parts' remaining corrections, as far as no tet around it
-//    is squeezed, and the bones held back there are chased as hard
-//    constraints from where they are.
+//    moved by its parts' remaining corrections, and where that inverts a
+//    tet the bones are chased as hard constraints from where they are.
 //
 // Only the tets that can change are solved: a tet whose four vertices move
 // with one part is moved rigidly and left out of the solve.
@@ -79,10 +78,6 @@ private:
   // Moves the solve's positions towards the blended step motion from
   // `from` to `to` of the pose, as far as no tet inverts.
   void predict(InjectiveSolver& solver, std::span<const Eigen::Isometry3d> motions, double from, double to);
-  // Moves the solve's positions towards `predicted`, each vertex as far as
-  // no tet around it is squeezed below 5 % of its volume (or half the
-  // volume it has).
-  void moveTowards(InjectiveSolver& solver, const std::vector<Eigen::Vector3d>& predicted) const;
   using PartTransforms = std::array<Eigen::Isometry3d, kSegmentCount + 1>;
   // Solve vertex i's point p moved by its nearest parts' transforms,
   // blended by nearWeight_.
