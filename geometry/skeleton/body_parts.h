@@ -93,7 +93,7 @@ struct AnatomicalFrame {
 struct BoneVoxels {
   Bone bone = Bone::None;
   Side side = Side::Axial;
-  std::vector<std::int64_t> voxels;
+  std::vector<std::int64_t> voxels;  // linear indices, sorted
 };
 
 struct BodyParts {

@@ -279,10 +279,8 @@ std::size_t hingeOverlaps(const std::vector<Eigen::Matrix3d>& turns, const Eigen
 // distance moved (mm).
 double clearHinge(Joint& joint, const GridGeometry& g, const BoneVoxels& parent, const BoneShape& parentShape, const BoneVoxels& child) {
   const double reach = 0.3 * parentShape.length(), range = 0.125 * parentShape.length();
-  std::vector<std::int64_t> childSorted = child.voxels;
-  std::sort(childSorted.begin(), childSorted.end());
   std::vector<Eigen::Vector3d> near;
-  for (const Eigen::Vector3d& p : centres(g, surfaceVoxels(g, childSorted)))
+  for (const Eigen::Vector3d& p : centres(g, surfaceVoxels(g, child.voxels)))
     if ((p - joint.centre).norm() < reach) near.push_back(p);
   // At most kSamples of them, evenly strided (fine grids).
   constexpr std::size_t kSamples = 4000;

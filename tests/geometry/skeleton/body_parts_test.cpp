@@ -276,8 +276,7 @@ TEST(BodyParts, AdultMale) {
     const BoneVoxels* parent = s.parts.find(arm ? Bone::Humerus : Bone::Femur, j->kind().side);
     const BoneVoxels* child = s.parts.find(arm ? Bone::ForearmBones : Bone::LowerLegBones, j->kind().side);
     ASSERT_TRUE(parent && child);
-    std::vector<std::int64_t> parentVoxels = parent->voxels;
-    std::sort(parentVoxels.begin(), parentVoxels.end());
+    const std::vector<std::int64_t>& parentVoxels = parent->voxels;  // sorted
     const GridGeometry& g = grid.geometry();
     int worst = 0;
     for (double deg = 10.0; deg <= j->kind().range[0][1]; deg += 10.0) {
