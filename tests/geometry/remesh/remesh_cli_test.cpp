@@ -250,6 +250,13 @@ TEST(RemeshCli, BadSizingIsRefused) {
   EXPECT_NE(r.err.find("bad.nii: voxel 13 (1, 1, 1) holds -0.5: sizes must be finite and positive (mm)"), std::string::npos)
       << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  // A size grid cut short: its header promises more samples than it holds.
+  writeFloatNifti(dir + "/short.nii", 3, 3, 3, 10.0f, std::vector<float>(27, 2.0f));
+  fs::resize_file(dir + "/short.nii", fs::file_size(dir + "/short.nii") - 40);
+  r = runCommand(mesh + "--size-grid " + quote(dir + "/short.nii"));
+  EXPECT_EQ(r.exitCode, 1);
+  EXPECT_EQ(r.err.rfind("voxmorph: error: " + dir + "/short.nii: ", 0), 0u) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   // Not a NIfTI file.
   { std::ofstream(dir + "/junk.nii") << "not a grid"; }
   r = runCommand(mesh + "--size-grid " + quote(dir + "/junk.nii"));
