@@ -172,8 +172,14 @@ void addDeformCommand(CLI::App& app) {
                   "Refuse (write nothing) when a bone's volume changes by more than this, % (with an organ table that names the bones)")
       ->capture_default_str()
       ->check(numberIn(0, 1000, "%"));
+  cmd->add_option("--max-bone-overlap", o->run.maxBoneOverlapPercent,
+                  "Refuse (write nothing) a joint pose that presses two parts' bones through each other by more than this share of the "
+                  "smaller part's bones, %")
+      ->capture_default_str()
+      ->check(numberIn(0, 100, "%"));
   cmd->add_flag("--force", o->run.force,
-                "Write a result beyond --max-body-change or --max-bone-change anyway (a warning, and \"forced\": true in the report)");
+                "Write a result beyond --max-body-change, --max-bone-change or --max-bone-overlap anyway (a warning, and \"forced\": "
+                "true in the report)");
   cmd->add_flag("--allow-growth", o->run.allowGrowth,
                 "Accept a posed grid of more than 8 times the source's voxels (a pose that moves parts far from the body)");
   cmd->add_flag("--cpu", o->cpu, "Rasterize and interpolate fields with the CPU reference instead of the GPU");

@@ -268,6 +268,16 @@ std::size_t hingeOverlaps(const std::vector<Eigen::Matrix3d>& turns, const Eigen
   return n;
 }
 
+// ", cleared over flexion and abduction": how clearHinge moved a centre.
+std::string clearedOver(const JointKind& kind) {
+  std::vector<std::string> dofs;
+  for (int d = 0; d < kDofCount; ++d)
+    if (kind.dofNames[std::size_t(d)] && kind.range[std::size_t(d)][0] < kind.range[std::size_t(d)][1]) dofs.push_back(kind.dofNames[std::size_t(d)]);
+  std::string out = ", cleared over ";
+  for (std::size_t i = 0; i < dofs.size(); ++i) out += (i == 0 ? "" : i + 1 == dofs.size() ? " and " : ", ") + dofs[i];
+  return out;
+}
+
 // The hinge's centre moved across its flexion axis to where the child's bone
 // end turns clear of the parent's bone over the flexion range, the nearest
 // such place to the estimate (the parent bone's distal end, which lies on its
@@ -296,8 +306,15 @@ double clearHinge(Joint& joint, const GridGeometry& g, const BoneVoxels& parent,
   u.normalize();
   const Eigen::Vector3d w = axis.cross(u);
   std::vector<Eigen::Matrix3d> turns;
-  for (double degrees = 10.0; degrees <= joint.kind().range[std::size_t(Dof::Flexion)][1]; degrees += 10.0)
-    turns.push_back(joint.rotation({degrees, 0.0, 0.0}));
+  for (const Dof dof : {Dof::Flexion, Dof::Abduction, Dof::Rotation}) {
+    const std::array<double, 2>& r = joint.kind().range[std::size_t(dof)];
+    for (double degrees = 10.0 * std::ceil(r[0] / 10.0); degrees <= r[1]; degrees += 10.0) {
+      if (degrees == 0.0) continue;
+      std::array<double, kDofCount> angles{};
+      angles[std::size_t(dof)] = degrees;
+      turns.push_back(joint.rotation(angles));
+    }
+  }
   const VoxelBitmap parentBits(g, parent.voxels);
   const Eigen::Vector3d estimate = joint.centre;
   std::size_t best = hingeOverlaps(turns, estimate, near, parentBits, std::numeric_limits<std::size_t>::max());
@@ -430,8 +447,14 @@ void estimateLimb(std::array<std::optional<Joint>, kJointCount>& found, const Gr
   setAxes();
   // The hinge's centre where the child's bone end turns clear of the
   // parent's, then the axes again from it.
+  // The wrist's and ankle's first: the elbow's and knee's long axis points
+  // at them.
+  if (low && middle && end && clearHinge(*low, g, *middle, *middleShape, *end) > 0.0) {
+    low->method = "distal end" + clearedOver(low->kind());
+    setAxes();
+  }
   if (mid && upper && middle && clearHinge(*mid, g, *upper, *upperShape, *middle) > 0.0) {
-    mid->method = "distal end, cleared over flexion";
+    mid->method = "distal end" + clearedOver(mid->kind());
     setAxes();
   }
 }
@@ -556,6 +579,8 @@ std::vector<Joint> estimateJoints(const GridGeometry& g, const BodyParts& bones)
       j.longAxis = up;
       j.method = "cervical spine, lower end";
       setLeftRight(j, std::nullopt, f);
+      if (const BoneVoxels* thoracic = bones.find(Bone::ThoracicSpine, Side::Axial))
+        if (clearHinge(j, g, *thoracic, shapeOf(g, thoracic->voxels), *cervical) > 0.0) j.method += clearedOver(j.kind());
       found[std::size_t(JointId::Neck)] = j;
     }
     if (!head.empty()) {
@@ -566,6 +591,12 @@ std::vector<Joint> estimateJoints(const GridGeometry& g, const BodyParts& bones)
       j.longAxis = d.norm() > 1e-6 ? Eigen::Vector3d(d.normalized()) : up;
       j.method = "cervical spine, upper end";
       setLeftRight(j, std::nullopt, f);
+      if (const BoneVoxels* cranium = bones.find(Bone::Cranium, Side::Axial))
+        if (clearHinge(j, g, *cervical, s, *cranium) > 0.0) {
+          j.method += clearedOver(j.kind());
+          const Eigen::Vector3d e = mean(head) - j.centre;
+          if (e.norm() > 1e-6) j.longAxis = e.normalized();
+        }
       found[std::size_t(JointId::Head)] = j;
     }
   }

@@ -192,6 +192,21 @@ TEST(PartsCommand, BadInput) {
   const std::string bent = writeFile(f.dir + "/bent.json", R"({"joints": {"right_elbow": {"flexion": 170}}})");
   expectOneLineError(test::runCommand(voxmorph(deform + test::quote(bent) + " --organs " + test::quote(f.organs))),
                      bent + ": joint 'right_elbow' flexion 170 is outside its range [0, 150] degrees");
+  // Legs crossed through each other: refused before the work, by the cage
+  // pipeline and the articulated mesh alike; --force writes it with a warning.
+  const std::string crossed = writeFile(f.dir + "/crossed.json", R"({"joints": {"right_hip": {"abduction": -30}}})");
+  for (const std::string extra : {"", " --articulated"}) {
+    expectOneLineError(test::runCommand(voxmorph(deform + test::quote(crossed) + " --organs " + test::quote(f.organs) + extra)),
+                       crossed + ": the bones of the right_lower_leg and the left_lower_leg pass through each other (");
+    EXPECT_FALSE(std::filesystem::exists(out)) << extra;
+  }
+  expectOneLineError(test::runCommand(voxmorph(deform + test::quote(crossed) + " --organs " + test::quote(f.organs) + " --max-bone-overlap 50")),
+                     "the pose changes the volume of the ");  // past the overlap check, the bone check of the cage pipeline
+  const auto forced = test::runCommand(voxmorph(deform + test::quote(crossed) + " --organs " + test::quote(f.organs) + " --force"));
+  EXPECT_EQ(forced.exitCode, 0) << forced.err;
+  EXPECT_NE(forced.err.find("pass through each other"), std::string::npos) << forced.err;
+  EXPECT_NE(forced.err.find("written because of --force"), std::string::npos) << forced.err;
+  std::filesystem::remove(out);
   const std::string wing = writeFile(f.dir + "/wing.json", R"({"joints": {"right_wing": {"flexion": 10}}})");
   expectOneLineError(test::runCommand(voxmorph(deform + test::quote(wing) + " --organs " + test::quote(f.organs))), "unknown joint 'right_wing'");
   // A joint the skeleton lacks: the stick figure's only bones are its humeri.

@@ -6,6 +6,7 @@
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <numbers>
 
@@ -189,6 +190,34 @@ PartMotions partMotions(const std::vector<Joint>& joints, const std::vector<Pose
     m[std::size_t(p)] = motion;
   }
   return m;
+}
+
+std::optional<std::string> bonesThroughEachOther(const Skeleton& skeleton, const std::vector<Joint>& joints, const std::vector<PoseJoint>& angles,
+                                                 double maxPercent) {
+  if (std::none_of(angles.begin(), angles.end(), [](const PoseJoint& a) { return turned(&a); })) return std::nullopt;
+  const PartMotions motions = partMotions(joints, angles);
+  const std::vector<BoneOverlap> overlaps = boneOverlaps(skeleton.parts, joints, motions);
+  if (overlaps.empty() || !(100.0 * overlaps.front().fractionOfSmaller > maxPercent)) return std::nullopt;
+  const BoneOverlap& o = overlaps.front();
+  // The turned joints on the way between the two parts, up from each to
+  // the part both hang from.
+  std::vector<Part> above;
+  for (Part p = o.first; p != Part::None; p = parentPart(p)) above.push_back(p);
+  std::vector<std::string> names;
+  const auto name = [&](Part p) {
+    const auto id = jointMoving(p);
+    if (id && turned(anglesOf(angles, *id))) names.insert(names.begin(), jointKind(*id).name);
+  };
+  Part common = o.second;
+  for (; common != Part::None && std::find(above.begin(), above.end(), common) == above.end(); common = parentPart(common)) name(common);
+  for (Part p = o.first; p != common && p != Part::None; p = parentPart(p)) name(p);
+  std::string joinedNames;
+  for (std::size_t i = 0; i < names.size(); ++i) joinedNames += (i == 0 ? "" : i + 1 == names.size() ? " and " : ", ") + names[i];
+  char figures[160];
+  std::snprintf(figures, sizeof figures, "%zu voxels, %.1f cm3: %.1f %% of the %s's bones, more than %g %%", o.voxels, o.volumeMm3 / 1000.0,
+                100.0 * o.fractionOfSmaller, partName(o.smaller), maxPercent);
+  return std::string("the bones of the ") + partName(o.first) + " and the " + partName(o.second) + " pass through each other (" + figures + ")" +
+         (joinedNames.empty() ? std::string() : " with " + joinedNames + " as posed");
 }
 
 PoseTransform screwTransform(const Eigen::Isometry3d& motion, const Eigen::Vector3d& near) {

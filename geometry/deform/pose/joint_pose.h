@@ -26,6 +26,7 @@
 
 #include "geometry/deform/pipeline.h"
 #include "geometry/deform/pose/pose.h"
+#include "geometry/skeleton/bone_overlap.h"
 #include "geometry/skeleton/skeleton.h"
 
 #include <Eigen/Geometry>
@@ -52,6 +53,10 @@ struct JointPoseOptions {
   double regionPaddingMm = 60.0;  // regions grow by this across the limb (the cage lies ~20 mm out, the inset wedge needs room)
   double nearMm = 40.0;           // groups this near the moving parts are separated from them (twice the cage's default dilation)
   JointZone jointZone = JointZone::Parent;
+  // A pose whose bones overlap (bone_overlap.h) by more than this percent of
+  // the smaller part's bone voxels is physically wrong
+  // (PipelineOptions::bonesThroughEachOther).
+  double maxBoneOverlapPercent = 2.0;
 };
 
 // The skeleton's joints with the pose's overrides applied (a "center"
@@ -65,6 +70,13 @@ std::vector<Joint> posedJoints(const Skeleton& skeleton, const std::vector<PoseJ
 // its rest position to its posed one (identity for the trunk and pelvis).
 using PartMotions = std::array<Eigen::Isometry3d, kPartCount + 1>;
 PartMotions partMotions(const std::vector<Joint>& joints, const std::vector<PoseJoint>& angles);
+
+// Bones the pose presses through each other: the pair of parts whose bones
+// overlap most (boneOverlaps, as a share of the smaller part's bones) when
+// that share exceeds maxPercent, as one line naming the two parts, the
+// overlap and the turned joints between them; nullopt otherwise.
+std::optional<std::string> bonesThroughEachOther(const Skeleton& skeleton, const std::vector<Joint>& joints, const std::vector<PoseJoint>& angles,
+                                                 double maxPercent);
 
 // A rigid motion as a pose transform: a screw about an axis through the
 // point nearest `near` (so a single joint's rotation has its centre on the

@@ -128,6 +128,7 @@ PipelineOptions deformPipelineOptions(const DeformGridRequest& o, const LabelGri
   // tissue around the bone follows it.
   skeleton::JointPoseOptions joints;
   if (o.rigidBones) joints.jointZone = skeleton::JointZone::Child;
+  joints.maxBoneOverlapPercent = o.maxBoneOverlapPercent;
   // The prepared skeleton (built from the same grid, organ table and parts
   // grid: PreparedState::check) stands in for the one built here.
   const bool skeletal = !o.pose.joints.empty() || usesBodyParts(o.pose) || !o.parts.empty();
@@ -221,6 +222,7 @@ PosedMesh poseByCage(const DeformGridRequest& o, const Source& source, RasterEng
   PipelineOptions options = deformPipelineOptions(o, source.workingGrid(), source.factor, prepared.get());
   options.prepared = prepared;
   if (options.bodyParts) report.stages.push_back(skeletonTimer.stop());
+  if (options.bonesThroughEachOther) refuseOrForce(o, report, *options.bonesThroughEachOther);
   const bool separated = !options.cage.separations.empty();
   auto pipeline = std::make_unique<DeformationPipeline>(source.workingGrid(), options);
   if (pipeline->stats().foregroundOutsideCage > 0 && !separated)
@@ -269,8 +271,10 @@ PosedMesh poseArticulated(const DeformGridRequest& o, const Source& source, Defo
   StageTimer skeletonTimer("skeleton");
   const skeleton::Skeleton sk = prepared && prepared->skeleton ? *prepared->skeleton
                                                                : skeleton::buildSkeleton(grid, *o.organs, {o.input, o.organsSource, o.parts});
-  const skeleton::PartMotions partMotions = skeleton::partMotions(skeleton::posedJoints(sk, o.pose.joints, o.poseSource), o.pose.joints);
+  const std::vector<skeleton::Joint> joints = skeleton::posedJoints(sk, o.pose.joints, o.poseSource);
+  const skeleton::PartMotions partMotions = skeleton::partMotions(joints, o.pose.joints);
   report.stages.push_back(skeletonTimer.stop());
+  if (const auto fault = skeleton::bonesThroughEachOther(sk, joints, o.pose.joints, o.maxBoneOverlapPercent)) refuseOrForce(o, report, *fault);
   StageTimer meshTimer("articulated transfer mesh");
   ArticulatedMesh mesh = buildArticulatedMesh(grid, *o.organs, sk);
   const std::vector<Eigen::Isometry3d> motions = segmentMotions(partMotions, sk, mesh);

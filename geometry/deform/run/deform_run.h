@@ -17,6 +17,7 @@
 
 #include "geometry/deform/solve/adaptive_refinement.h"
 #include "geometry/deform/report/deformation_report.h"
+#include "geometry/deform/pose/joint_pose.h"
 #include "geometry/deform/pose/pose.h"
 #include "geometry/organ_table.h"
 #include "geometry/raster/raster_engines.h"
@@ -67,10 +68,14 @@ struct DeformGridRequest {
   // volume (through the transfer mesh, report.bones) changes by more than
   // maxBoneChangePercent, checked before the rasterization, or a whole body
   // (G''s foreground) by more than maxBodyChangePercent, checked before G'
-  // and the extra outputs are committed. `force` writes them anyway, with a
-  // warning and "forced" in the report.
+  // and the extra outputs are committed; a joint pose whose bones pass
+  // through each other by more than maxBoneOverlapPercent of the smaller
+  // part's bones (skeleton::bonesThroughEachOther), checked before the
+  // transfer mesh is built. `force` writes them anyway, with a warning and
+  // "forced" in the report.
   double maxBodyChangePercent = 2.0;
   double maxBoneChangePercent = 10.0;
+  double maxBoneOverlapPercent = skeleton::JointPoseOptions{}.maxBoneOverlapPercent;
   bool force = false;
   std::int64_t maxTets = RefinementOptions{}.maxTets;
   int refineIterations = RefinementOptions{}.maxIterations;

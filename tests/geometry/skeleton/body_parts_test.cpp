@@ -6,6 +6,7 @@
 
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
+#include "geometry/skeleton/bone_overlap.h"
 #include "geometry/skeleton/skeleton.h"
 #include "geometry/synth.h"
 #include "tests/support/test_environment.h"
@@ -146,6 +147,51 @@ TEST(Joints, SkeletonFigureJointsWhereTheyWereBuilt) {
   const Joint* elbow = s.joint(JointId::RightElbow);
   EXPECT_NEAR(elbow->centre.z(), figureMm(0.627), 2.0 * voxel);
   EXPECT_NEAR(elbow->centre.x(), figureMm(truth.humeralHeadX[0]), voxel);
+}
+
+// Each joint turned alone through its range, every 10 degrees of each of
+// its degrees of freedom: the largest overlap of its own two parts' bones
+// (bone_overlap.h; a share of the smaller part's bones, %), which a pose
+// refuses above 2 % (JointPoseOptions::maxBoneOverlapPercent). Where the
+// trunk itself is in the way the shoulders' abduction is left out: past 160
+// degrees (the scapula stays with the trunk, and the humerus meets the
+// acromion) and below 0 (the hanging arm pressed through the ribs, which
+// the pose refuses: checked at -30 degrees).
+void expectJointsTurnClear(const Skeleton& s, const std::string& phantom) {
+  for (const Joint& j : s.joints) {
+    const JointKind& k = j.kind();
+    for (int d = 0; d < kDofCount; ++d) {
+      if (!k.dofNames[std::size_t(d)]) continue;
+      double worst = 0.0, at = 0.0, adducted = 0.0;
+      for (double deg = 10.0 * std::ceil(k.range[std::size_t(d)][0] / 10.0); deg <= k.range[std::size_t(d)][1]; deg += 10.0) {
+        if (deg == 0.0) continue;
+        std::array<double, kDofCount> angles{};
+        angles[std::size_t(d)] = deg;
+        Eigen::Isometry3d turn = Eigen::Isometry3d::Identity();
+        turn.linear() = j.rotation(angles);
+        turn.translation() = j.centre - turn.linear() * j.centre;
+        std::array<Eigen::Isometry3d, kPartCount + 1> motions;
+        motions.fill(Eigen::Isometry3d::Identity());
+        for (const Part p : partSubtree(k.child)) motions[std::size_t(p)] = turn;
+        for (const BoneOverlap& o : boneOverlaps(s.parts, s.joints, motions)) {
+          const bool own = (o.first == k.parent && o.second == k.child) || (o.first == k.child && o.second == k.parent);
+          const bool shoulder = k.parent == Part::Trunk && k.dofNames[std::size_t(d)] == std::string("abduction");
+          if (own && shoulder && deg == -30.0) adducted = 100.0 * o.fractionOfSmaller;
+          if (own && !(shoulder && (deg > 160.0 || deg < 0.0)) && 100.0 * o.fractionOfSmaller > worst) {
+            worst = 100.0 * o.fractionOfSmaller;
+            at = deg;
+          }
+        }
+      }
+      std::cout << phantom << " " << k.name << " " << k.dofNames[std::size_t(d)] << ": at most " << worst << " % of bone overlap (" << at
+                << " degrees)\n";
+      EXPECT_LE(worst, 2.0) << phantom << " " << k.name << " " << k.dofNames[std::size_t(d)] << " at " << at << " degrees";
+      if (k.parent == Part::Trunk && k.dofNames[std::size_t(d)] == std::string("abduction")) {
+        std::cout << phantom << " " << k.name << " abduction -30: " << adducted << " %\n";
+        EXPECT_GT(adducted, 2.0) << phantom << " " << k.name;
+      }
+    }
+  }
 }
 
 TEST(Joints, SphereFitRecoversASphere) {
@@ -314,6 +360,21 @@ TEST(BodyParts, AdultMale) {
     else
       EXPECT_LT(front, 0.0) << j->kind().name;
   }
+
+  // The wrists, ankles and the neck are cleared the same way, over every
+  // degree of freedom they have.
+  for (const JointId id : {JointId::RightWrist, JointId::LeftWrist, JointId::RightAnkle, JointId::LeftAnkle, JointId::Neck})
+    EXPECT_NE(s.joint(id)->method.find(", cleared over flexion"), std::string::npos) << s.joint(id)->kind().name << ": " << s.joint(id)->method;
+  expectJointsTurnClear(s, "adult male");
+}
+
+// The adult female: 299 x 137 x 348 voxels of 1.775 x 1.775 x 4.84 mm.
+TEST(BodyParts, AdultFemale) {
+  const LabelGrid grid = readGrid(test::assetPath("icrp110_af.nii.gz"));
+  const OrganTable organs = OrganTable::read(test::assetPath("icrp110_af_organs.dat"));
+  const Skeleton s = buildSkeleton(grid, organs, {"af", "af organs", "af parts"});
+  ASSERT_EQ(s.joints.size(), std::size_t(kJointCount));
+  expectJointsTurnClear(s, "adult female");
 }
 
 }  // namespace

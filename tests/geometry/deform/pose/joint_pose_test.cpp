@@ -4,13 +4,16 @@
 // sides, the compiled pose fixes the parts at rest and moves the others, and
 // the pipeline places the hand where the kinematics say. Bad input: angles
 // out of range, joints and degrees of freedom that do not exist, a joint
-// the skeleton lacks.
+// the skeleton lacks, bones pressed through each other (the figure's legs
+// crossed; on the adult male the bundled poses pass and crossed legs do not).
 
 #include "geometry/deform/pipeline.h"
 #include "geometry/deform/pose/pose.h"
 #include "geometry/error.h"
 #include "geometry/deform/pose/joint_pose.h"
+#include "geometry/io/grid_io.h"
 #include "geometry/synth.h"
+#include "tests/support/test_environment.h"
 
 #include <gtest/gtest.h>
 
@@ -220,6 +223,47 @@ TEST(JointPose, BadInput) {
   PipelineOptions raw;
   raw.pose = parsePose(R"({"joints": {"neck": {"flexion": 10}}})", "p.json");
   EXPECT_THROW(DeformationPipeline(grid, raw), InputError);
+}
+
+TEST(JointPose, BonesThroughEachOther) {
+  const Skeleton& s = figure();
+  const auto fault = [&](const std::string& json, double maxPercent = 2.0) {
+    const Pose pose = parsePose(json, "p.json");
+    return bonesThroughEachOther(s, posedJoints(s, pose.joints, "p.json"), pose.joints, maxPercent);
+  };
+  EXPECT_FALSE(fault(R"({"joints": {"right_hip": {"flexion": 0}}})"));
+  EXPECT_FALSE(fault(R"({"joints": {"right_hip": {"abduction": 20}, "right_knee": {"flexion": 30}}})"));
+  // The right leg turned 30 degrees across the left.
+  const auto crossed = fault(R"({"joints": {"right_hip": {"abduction": -30}, "left_shoulder": {"flexion": 10}}})");
+  ASSERT_TRUE(crossed);
+  EXPECT_EQ(crossed->rfind("the bones of the right_", 0), 0u) << *crossed;
+  EXPECT_NE(crossed->find(" and the left_"), std::string::npos) << *crossed;
+  EXPECT_NE(crossed->find("more than 2 %) with right_hip as posed"), std::string::npos) << *crossed;  // not the shoulder
+  EXPECT_FALSE(fault(R"({"joints": {"right_hip": {"abduction": -30}}})", 100.0));
+  // Through the pipeline's options: the fault is carried, not thrown.
+  const PipelineOptions options =
+      skeletalPoseOptions(parsePose(R"({"joints": {"right_hip": {"abduction": -30}}})", "p.json"), "p.json", s, synthOrganTable(SynthKind::SkeletonFigure));
+  ASSERT_TRUE(options.bonesThroughEachOther);
+  EXPECT_EQ(*options.bonesThroughEachOther, *fault(R"({"joints": {"right_hip": {"abduction": -30}}})"));
+}
+
+TEST(JointPose, AdultMaleBonesClearInTheBundledPosesNotWithCrossedLegs) {
+  const LabelGrid grid = readGrid(test::assetPath("icrp110_am.nii.gz"));
+  const OrganTable organs = OrganTable::read(test::assetPath("icrp110_am_organs.dat"));
+  const Skeleton s = buildSkeleton(grid, organs, {"am", "am organs", "am parts"});
+  for (const std::string name : {"am_head_turned_20_joints.json", "am_left_knee_bent_30_joints.json", "am_right_arm_raised_45_joints.json",
+                                 "hard/am_phone_call_joints.json", "hard/am_seated_joints.json", "hard/am_walking_stride_joints.json"}) {
+    const Pose pose = readPose(test::assetPath("poses/" + name));
+    const auto fault = bonesThroughEachOther(s, posedJoints(s, pose.joints, name), pose.joints, 2.0);
+    EXPECT_FALSE(fault) << name << ": " << *fault;
+  }
+  // Legs straight, the right hip adducted 20 degrees: the thighs pass
+  // through each other by about a seventh of a thigh's bones.
+  const Pose crossed = parsePose(R"({"joints": {"right_hip": {"abduction": -20}}})", "crossed.json");
+  const auto fault = bonesThroughEachOther(s, posedJoints(s, crossed.joints, "crossed.json"), crossed.joints, 2.0);
+  ASSERT_TRUE(fault);
+  std::cout << *fault << "\n";
+  EXPECT_EQ(fault->rfind("the bones of the right_thigh and the left_thigh pass through each other", 0), 0u) << *fault;
 }
 
 TEST(JointPose, RoundTrip) {

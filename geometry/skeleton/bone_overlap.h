@@ -1,0 +1,44 @@
+#pragma once
+// Bones pressed through each other by a pose: every bone voxel of a part,
+// moved by its part's rigid motion, is looked up in the bones of every other
+// part moved by theirs. Rigid bones cannot share space, and no deformation of
+// the tissue between them can make room, so a pose whose bones overlap is
+// physically wrong.
+//
+// At a ball joint (shoulder, hip: a joint with a fitted sphere) the head
+// turns in its socket, and at the grid's resolution the two staircased
+// surfaces cross where they meet: voxels of the parent and the child within
+// the sphere's radius plus one voxel (the largest spacing) of the joint's
+// centre are the articular surfaces and are not counted between those two
+// parts. Everywhere else, and between parts that do not share a joint, every
+// overlapping voxel counts.
+
+#include "geometry/skeleton/body_parts.h"
+#include "geometry/skeleton/joints.h"
+
+#include <Eigen/Geometry>
+#include <span>
+#include <vector>
+
+namespace vox::skeleton {
+
+struct BoneOverlap {
+  Part first = Part::None, second = Part::None;  // first < second
+  // The larger of the two counts: first's bone voxels landing in second's
+  // bones, and second's in first's.
+  std::size_t voxels = 0;
+  double volumeMm3 = 0.0;
+  Part smaller = Part::None;  // the one of the two with fewer bone voxels
+  double fractionOfSmaller = 0.0;  // voxels over smaller's bone voxels
+};
+
+// The bones' overlaps under `motions` (indexed by Part, grid frame mm; the
+// identity for a part at rest), one entry per pair of parts that overlap,
+// the largest fraction first. Parts with the same motion are not compared
+// (their bones are apart at rest, as every voxel has one part).
+std::vector<BoneOverlap> boneOverlaps(const BodyParts& parts, std::span<const Joint> joints, std::span<const Eigen::Isometry3d> motions);
+
+// The parts that move with `part` (it and every part below it in the tree).
+std::vector<Part> partSubtree(Part part);
+
+}  // namespace vox::skeleton
