@@ -278,11 +278,13 @@ std::string clearedOver(const JointKind& kind) {
   return out;
 }
 
-// The hinge's centre moved across its flexion axis to where the child's bone
-// end turns clear of the parent's bone over the flexion range, the nearest
-// such place to the estimate (the parent bone's distal end, which lies on its
-// shaft, while the trochlea and the femoral condyles turn about a centre in
-// front of the humeral shaft and behind the femoral one). Searched within an
+// The joint's centre moved across its flexion axis to where the child's bone
+// end turns clear of the parent's bone over the joint's whole range, every 10
+// degrees of each degree of freedom it has, the nearest such place to the
+// estimate (the parent bone's end, which lies on its shaft, while the
+// trochlea and the femoral condyles turn about a centre in front of the
+// humeral shaft and behind the femoral one; the cervical spine's ends, about
+// which a single pivot turns the vertebrae into their neighbours). Searched within an
 // eighth of the parent bone's length, on a grid of two finest voxels, then of
 // half a voxel about the best; the fewest overlaps win, then the nearest to
 // the estimate; a move under a finest voxel is not made. Returns the
@@ -308,11 +310,10 @@ double clearHinge(Joint& joint, const GridGeometry& g, const BoneVoxels& parent,
   std::vector<Eigen::Matrix3d> turns;
   for (const Dof dof : {Dof::Flexion, Dof::Abduction, Dof::Rotation}) {
     const std::array<double, 2>& r = joint.kind().range[std::size_t(dof)];
-    for (double degrees = 10.0 * std::ceil(r[0] / 10.0); degrees <= r[1]; degrees += 10.0) {
-      if (degrees == 0.0) continue;
+    for (double degrees = r[0]; degrees < r[1] + 10.0; degrees += 10.0) {
       std::array<double, kDofCount> angles{};
-      angles[std::size_t(dof)] = degrees;
-      turns.push_back(joint.rotation(angles));
+      angles[std::size_t(dof)] = std::min(degrees, r[1]);  // the range's ends too
+      if (angles[std::size_t(dof)] != 0.0) turns.push_back(joint.rotation(angles));
     }
   }
   const VoxelBitmap parentBits(g, parent.voxels);

@@ -24,6 +24,12 @@
 //    6 %; the ankle's axis is the malleoli's widest direction as above, the
 //    wrist's the body's left-right axis.
 //  - neck, head: the centroids of the cervical spine's lower and upper 15 %.
+// Every joint but the shoulders and hips is then moved across its flexion
+// axis, within an eighth of the parent bone's length, to the nearest place
+// where the child's bone end (the forearm bones, tibiae, hand and foot
+// bones, the cervical spine against the thoracic, the cranium against the
+// cervical spine) turns clear of the parent's bone over the joint's range,
+// every 10 degrees of each degree of freedom ("..., cleared over flexion").
 // Each joint's long axis points from its centre to the next joint down the
 // chain (or the child bone's centroid). The flexion axis is the hinge found
 // on the bone end (made perpendicular to the bone, pointing to the body's

@@ -150,7 +150,7 @@ TEST(Joints, SkeletonFigureJointsWhereTheyWereBuilt) {
 }
 
 // Each joint turned alone through its range, every 10 degrees of each of
-// its degrees of freedom: the largest overlap of its own two parts' bones
+// its degrees of freedom from the range's start, and its end: the largest overlap of its own two parts' bones
 // (bone_overlap.h; a share of the smaller part's bones, %), which a pose
 // refuses above 2 % (JointPoseOptions::maxBoneOverlapPercent). Where the
 // trunk itself is in the way the shoulders' abduction is left out: past 160
@@ -163,7 +163,8 @@ void expectJointsTurnClear(const Skeleton& s, const std::string& phantom) {
     for (int d = 0; d < kDofCount; ++d) {
       if (!k.dofNames[std::size_t(d)]) continue;
       double worst = 0.0, at = 0.0, adducted = 0.0;
-      for (double deg = 10.0 * std::ceil(k.range[std::size_t(d)][0] / 10.0); deg <= k.range[std::size_t(d)][1]; deg += 10.0) {
+      for (double step = k.range[std::size_t(d)][0]; step < k.range[std::size_t(d)][1] + 10.0; step += 10.0) {
+        const double deg = std::min(step, k.range[std::size_t(d)][1]);  // the range's ends too
         if (deg == 0.0) continue;
         std::array<double, kDofCount> angles{};
         angles[std::size_t(d)] = deg;
