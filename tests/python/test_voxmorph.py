@@ -219,6 +219,8 @@ def test_deform_of_a_grid_in_memory_writes_no_scratch_file(figure, tmp_path, mon
         posed, report = voxmorph.deform(owned, pose, **common)
         again, report_again = voxmorph.deform(borrowed, figure["pose"], output=str(out / "posed.nii.gz"), **common)
         streamed, _ = voxmorph.deform(borrowed, pose, organs=figure["organs"], cpu=True, force=True)
+        # Out of core: the source read slab by slab from memory.
+        windowed, _ = voxmorph.deform(borrowed, pose, organs=figure["organs"], cpu=True, force=True, max_memory=256)
     finally:
         running.clear()
         watcher.join()
@@ -242,6 +244,7 @@ def test_deform_of_a_grid_in_memory_writes_no_scratch_file(figure, tmp_path, mon
     # Streamed slab by slab into memory (no volume correction) as from the file.
     from_file, by_path = voxmorph.deform(figure["grid"], pose, organs=figure["organs"], cpu=True, force=True)
     np.testing.assert_array_equal(streamed.labels, from_file.labels)
+    np.testing.assert_array_equal(windowed.labels, from_file.labels)
     roles = {d["role"]: d for d in by_path["provenance"]["inputs"]}
     assert set(roles) == {"grid", "organs", "pose"}
     assert roles["grid"]["sha256"] == hashlib.sha256(open(figure["grid"], "rb").read()).hexdigest()

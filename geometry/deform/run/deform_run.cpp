@@ -59,10 +59,14 @@ Source openSource(const DeformGridRequest& o) {
     // the transfer mesh and its coordinates.
     const std::int64_t budget = o.maxMemoryMb << 20;
     const std::int64_t maxWorking = std::min(kDefaultWorkingVoxels, budget / 2 / kPreprocessBytesPerVoxel);
-    const std::string temp =
-        o.output.empty() ? std::filesystem::temp_directory_path().string() : std::filesystem::path(o.output).parent_path().string();
+    // A compressed file is spooled to an unlinked temporary beside the
+    // output, or without one in the system's temporary folder.
+    const bool seekable = o.inputGrid || gridSlicesSeekable(o.input);
+    const std::string temp = seekable             ? std::string()
+                             : o.output.empty() ? std::filesystem::temp_directory_path().string()
+                                                : std::filesystem::path(o.output).parent_path().string();
     std::unique_ptr<GridSliceReader> reader = o.inputGrid ? std::make_unique<LabelGridSlices>(*o.inputGrid) : openGridSlices(o.input);
-    s.outOfCore = std::make_unique<OutOfCoreSource>(std::move(reader), o.input, o.inputGrid || gridSlicesSeekable(o.input), maxWorking, temp);
+    s.outOfCore = std::make_unique<OutOfCoreSource>(std::move(reader), o.input, seekable, maxWorking, temp);
     s.factor = s.outOfCore->downsampleFactor();
     return s;
   }
