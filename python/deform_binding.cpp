@@ -273,7 +273,10 @@ rigid_bones, articulated, force, max_body_change, max_bone_change, allow_growth,
     as the CLI's --rigid-bones, --articulated, --force, --max-body-change (%), --max-bone-change (%),
     --allow-growth and --max-memory (MB; 0: in core).
 
-The report dict is the CLI's JSON report (--report). Bad input raises ValueError (or
+The report dict is the CLI's JSON report (--report); its provenance lists the inputs given
+as paths (and a pose dict's JSON text) with their SHA-256, while a Grid in memory, which has
+no file, is named by the report's "input" alone. The grid is read where it lies and the
+posed grid comes back from memory: no scratch file is written. Bad input raises ValueError (or
 OSError for unreadable files) with the CLI's one-line message; a physically wrong
 result is refused with ValueError unless force=True. The GIL is released during the
 work and Ctrl-C interrupts it.)doc");

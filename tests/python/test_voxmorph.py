@@ -6,6 +6,7 @@ import hashlib
 import json
 import os
 import threading
+import time
 
 import meshio
 import nibabel as nib
@@ -211,6 +212,7 @@ def test_deform_of_a_grid_in_memory_writes_no_scratch_file(figure, tmp_path, mon
     def watch():
         while running.is_set():
             seen.update(os.listdir(out))
+            time.sleep(0.001)
 
     running.set()
     watcher = threading.Thread(target=watch)
@@ -218,19 +220,22 @@ def test_deform_of_a_grid_in_memory_writes_no_scratch_file(figure, tmp_path, mon
     try:
         posed, report = voxmorph.deform(owned, pose, **common)
         again, report_again = voxmorph.deform(borrowed, figure["pose"], output=str(out / "posed.nii.gz"), **common)
-        streamed, _ = voxmorph.deform(borrowed, pose, organs=figure["organs"], cpu=True, force=True)
+        streamed, _ = voxmorph.deform(borrowed, pose, organs=figure["organs"], cpu=True, force=True,
+                                      output=str(out / "streamed.nii"))
         # Out of core: the source read slab by slab from memory.
         windowed, _ = voxmorph.deform(borrowed, pose, organs=figure["organs"], cpu=True, force=True, max_memory=256)
     finally:
         running.clear()
         watcher.join()
     assert not (tmp_path / "absent").exists()
-    assert os.listdir(out) == ["posed.nii.gz"]
-    assert all(n == "posed.nii.gz" or (n.startswith(f".tmp-{os.getpid()}-") and n.endswith(".posed.nii.gz")) for n in seen), seen
+    assert sorted(os.listdir(out)) == ["posed.nii.gz", "streamed.nii"]
+    assert all(n in ("posed.nii.gz", "streamed.nii") or
+               (n.startswith(f".tmp-{os.getpid()}-") and n.endswith((".posed.nii.gz", ".streamed.nii"))) for n in seen), seen
     # The same posed grid whether the Grid owns its labels or borrows numpy's, and its file
     # is what the module returns.
     np.testing.assert_array_equal(posed.labels, again.labels)
     np.testing.assert_array_equal(voxmorph.Grid.read(str(out / "posed.nii.gz")).labels, again.labels)
+    np.testing.assert_array_equal(voxmorph.Grid.read(str(out / "streamed.nii")).labels, streamed.labels)
     # Provenance: the files given as paths by their digests, a pose dict by its text's; a
     # Grid in memory has no file, only its name in "input".
     assert report["input"] == figure["grid"] and report_again["input"] == "grid"
