@@ -11,6 +11,7 @@
 #include "geometry/deform/run/deform_run.h"
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
+#include "geometry/io/input_provenance.h"
 #include "geometry/io/output_path.h"
 #include "geometry/raster/raster_engines.h"
 #include "geometry/skeleton/skeleton.h"
@@ -20,33 +21,12 @@
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
 
-#include <cstdlib>
-#include <filesystem>
 #include <memory>
 #include <vector>
 
 namespace vox::python {
 
 namespace {
-
-// A directory of the run's own files, removed with everything in it.
-class ScratchDirectory {
-public:
-  explicit ScratchDirectory(const std::string& near) {
-    std::string pattern = (std::filesystem::temp_directory_path() / "voxmorph-XXXXXX").string();
-    if (!near.empty()) pattern = (std::filesystem::absolute(near).parent_path() / ".voxmorph-XXXXXX").string();
-    if (!::mkdtemp(pattern.data())) throw RuntimeFailure(pattern + ": cannot create a scratch directory");
-    path_ = pattern;
-  }
-  ~ScratchDirectory() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  std::string file(const std::string& name) const { return (path_ / name).string(); }
-
-private:
-  std::filesystem::path path_;
-};
 
 // Warnings the run gives, shown as Python warnings once it returns.
 struct Warnings {
@@ -72,6 +52,29 @@ DeformGridRequest::VolumeTarget volumeTarget(const py::object& preserve, bool& o
   return target == "rest" ? DeformGridRequest::VolumeTarget::Rest : DeformGridRequest::VolumeTarget::Deformed;
 }
 
+// A path argument (str or os.PathLike) as text; "" for anything else.
+std::string pathArgument(const py::object& argument) {
+  const bool path = py::isinstance<py::str>(argument) || py::hasattr(argument, "__fspath__");
+  return path ? py::str(py::module_::import("os").attr("fspath")(argument)).cast<std::string>() : std::string();
+}
+
+// The report's provenance for a call from Python: the process's command
+// line (the interpreter and sys.argv), the working directory, and the
+// digests of the inputs given as files (grid, organ table, pose) or as text
+// (a pose dict, by its JSON text). A Grid in memory has no file to digest:
+// the report's "input" names it (the file it was read from, or "grid").
+Provenance deformProvenance(const py::object& grid, const py::object& organs, const py::object& pose) {
+  const py::module_ sys = py::module_::import("sys");
+  std::vector<std::string> words{py::str(sys.attr("executable")).cast<std::string>()};
+  for (const py::handle a : py::list(py::getattr(sys, "argv", py::list()))) words.push_back(py::str(a).cast<std::string>());
+  std::vector<const char*> argv;
+  for (const std::string& w : words) argv.push_back(w.c_str());
+  Provenance p = makeProvenance(shellCommandLine(int(argv.size()), argv.data()),
+                                {{"grid", pathArgument(grid)}, {"organs", pathArgument(organs)}, {"pose", pathArgument(pose)}});
+  if (py::isinstance<py::dict>(pose)) addTextInput(p, "pose", "pose (dict)", py::module_::import("json").attr("dumps")(pose).cast<std::string>());
+  return p;
+}
+
 py::tuple deform(const py::object& gridArgument, const py::object& pose, const py::object& organsArgument, const py::object& preserveVolumes,
                  const py::object& prepared, const std::string& output, bool cpu, int samples, bool rigidBones, bool articulated, bool force,
                  double maxBodyChange, double maxBoneChange, bool allowGrowth, std::int64_t maxMemoryMb) {
@@ -94,34 +97,32 @@ py::tuple deform(const py::object& gridArgument, const py::object& pose, const p
   request.maxMemoryMb = maxMemoryMb;
   checkOutputPath(output, OutputKind::Grid, "output");
 
-  // The run reads and writes files, as `voxmorph deform` does: a Grid goes
-  // to an uncompressed NIfTI in a scratch directory (beside the output, so
-  // that the output's rename stays on one file system).
-  const ScratchDirectory scratch(output);
-  std::string gridName;
+  // The CLI's run on the Grid in memory (read in place, kept alive by the
+  // argument), or on the grid file it reads as the CLI does; G' comes back
+  // in memory, and is also written to `output` when given.
+  GridHandle held;
   if (py::isinstance<Grid>(gridArgument)) {
-    const Grid& g = gridArgument.cast<const Grid&>();
-    request.input = scratch.file("source.nii");
-    gridName = g.source;
-    runInterruptible([&] { writeGrid(request.input, g.grid); });
+    held = gridArgument.cast<GridHandle>();
+    request.inputGrid = &held->grid;
+    request.input = held->source;
   } else {
-    request.input = gridName = py::str(gridArgument).cast<std::string>();
+    request.input = py::str(gridArgument).cast<std::string>();
   }
-  request.output = output.empty() ? scratch.file("posed.nii") : output;
-  const GridGeometry frame = openGridSlices(request.input)->geometry();
+  request.output = output;
+  LabelGrid posed;
+  request.posedGrid = &posed;
+  const GridGeometry frame = held ? held->grid.geometry() : openGridSlices(request.input)->geometry();
   PoseArgument p = poseArgument(pose, frame);
   request.pose = std::move(p.pose);
   request.poseSource = p.source;
+  request.provenance = deformProvenance(gridArgument, organsArgument, pose);
   Warnings warnings;
   request.warn = warnings.sink();
   checkDeformGridRequest(request);
 
-  auto [posed, report] = interruptible([&] {
+  DeformationReport report = interruptible([&] {
     const std::unique_ptr<RasterEngines> engines = gpu::makeRasterEngines(cpu, request.warn);
-    DeformationReport r = deformGrid(request, *engines);
-    r.input = gridName;
-    if (output.empty()) r.output = "";
-    return std::make_pair(readGrid(request.output), std::move(r));
+    return deformGrid(request, *engines);
   });
   warnings.emit();
   for (const std::string& w : deformationWarnings(report)) PyErr_WarnEx(PyExc_RuntimeWarning, w.c_str(), 1);
@@ -272,7 +273,10 @@ rigid_bones, articulated, force, max_body_change, max_bone_change, allow_growth,
     as the CLI's --rigid-bones, --articulated, --force, --max-body-change (%), --max-bone-change (%),
     --allow-growth and --max-memory (MB; 0: in core).
 
-The report dict is the CLI's JSON report (--report). Bad input raises ValueError (or
+The report dict is the CLI's JSON report (--report); its provenance lists the inputs given
+as paths (and a pose dict's JSON text) with their SHA-256, while a Grid in memory, which has
+no file, is named by the report's "input" alone. The grid is read where it lies and the
+posed grid comes back from memory: no scratch file is written. Bad input raises ValueError (or
 OSError for unreadable files) with the CLI's one-line message; a physically wrong
 result is refused with ValueError unless force=True. The GIL is released during the
 work and Ctrl-C interrupts it.)doc");

@@ -64,26 +64,31 @@ Eigen::Matrix3d flipLpsRas(const Eigen::Matrix3d& direction) {
   return d;
 }
 
+void checkSamplesFit(const std::string& source, const GridGeometry& geometry, VoxelType type, const ByteReader& data,
+                     std::uint64_t dataOffset) {
+  const std::int64_t needed = geometry.voxelCount() * voxelTypeSize(type);
+  const std::int64_t size = data.size();
+  if (size >= 0 && (std::uint64_t(size) < dataOffset || std::uint64_t(size) - dataOffset < std::uint64_t(needed))) {
+    const std::int64_t present = std::uint64_t(size) > dataOffset ? size - std::int64_t(dataOffset) : 0;
+    throw InputError(source, "voxel data is truncated: " + std::to_string(geometry.dims[0]) + " x " +
+                                 std::to_string(geometry.dims[1]) + " x " + std::to_string(geometry.dims[2]) + " " +
+                                 voxelTypeName(type) + " samples need " + std::to_string(needed) + " bytes from offset " +
+                                 std::to_string(dataOffset) + ", the file holds " + std::to_string(present));
+  }
+  const std::int64_t bound = data.maxSize();
+  if (size < 0 && (std::uint64_t(bound) < dataOffset || std::uint64_t(bound) - dataOffset < std::uint64_t(needed)))
+    throw InputError(source, "voxel data is truncated: " + std::to_string(geometry.dims[0]) + " x " +
+                                 std::to_string(geometry.dims[1]) + " x " + std::to_string(geometry.dims[2]) + " " +
+                                 voxelTypeName(type) + " samples need " + std::to_string(needed) +
+                                 " bytes, the compressed data can decode to at most " + std::to_string(bound) +
+                                 " (deflate's largest ratio is 1032:1)");
+}
+
 StreamSliceReader::StreamSliceReader(std::string source, const GridGeometry& geometry, const VoxelEncoding& encoding,
                                      std::unique_ptr<ByteReader> data, std::uint64_t dataOffset)
     : source_(std::move(source)), geometry_(geometry), encoding_(encoding), data_(std::move(data)), dataOffset_(dataOffset) {
   geometry_.validate(source_);
-  const std::int64_t needed = geometry_.voxelCount() * voxelTypeSize(encoding_.type);
-  const std::int64_t size = data_->size();
-  if (size >= 0 && (std::uint64_t(size) < dataOffset_ || std::uint64_t(size) - dataOffset_ < std::uint64_t(needed))) {
-    const std::int64_t present = std::uint64_t(size) > dataOffset_ ? size - std::int64_t(dataOffset_) : 0;
-    throw InputError(source_, "voxel data is truncated: " + std::to_string(geometry_.dims[0]) + " x " +
-                                  std::to_string(geometry_.dims[1]) + " x " + std::to_string(geometry_.dims[2]) + " " +
-                                  voxelTypeName(encoding_.type) + " samples need " + std::to_string(needed) + " bytes from offset " +
-                                  std::to_string(dataOffset_) + ", the file holds " + std::to_string(present));
-  }
-  const std::int64_t bound = data_->maxSize();
-  if (size < 0 && (std::uint64_t(bound) < dataOffset_ || std::uint64_t(bound) - dataOffset_ < std::uint64_t(needed)))
-    throw InputError(source_, "voxel data is truncated: " + std::to_string(geometry_.dims[0]) + " x " +
-                                  std::to_string(geometry_.dims[1]) + " x " + std::to_string(geometry_.dims[2]) + " " +
-                                  voxelTypeName(encoding_.type) + " samples need " + std::to_string(needed) +
-                                  " bytes, the compressed data can decode to at most " + std::to_string(bound) +
-                                  " (deflate's largest ratio is 1032:1)");
+  checkSamplesFit(source_, geometry_, encoding_.type, *data_, dataOffset_);
   data_->seek(dataOffset_);
 }
 

@@ -36,6 +36,13 @@ GridGeometry geometryFromAffine(const std::string& source, const Index3& dims, c
 // (the grid-frame origin and spacing do not change).
 Eigen::Matrix3d flipLpsRas(const Eigen::Matrix3d& direction);
 
+// Throws InputError(source, "voxel data is truncated: ...") unless `data`
+// can hold the samples of `geometry` from byte `dataOffset` on: a plain
+// file's size, a compressed stream's maxSize(). Call before the samples are
+// allocated.
+void checkSamplesFit(const std::string& source, const GridGeometry& geometry, VoxelType type, const ByteReader& data,
+                     std::uint64_t dataOffset);
+
 // Reads samples from `data`, where voxel 0 starts at byte `dataOffset`, and
 // converts them to labels. For plain files the length is checked up front.
 class StreamSliceReader final : public GridSliceReader {

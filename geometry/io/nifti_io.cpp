@@ -14,6 +14,7 @@
 #include "geometry/error.h"
 #include "geometry/atomic_file.h"
 #include "geometry/io/grid_stream.h"
+#include "geometry/io/nifti_header.h"
 
 #include <bit>
 #include <cerrno>
@@ -33,8 +34,6 @@ namespace {
 static_assert(sizeof(nifti_1_header) == 348, "NIfTI-1 header layout");
 // Headers are written in native order and samples in little-endian order.
 static_assert(std::endian::native == std::endian::little, "NIfTI writer assumes a little-endian host");
-
-constexpr std::uint64_t kNiftiDataOffset = 352;  // 348-byte header + 4-byte extension flag
 
 // niftilib reports problems on stderr at its default debug level; errors here
 // are reported once, as exceptions.
@@ -140,15 +139,11 @@ std::string floatText(double v) {
   return buf;
 }
 
-struct NiftiLayout {
-  GridGeometry geometry;
-  VoxelEncoding encoding;
-  std::uint64_t dataOffset = kNiftiDataOffset;
-};
+}  // namespace
 
 // Everything is checked here, in the order a reader depends on it, before
 // the caller allocates anything from the header.
-NiftiLayout parseNiftiHeader(const std::string& path, ByteReader& in) {
+NiftiLayout parseNiftiHeader(const std::string& path, ByteReader& in, const NiftiContent& content) {
   nifti_1_header h;
   std::memset(&h, 0, sizeof(h));
   const std::size_t got = in.read(&h, sizeof(h));
@@ -172,7 +167,7 @@ NiftiLayout parseNiftiHeader(const std::string& path, ByteReader& in) {
 
   const int rank = h.dim[0];
   if (rank < 3 || rank > 7)
-    throw InputError(path, "dim[0] is " + std::to_string(rank) + ": a label grid needs 3 dimensions");
+    throw InputError(path, "dim[0] is " + std::to_string(rank) + ": a " + content.grid + " needs 3 dimensions");
   for (int d = 4; d <= rank; ++d)
     if (h.dim[d] != 1)
       throw InputError(path, "dim[" + std::to_string(d) + "] is " + std::to_string(h.dim[d]) +
@@ -184,7 +179,7 @@ NiftiLayout parseNiftiHeader(const std::string& path, ByteReader& in) {
   if (!niftiVoxelType(h.datatype, layout.encoding.type)) {
     if (!nifti_datatype_is_valid(h.datatype, 1)) throw InputError(path, "datatype " + std::to_string(h.datatype) + " is not a NIfTI-1 type");
     throw InputError(path, "datatype " + std::to_string(h.datatype) + " (" + nifti_datatype_string(h.datatype) +
-                               ") is not supported for labels (expected an integer or float type)");
+                               ") is not supported for " + content.values + " (expected an integer or float type)");
   }
   layout.encoding.bigEndian = swapped ? std::endian::native == std::endian::little : std::endian::native == std::endian::big;
 
@@ -234,6 +229,13 @@ NiftiLayout parseNiftiHeader(const std::string& path, ByteReader& in) {
   layout.geometry = geometryFromAffine(path, dims, linear, translation);
   return layout;
 }
+
+std::unique_ptr<ByteReader> openNiftiBytes(const std::string& path) {
+  quietNiftilib();
+  return std::make_unique<ZnzReader>(path, isGzipFile(path));
+}
+
+namespace {
 
 class ZnzWriter final : public ByteWriter {
 public:
@@ -319,9 +321,8 @@ private:
 }  // namespace
 
 std::unique_ptr<GridSliceReader> openNiftiSlices(const std::string& path) {
-  quietNiftilib();
-  auto in = std::make_unique<ZnzReader>(path, isGzipFile(path));
-  const NiftiLayout layout = parseNiftiHeader(path, *in);
+  std::unique_ptr<ByteReader> in = openNiftiBytes(path);
+  const NiftiLayout layout = parseNiftiHeader(path, *in, kNiftiLabels);
   return std::make_unique<StreamSliceReader>(path, layout.geometry, layout.encoding, std::move(in), layout.dataOffset);
 }
 

@@ -10,7 +10,9 @@
 namespace vox {
 
 // Throws InputError(path, ...) for a file that is not a readable 3-D NIfTI-1
-// grid, or whose voxel bytes the file cannot hold.
+// grid (the label grid reader's header check, nifti_header.h, with its
+// messages), or whose voxel bytes the file cannot hold. Values beyond
+// float's range come back infinite, for the caller's checks.
 ScalarGrid readSizingGrid(const std::string& path);
 
 }  // namespace vox

@@ -72,6 +72,16 @@ void decodeReals(const std::string& source, const GridGeometry& g, const VoxelEn
 }
 
 template <class T>
+void decodeRealValues(const VoxelEncoding& encoding, const char* raw, std::int64_t count, float* out) {
+  constexpr double kMaxFloat = double(std::numeric_limits<float>::max());
+  for (std::int64_t n = 0; n < count; ++n) {
+    const double v = double(loadSample<T>(raw + n * std::int64_t(sizeof(T)))) * encoding.slope + encoding.intercept;
+    constexpr float kInfinity = std::numeric_limits<float>::infinity();
+    out[n] = std::abs(v) > kMaxFloat ? (v > 0.0 ? kInfinity : -kInfinity) : float(v);
+  }
+}
+
+template <class T>
 void decodeAs(const std::string& source, const GridGeometry& g, const VoxelEncoding& encoding, const char* raw,
               std::int64_t count, std::int64_t firstVoxel, Label* out) {
   if constexpr (std::is_integral_v<T>) {
@@ -129,6 +139,23 @@ void decodeLabels(const std::string& source, const GridGeometry& g, const VoxelE
     case VoxelType::Int64: return decodeAs<std::int64_t>(source, g, encoding, raw, count, firstVoxel, out);
     case VoxelType::Float32: return decodeAs<float>(source, g, encoding, raw, count, firstVoxel, out);
     case VoxelType::Float64: return decodeAs<double>(source, g, encoding, raw, count, firstVoxel, out);
+  }
+}
+
+void decodeValues(const VoxelEncoding& encoding, char* raw, std::int64_t count, float* out) {
+  const int size = voxelTypeSize(encoding.type);
+  if (size > 1 && encoding.bigEndian != (std::endian::native == std::endian::big)) swapBytes(raw, count, size);
+  switch (encoding.type) {
+    case VoxelType::UInt8: return decodeRealValues<std::uint8_t>(encoding, raw, count, out);
+    case VoxelType::Int8: return decodeRealValues<std::int8_t>(encoding, raw, count, out);
+    case VoxelType::UInt16: return decodeRealValues<std::uint16_t>(encoding, raw, count, out);
+    case VoxelType::Int16: return decodeRealValues<std::int16_t>(encoding, raw, count, out);
+    case VoxelType::UInt32: return decodeRealValues<std::uint32_t>(encoding, raw, count, out);
+    case VoxelType::Int32: return decodeRealValues<std::int32_t>(encoding, raw, count, out);
+    case VoxelType::UInt64: return decodeRealValues<std::uint64_t>(encoding, raw, count, out);
+    case VoxelType::Int64: return decodeRealValues<std::int64_t>(encoding, raw, count, out);
+    case VoxelType::Float32: return decodeRealValues<float>(encoding, raw, count, out);
+    case VoxelType::Float64: return decodeRealValues<double>(encoding, raw, count, out);
   }
 }
 

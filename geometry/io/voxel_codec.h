@@ -34,6 +34,12 @@ struct VoxelEncoding {
 void decodeLabels(const std::string& source, const GridGeometry& g, const VoxelEncoding& encoding, char* raw,
                   std::int64_t count, std::int64_t firstVoxel, Label* out);
 
+// Converts `count` samples in file byte order (byte-swapped in place when
+// needed) into real values slope * sample + intercept. A value beyond
+// float's range becomes an infinity of its sign (for the caller's checks to
+// refuse), NaN stays NaN.
+void decodeValues(const VoxelEncoding& encoding, char* raw, std::int64_t count, float* out);
+
 // The type writers store: UInt8 when every label fits, UInt16 otherwise.
 VoxelType storedLabelType(Label maxLabel);
 

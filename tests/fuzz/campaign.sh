@@ -30,7 +30,7 @@ ticks=$(getconf CLK_TCK)
 
 budget() {
   case "$1" in
-    nifti | metaimage | nrrd | inr | medit | meshb | vtu | gmsh) echo $((long * 60)) ;;
+    nifti | sizing_grid | metaimage | nrrd | inr | medit | meshb | vtu | gmsh) echo $((long * 60)) ;;
     *) echo $((short * 60)) ;;
   esac
 }

@@ -8,7 +8,7 @@ cd "$(dirname "$0")"
 bin=$(realpath "${1:-../../build/release/voxmorph}")
 out=corpus
 rm -rf "$out"
-mkdir -p "$out"/{nifti,metaimage,nrrd,inr,medit,meshb,vtu,gmsh,obj,off,ply,pose,organs,remesh,mesh,parts,viewer_script,prepared}
+mkdir -p "$out"/{nifti,sizing_grid,metaimage,nrrd,inr,medit,meshb,vtu,gmsh,obj,off,ply,pose,organs,remesh,mesh,parts,viewer_script,prepared}
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 
@@ -18,6 +18,27 @@ head -c 2000 ../../assets/icrp110_am_organs.dat > "$out/organs/am_head.dat"
 "$bin" synth spheres --size 8 -o "$tmp/s.nii.gz" >/dev/null
 cp "$tmp/g.nii" "$out/nifti/stick.nii"
 cp "$tmp/s.nii.gz" "$out/nifti/spheres.nii.gz"
+# Sizing grids (mm values, fuzz_sizing_grid): float32 in a mirrored sform,
+# int16 scaled by scl_slope / scl_inter in a qform (gzip), uint8 in pixdim
+# only; and a label grid, which is one too.
+/usr/bin/python3 - "$out/sizing_grid" <<'PY'
+import sys, nibabel as nib, numpy as np
+out = sys.argv[1]
+ramp = np.linspace(1.5, 6.0, 60, dtype=np.float32).reshape((5, 4, 3), order="F")
+img = nib.Nifti1Image(ramp, np.diag([-4.0, 4.0, 4.0, 1.0]) + np.array([[0, 0, 0, 18], [0] * 4, [0] * 4, [0] * 4]))
+img.to_filename(out + "/float32_sform.nii")
+img = nib.Nifti1Image(np.arange(24, dtype=np.int16).reshape((4, 3, 2), order="F"), None)
+img.set_qform(np.diag([2.0, 2.0, 3.0, 1.0]), code=1)
+img.set_sform(None, code=0)
+img.header.set_slope_inter(0.25, 1.0)
+img.to_filename(out + "/int16_scaled_qform.nii.gz")
+img = nib.Nifti1Image(np.full((3, 3, 3), 2, np.uint8), None)
+img.header.set_zooms((10, 10, 10))
+img.set_qform(None, code=0)
+img.set_sform(None, code=0)
+img.to_filename(out + "/uint8_pixdim.nii")
+PY
+cp "$tmp/g.nii" "$out/sizing_grid/stick_labels.nii"
 for f in stick.mha stick.mhd; do "$bin" synth stick --size 8 -o "$tmp/$f" >/dev/null; done
 cp "$tmp/stick.mha" "$out/metaimage/stick.mha"
 /usr/bin/python3 - "$tmp/stick.mhd" "$out/metaimage/stick_raw.mha" <<'PY'

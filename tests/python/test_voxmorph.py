@@ -2,9 +2,11 @@
 without copies, round trips through nibabel and meshio, deform byte for byte as the
 CLI, and bad input raising the CLI's one-line messages."""
 
+import hashlib
 import json
 import os
 import threading
+import time
 
 import meshio
 import nibabel as nib
@@ -188,6 +190,69 @@ def test_deform_takes_a_prepared_state(figure, tmp_path):
     with pytest.raises(ValueError, match="prepared from another grid"):
         voxmorph.deform(str(other), figure["pose"], prepared=state, output=str(tmp_path / "stale.nii.gz"), **common)
     assert not (tmp_path / "stale.nii.gz").exists()
+
+
+def test_deform_of_a_grid_in_memory_writes_no_scratch_file(figure, tmp_path, monkeypatch):
+    # The Grid is read where it lies and the posed grid comes back from memory: nothing is
+    # made in the temporary folder (TMPDIR names a folder that does not exist, so creating
+    # anything there fails) nor beside the output, where only the output and its atomic
+    # temporary appear while the run works.
+    monkeypatch.setenv("TMPDIR", str(tmp_path / "absent"))
+    out = tmp_path / "out"
+    out.mkdir()
+    monkeypatch.chdir(out)
+    owned = voxmorph.Grid.read(figure["grid"])
+    borrowed = voxmorph.Grid(np.array(owned.labels, order="F"), affine=owned.affine)
+    assert not np.shares_memory(borrowed.labels, owned.labels)
+    with open(figure["pose"]) as f:
+        pose = json.load(f)
+    common = dict(organs=voxmorph.OrganTable(figure["organs"]), preserve_volumes=True, cpu=True, force=True)
+    seen, running = set(), threading.Event()
+
+    def watch():
+        while running.is_set():
+            seen.update(os.listdir(out))
+            time.sleep(0.001)
+
+    running.set()
+    watcher = threading.Thread(target=watch)
+    watcher.start()
+    try:
+        posed, report = voxmorph.deform(owned, pose, **common)
+        again, report_again = voxmorph.deform(borrowed, figure["pose"], output=str(out / "posed.nii.gz"), **common)
+        streamed, _ = voxmorph.deform(borrowed, pose, organs=figure["organs"], cpu=True, force=True,
+                                      output=str(out / "streamed.nii"))
+        # Out of core: the source read slab by slab from memory.
+        windowed, _ = voxmorph.deform(borrowed, pose, organs=figure["organs"], cpu=True, force=True, max_memory=256)
+    finally:
+        running.clear()
+        watcher.join()
+    assert not (tmp_path / "absent").exists()
+    assert sorted(os.listdir(out)) == ["posed.nii.gz", "streamed.nii"]
+    assert all(n in ("posed.nii.gz", "streamed.nii") or
+               (n.startswith(f".tmp-{os.getpid()}-") and n.endswith((".posed.nii.gz", ".streamed.nii"))) for n in seen), seen
+    # The same posed grid whether the Grid owns its labels or borrows numpy's, and its file
+    # is what the module returns.
+    np.testing.assert_array_equal(posed.labels, again.labels)
+    np.testing.assert_array_equal(voxmorph.Grid.read(str(out / "posed.nii.gz")).labels, again.labels)
+    np.testing.assert_array_equal(voxmorph.Grid.read(str(out / "streamed.nii")).labels, streamed.labels)
+    # Provenance: the files given as paths by their digests, a pose dict by its text's; a
+    # Grid in memory has no file, only its name in "input".
+    assert report["input"] == figure["grid"] and report_again["input"] == "grid"
+    assert report["output"] == "" and report_again["output"] == str(out / "posed.nii.gz")
+    roles = {d["role"]: d for d in report["provenance"]["inputs"]}
+    assert set(roles) == {"pose"} and roles["pose"]["path"] == "pose (dict)" and len(roles["pose"]["sha256"]) == 64
+    roles = {d["role"]: d for d in report_again["provenance"]["inputs"]}
+    assert set(roles) == {"pose"} and roles["pose"]["path"] == figure["pose"]
+    assert roles["pose"]["sha256"] == hashlib.sha256(open(figure["pose"], "rb").read()).hexdigest()
+    assert report["provenance"]["working_directory"] == str(out)
+    # Streamed slab by slab into memory (no volume correction) as from the file.
+    from_file, by_path = voxmorph.deform(figure["grid"], pose, organs=figure["organs"], cpu=True, force=True)
+    np.testing.assert_array_equal(streamed.labels, from_file.labels)
+    np.testing.assert_array_equal(windowed.labels, from_file.labels)
+    roles = {d["role"]: d for d in by_path["provenance"]["inputs"]}
+    assert set(roles) == {"grid", "organs", "pose"}
+    assert roles["grid"]["sha256"] == hashlib.sha256(open(figure["grid"], "rb").read()).hexdigest()
 
 
 # --- Posing, parts ------------------------------------------------------------------------

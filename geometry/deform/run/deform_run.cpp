@@ -33,17 +33,22 @@ namespace {
 // rasterization buffers under --max-memory.
 constexpr std::int64_t kRasterOverheadBytes = std::int64_t(256) << 20;
 
-// The source: whole in memory, or opened out of core.
+// The source: whole in memory (read, or a view of the caller's grid), or
+// opened out of core.
 struct Source {
   std::optional<LabelGrid> grid;
   std::unique_ptr<OutOfCoreSource> outOfCore;
-  LabelGrid working;  // the pipeline's grid when downsampled (empty otherwise)
+  // The pipeline's grid when downsampled, or a borrowing caller's grid
+  // copied for the pipeline, which reads labels as a vector (empty otherwise).
+  LabelGrid working;
+  const LabelGrid* caller = nullptr;  // request.inputGrid
   int factor = 1;
 
   const GridGeometry& geometry() const { return grid ? grid->geometry() : outOfCore->geometry(); }
   const LabelGrid& workingGrid() const {
     if (outOfCore) return outOfCore->downsampled();
-    return factor > 1 ? working : *grid;
+    if (working.voxelCount() > 0) return working;
+    return caller ? *caller : *grid;
   }
 };
 
@@ -54,16 +59,29 @@ Source openSource(const DeformGridRequest& o) {
     // the transfer mesh and its coordinates.
     const std::int64_t budget = o.maxMemoryMb << 20;
     const std::int64_t maxWorking = std::min(kDefaultWorkingVoxels, budget / 2 / kPreprocessBytesPerVoxel);
-    const std::string temp = std::filesystem::path(o.output).parent_path().string();
-    s.outOfCore = std::make_unique<OutOfCoreSource>(openGridSlices(o.input), o.input, gridSlicesSeekable(o.input), maxWorking, temp);
+    // A compressed file is spooled to an unlinked temporary beside the
+    // output, or without one in the system's temporary folder.
+    const bool seekable = o.inputGrid || gridSlicesSeekable(o.input);
+    const std::string temp = seekable             ? std::string()
+                             : o.output.empty() ? std::filesystem::temp_directory_path().string()
+                                                : std::filesystem::path(o.output).parent_path().string();
+    std::unique_ptr<GridSliceReader> reader = o.inputGrid ? std::make_unique<LabelGridSlices>(*o.inputGrid) : openGridSlices(o.input);
+    s.outOfCore = std::make_unique<OutOfCoreSource>(std::move(reader), o.input, seekable, maxWorking, temp);
     s.factor = s.outOfCore->downsampleFactor();
     return s;
   }
-  s.grid = readGrid(o.input);
+  if (o.inputGrid) {
+    s.grid = LabelGrid(o.inputGrid->geometry(), o.inputGrid->data(), nullptr);
+    s.caller = o.inputGrid;
+  } else {
+    s.grid = readGrid(o.input);
+  }
   s.factor = downsampleFactor(s.grid->geometry(), kDefaultWorkingVoxels);
   if (s.factor > 1) {
     LabelGridSlices slices(*s.grid);
     s.working = downsampleLabels(slices, s.factor);
+  } else if (o.inputGrid && o.inputGrid->borrowed()) {
+    s.working = *o.inputGrid;
   }
   return s;
 }
@@ -71,7 +89,7 @@ Source openSource(const DeformGridRequest& o) {
 // G' held in memory, handed to writePosedGrid slab by slab.
 class HeldGrid : public SlabRasterizer {
 public:
-  explicit HeldGrid(LabelGrid grid) : grid_(std::move(grid)) {}
+  explicit HeldGrid(const LabelGrid& grid) : grid_(grid) {}
   const GridGeometry& outputGeometry() const override { return grid_.geometry(); }
   std::int64_t slabSlices() const override { return 64; }
   void rasterizeSlab(std::int64_t z0, std::int64_t z1, Label* out) override {
@@ -80,7 +98,38 @@ public:
   }
 
 private:
+  const LabelGrid& grid_;
+};
+
+// G' where the request wants it: its file and, with request.posedGrid, in
+// memory, handed over on commit. G' held whole (`whole`, the volume
+// correction's) is handed over as it is, not copied from the slices.
+class PosedGridSink : public GridSliceWriter {
+public:
+  PosedGridSink(const DeformGridRequest& o, const GridGeometry& g, Label maxLabel, LabelGrid* whole)
+      : keep_(o.posedGrid), whole_(whole) {
+    if (!o.output.empty()) file_ = createGridSlices(o.output, g, maxLabel);
+    if (keep_ && !whole_) grid_ = LabelGrid(g);
+  }
+  void writeSlices(const Label* in, std::int64_t count) override {
+    if (keep_ && !whole_) {
+      const std::int64_t n = count * grid_.geometry().sliceVoxels();
+      std::copy(in, in + n, grid_.data() + written_);
+      written_ += n;
+    }
+    if (file_) file_->writeSlices(in, count);
+  }
+  void commit() override {
+    if (file_) file_->commit();
+    if (keep_) *keep_ = whole_ ? std::move(*whole_) : std::move(grid_);
+  }
+
+private:
+  LabelGrid* keep_;
+  LabelGrid* whole_;
+  std::unique_ptr<GridSliceWriter> file_;
   LabelGrid grid_;
+  std::int64_t written_ = 0;
 };
 
 void warn(const DeformGridRequest& o, const std::string& message) {
@@ -335,7 +384,9 @@ PosedMesh poseArticulated(const DeformGridRequest& o, const Source& source, Defo
 }  // namespace
 
 void checkDeformGridRequest(const DeformGridRequest& o) {
-  if (!hasGridExtension(o.output)) throw InputError(o.output, "unknown grid format for the output");
+  if (!(o.posedGrid && o.output.empty()) && !hasGridExtension(o.output)) throw InputError(o.output, "unknown grid format for the output");
+  if (o.inputGrid && !o.prepared.empty())
+    throw UsageError("--prepared", "is checked against the grid file it was made from; a grid in memory has none");
   if (!o.posedCage.empty() && !hasSurfaceExtension(o.posedCage))
     throw InputError(o.posedCage, "unknown surface format for --posed-cage (use .obj, .off or .ply)");
   if (o.preserveVolumes && o.maxMemoryMb > 0)
@@ -362,7 +413,8 @@ void checkDeformGridRequest(const DeformGridRequest& o) {
     requireOrganTable(o.organs.has_value(), OrganTableNeed::Bones, o.poseSource);
     skeleton::requireBones(*o.organs, o.organsSource);
   }
-  if (!o.parts.empty() && openGridSlices(o.parts)->geometry().dims != openGridSlices(o.input)->geometry().dims)
+  if (!o.parts.empty() &&
+      openGridSlices(o.parts)->geometry().dims != (o.inputGrid ? o.inputGrid->dims() : openGridSlices(o.input)->geometry().dims))
     throw InputError(o.parts, "has other dims than the grid " + o.input);
   if (!o.collisionMask.empty() && !skeletal && !(o.organs && skeleton::namesBones(*o.organs)))
     throw InputError(o.collisionMask, "collisions are between body parts: they need an organ table that names the bones (--organs) or --parts");
@@ -402,6 +454,7 @@ DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines)
   const std::vector<Eigen::Vector3d>& deformed = posedMesh.deformed;
   LabelGrid& collisionMask = posedMesh.collisionMask;
   std::optional<TriMesh>& posedCage = posedMesh.posedCage;
+  source.working = LabelGrid();  // the pipeline's grid goes before G'
 
   StageTimer rasterTimer("rasterization");
   std::int64_t rasterBudget = 0;
@@ -416,8 +469,9 @@ DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines)
   PosedGridMeasures after;
   std::unique_ptr<GridSliceWriter> output;  // G', committed once the whole body is measured
   std::vector<double> deformedVolumes;
+  LabelGrid posed;  // G' held whole for the volume correction
   if (o.preserveVolumes) {
-    LabelGrid posed = rasterizeAllSlabs(*engine);
+    posed = rasterizeAllSlabs(*engine);
     report.stages.push_back(rasterTimer.stop());
     StageTimer correctionTimer("volume correction");
     deformedVolumes = deformedLabelVolumes(*source.grid, rest, deformed);
@@ -427,13 +481,13 @@ DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines)
     report.volumeCorrection->toRestVolumes = toRest;
     report.stages.push_back(correctionTimer.stop());
     StageTimer writeTimer("write");
-    HeldGrid held(std::move(posed));
-    output = createGridSlices(o.output, held.outputGeometry(), maxLabel);
+    HeldGrid held(posed);
+    output = std::make_unique<PosedGridSink>(o, held.outputGeometry(), maxLabel, &posed);
     after = writePosedGrid(held, *output, false);
     report.posed = held.outputGeometry();
     report.stages.push_back(writeTimer.stop());
   } else {
-    output = createGridSlices(o.output, engine->outputGeometry(), maxLabel);
+    output = std::make_unique<PosedGridSink>(o, engine->outputGeometry(), maxLabel, nullptr);
     after = writePosedGrid(*engine, *output, false);
     report.posed = engine->outputGeometry();
     report.stages.push_back(rasterTimer.stop());

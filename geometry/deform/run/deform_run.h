@@ -36,8 +36,19 @@ struct PipelineOptions;
 class PreparedState;
 
 struct DeformGridRequest {
-  std::string input;          // label grid file
-  std::string output;         // posed grid file (any grid format in core)
+  std::string input;          // label grid file (with inputGrid: only its name in errors and the report)
+  std::string output;         // posed grid file (any grid format in core); "" with posedGrid: none
+  // The label grid in memory instead of the file `input` (the Python
+  // module's Grid), read in place: the rasterization, the statistics and the
+  // volume correction read its labels where they are; the pipeline reads it
+  // as it is, or, when the grid borrows its labels, a working grid of its
+  // own (the downsampled grid, or a copy when no larger than the working
+  // grid). Must outlive deformGrid. Not with `prepared`, which is checked
+  // against a file.
+  const LabelGrid* inputGrid = nullptr;
+  // Receives G' in memory once it is committed, beside its file or, with
+  // `output` "", instead of it.
+  LabelGrid* posedGrid = nullptr;
   Pose pose;                        // in the grid frame (poseInGridFrame)
   std::string poseSource = "pose";  // names the pose in errors and the report
   std::optional<OrganTable> organs;
