@@ -338,7 +338,7 @@ def test_long_calls_release_the_gil(figure):
 def test_help_explains_every_argument():
     doc = voxmorph.deform.__doc__
     for argument in ("grid", "pose", "organs", "preserve_volumes", "prepared", "output", "cpu", "samples", "rigid_bones", "force",
-                     "max_body_change", "max_bone_change", "allow_growth", "max_memory"):
+                     "max_body_change", "max_bone_change", "max_bone_overlap", "allow_growth", "max_memory"):
         assert f"{argument}:" in doc or f"{argument}," in doc, argument
     for name in ("Grid", "OrganTable", "Posing", "mesh", "remesh", "render", "parts"):
         assert getattr(voxmorph, name).__doc__
@@ -385,5 +385,7 @@ def test_a_bad_pose_is_a_valueerror_with_the_cli_message(figure):
     grid = voxmorph.Grid.read(figure["grid"])
     with pytest.raises(ValueError, match=r"^pose: joint 'right_elbow' flexion 170 is outside its range \[0, 150\] degrees$"):
         voxmorph.deform(grid, {"joints": {"right_elbow": {"flexion": 170}}}, organs=figure["organs"], cpu=True)
+    with pytest.raises(ValueError, match=r"^pose: the bones of the right_\w+ and the left_\w+ pass through each other \(.*with right_hip as posed; nothing written"):
+        voxmorph.deform(grid, {"joints": {"right_hip": {"abduction": -30}}}, organs=figure["organs"], cpu=True)
     with pytest.raises(ValueError, match=r"^pose: a pose with joints or body parts needs the grid's organ table \(--organs\) to find the bones$"):
         voxmorph.Posing(grid, {"joints": {"right_shoulder": {"abduction": 30}}})
