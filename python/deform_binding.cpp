@@ -168,6 +168,7 @@ public:
     d["label_volumes"] = volumes;
     d["inverted_tets"] = f.tmInverted;
     d["vertices_outside_cage"] = f.tmOutsideCage;
+    d["bones_through_each_other"] = f.bonesThroughEachOther ? py::object(py::str(*f.bonesThroughEachOther)) : py::object(py::none());
     d["deform_ms"] = f.deformMs;
     return d;
   }

@@ -96,7 +96,8 @@ class Posing:
     def set_joints(self, joints: dict[str, dict[str, float]]) -> None:
         """Joint angles in degrees, e.g. {'right_shoulder': {'abduction': 60}}."""
     def frame(self) -> dict[str, Any]:
-        """positions (#V x 3 world mm), label_volumes, inverted_tets, vertices_outside_cage, deform_ms."""
+        """positions (#V x 3 world mm), label_volumes, inverted_tets, vertices_outside_cage,
+        bones_through_each_other (what deform refuses the joint pose for, or None), deform_ms."""
     def rasterize(self, samples: int = 1, cpu: bool = False) -> Grid:
         """The posed full-resolution grid of the current pose."""
     @property

@@ -53,6 +53,12 @@ void JointsPanel::draw(Viewer& viewer) {
   }
   scrolledTo_ = editor.state().joint;
   ImGui::EndChild();
+  // What an export of this pose is refused for, while it lasts.
+  if (const auto& fault = editor.figures().bonesThroughEachOther) {
+    ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0f, 0.35f, 0.3f, 1.0f));
+    ImGui::TextWrapped("%s", (*fault + "; an export is refused").c_str());
+    ImGui::PopStyleColor();
+  }
 }
 
 }  // namespace vox::app

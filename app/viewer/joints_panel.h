@@ -4,7 +4,9 @@
 // stated range; clicking a joint's name makes it the gizmo's target (its
 // rings turn it about its axes). A slider's gesture is one undo step. A
 // session not built from the skeleton (not opened with a joint pose) has
-// no joints to turn, and the panel says so.
+// no joints to turn, and the panel says so. Below the list, in red while it
+// lasts: the bones the pose presses through each other, which an export is
+// refused for (PoseFigures::bonesThroughEachOther).
 
 namespace vox::app {
 

@@ -28,34 +28,37 @@ std::vector<Part> partSubtree(Part part) {
   return out;
 }
 
-std::vector<BoneOverlap> boneOverlaps(const BodyParts& parts, std::span<const Joint> joints, std::span<const Eigen::Isometry3d> motions) {
-  const GridGeometry& g = parts.parts.geometry();
+BoneOverlapIndex::BoneOverlapIndex(const BodyParts& parts) : grid_(parts.parts.geometry()) {
+  const GridGeometry& g = grid_;
   const Label* labels = parts.parts.data();
-  std::array<std::vector<std::int64_t>, kPartCount + 1> voxels;
-  std::array<Eigen::AlignedBox3d, kPartCount + 1> boxes;
-  std::vector<std::uint8_t> bonePart(std::size_t(g.voxelCount()), 0);
+  bonePart_.assign(std::size_t(g.voxelCount()), 0);
   for (const BoneVoxels& b : parts.bones)
     for (const std::int64_t v : b.voxels) {
       const Label p = labels[std::size_t(v)];
       if (p == 0 || p > kPartCount) continue;
-      voxels[p].push_back(v);
-      bonePart[std::size_t(v)] = std::uint8_t(p);
       const Index3 c = g.ijk(v);
-      boxes[p].extend(g.voxelCenter(c[0], c[1], c[2]));
+      const Eigen::Vector3d x = g.voxelCenter(c[0], c[1], c[2]);
+      points_[p].push_back(x);
+      bonePart_[std::size_t(v)] = std::uint8_t(p);
+      boxes_[p].extend(x);
     }
+}
+
+std::vector<BoneOverlap> BoneOverlapIndex::under(std::span<const Joint> joints, std::span<const Eigen::Isometry3d> motions) const {
+  const GridGeometry& g = grid_;
   const double slack = g.spacing.maxCoeff();
   // Bone voxels of a landing in b's bones, for each ordered pair.
   std::array<std::array<std::size_t, kPartCount + 1>, kPartCount + 1> landed{};
   for (int a = 1; a <= kPartCount; ++a) {
-    if (voxels[std::size_t(a)].empty() || std::size_t(a) >= motions.size()) continue;
+    if (points_[std::size_t(a)].empty() || std::size_t(a) >= motions.size()) continue;
     for (int b = 1; b <= kPartCount; ++b) {
-      if (a == b || voxels[std::size_t(b)].empty() || std::size_t(b) >= motions.size()) continue;
+      if (a == b || points_[std::size_t(b)].empty() || std::size_t(b) >= motions.size()) continue;
       if (motions[std::size_t(a)].isApprox(motions[std::size_t(b)], 1e-12)) continue;
       // a's bones in b's rest frame.
       const Eigen::Isometry3d t = motions[std::size_t(b)].inverse() * motions[std::size_t(a)];
       Eigen::AlignedBox3d moved;
-      for (int corner = 0; corner < 8; ++corner) moved.extend(t * boxes[std::size_t(a)].corner(Eigen::AlignedBox3d::CornerType(corner)));
-      Eigen::AlignedBox3d target = boxes[std::size_t(b)];
+      for (int corner = 0; corner < 8; ++corner) moved.extend(t * boxes_[std::size_t(a)].corner(Eigen::AlignedBox3d::CornerType(corner)));
+      Eigen::AlignedBox3d target = boxes_[std::size_t(b)];
       target.extend(target.min() - Eigen::Vector3d::Constant(slack)).extend(target.max() + Eigen::Vector3d::Constant(slack));
       if (!moved.intersects(target)) continue;
       // A joint between them with a fitted ball leaves its articular shell
@@ -64,13 +67,11 @@ std::vector<BoneOverlap> boneOverlaps(const BodyParts& parts, std::span<const Jo
       const Joint* ball = jointBetween(joints, Part(a), Part(b));
       const double shell = ball && ball->radius > 0.0 ? ball->radius + slack : -1.0;
       std::size_t n = 0;
-      for (const std::int64_t v : voxels[std::size_t(a)]) {
-        const Index3 c = g.ijk(v);
-        const Eigen::Vector3d x = g.voxelCenter(c[0], c[1], c[2]);
+      for (const Eigen::Vector3d& x : points_[std::size_t(a)]) {
         if (shell > 0.0 && (x - ball->centre).norm() <= shell) continue;
         const Eigen::Vector3d q = g.continuousIndex(t * x);
         const std::int64_t i = std::llround(q[0]), j = std::llround(q[1]), k = std::llround(q[2]);
-        n += g.contains(i, j, k) && bonePart[std::size_t(g.index(i, j, k))] == std::uint8_t(b);
+        n += g.contains(i, j, k) && bonePart_[std::size_t(g.index(i, j, k))] == std::uint8_t(b);
       }
       landed[std::size_t(a)][std::size_t(b)] = n;
     }
@@ -80,11 +81,15 @@ std::vector<BoneOverlap> boneOverlaps(const BodyParts& parts, std::span<const Jo
     for (int b = a + 1; b <= kPartCount; ++b) {
       const std::size_t n = std::max(landed[std::size_t(a)][std::size_t(b)], landed[std::size_t(b)][std::size_t(a)]);
       if (n == 0) continue;
-      const int smaller = voxels[std::size_t(a)].size() <= voxels[std::size_t(b)].size() ? a : b;
-      out.push_back(BoneOverlap{Part(a), Part(b), n, double(n) * g.spacing.prod(), Part(smaller), double(n) / double(voxels[std::size_t(smaller)].size())});
+      const int smaller = points_[std::size_t(a)].size() <= points_[std::size_t(b)].size() ? a : b;
+      out.push_back(BoneOverlap{Part(a), Part(b), n, double(n) * g.spacing.prod(), Part(smaller), double(n) / double(points_[std::size_t(smaller)].size())});
     }
   std::sort(out.begin(), out.end(), [](const BoneOverlap& x, const BoneOverlap& y) { return x.fractionOfSmaller > y.fractionOfSmaller; });
   return out;
+}
+
+std::vector<BoneOverlap> boneOverlaps(const BodyParts& parts, std::span<const Joint> joints, std::span<const Eigen::Isometry3d> motions) {
+  return BoneOverlapIndex(parts).under(joints, motions);
 }
 
 }  // namespace vox::skeleton

@@ -17,6 +17,8 @@
 #include "geometry/skeleton/joints.h"
 
 #include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -32,10 +34,26 @@ struct BoneOverlap {
   double fractionOfSmaller = 0.0;  // voxels over smaller's bone voxels
 };
 
-// The bones' overlaps under `motions` (indexed by Part, grid frame mm; the
-// identity for a part at rest), one entry per pair of parts that overlap,
-// the largest fraction first. Parts with the same motion are not compared
-// (their bones are apart at rest, as every voxel has one part).
+// The bones of a skeleton's parts, indexed once, so that each pose's
+// overlaps cost only the moved bone voxels' lookups (the viewer asks at
+// every change of a joint's angle).
+class BoneOverlapIndex {
+public:
+  explicit BoneOverlapIndex(const BodyParts& parts);
+  // The bones' overlaps under `motions` (indexed by Part, grid frame mm; the
+  // identity for a part at rest), one entry per pair of parts that overlap,
+  // the largest fraction first. Parts with the same motion are not compared
+  // (their bones are apart at rest, as every voxel has one part).
+  std::vector<BoneOverlap> under(std::span<const Joint> joints, std::span<const Eigen::Isometry3d> motions) const;
+
+private:
+  GridGeometry grid_;
+  std::array<std::vector<Eigen::Vector3d>, kPartCount + 1> points_;  // bone voxel centres per part
+  std::array<Eigen::AlignedBox3d, kPartCount + 1> boxes_;
+  std::vector<std::uint8_t> bonePart_;  // per voxel: the part whose bone it is (0: none)
+};
+
+// BoneOverlapIndex(parts).under(joints, motions).
 std::vector<BoneOverlap> boneOverlaps(const BodyParts& parts, std::span<const Joint> joints, std::span<const Eigen::Isometry3d> motions);
 
 // The parts that move with `part` (it and every part below it in the tree).

@@ -272,6 +272,9 @@ def test_posing_frames_follow_the_joints(figure):
     posed = posing.rasterize(cpu=True)
     assert posed.labels.max() == grid.labels.max()
     assert "selections" in posing.pose
+    assert second["bones_through_each_other"] is None
+    posing.set_joints({"right_shoulder": {"abduction": -30}})  # the hanging arm into the pelvis
+    assert "pass through each other" in posing.frame()["bones_through_each_other"]
 
 
 def test_parts_and_joints(figure):

@@ -195,8 +195,14 @@ PartMotions partMotions(const std::vector<Joint>& joints, const std::vector<Pose
 std::optional<std::string> bonesThroughEachOther(const Skeleton& skeleton, const std::vector<Joint>& joints, const std::vector<PoseJoint>& angles,
                                                  double maxPercent) {
   if (std::none_of(angles.begin(), angles.end(), [](const PoseJoint& a) { return turned(&a); })) return std::nullopt;
+  return bonesThroughEachOther(BoneOverlapIndex(skeleton.parts), joints, angles, maxPercent);
+}
+
+std::optional<std::string> bonesThroughEachOther(const BoneOverlapIndex& bones, const std::vector<Joint>& joints,
+                                                 const std::vector<PoseJoint>& angles, double maxPercent) {
+  if (std::none_of(angles.begin(), angles.end(), [](const PoseJoint& a) { return turned(&a); })) return std::nullopt;
   const PartMotions motions = partMotions(joints, angles);
-  const std::vector<BoneOverlap> overlaps = boneOverlaps(skeleton.parts, joints, motions);
+  const std::vector<BoneOverlap> overlaps = bones.under(joints, motions);
   if (overlaps.empty() || !(100.0 * overlaps.front().fractionOfSmaller > maxPercent)) return std::nullopt;
   const BoneOverlap& o = overlaps.front();
   // The turned joints on the way between the two parts, up from each to

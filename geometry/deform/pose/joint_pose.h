@@ -77,6 +77,9 @@ PartMotions partMotions(const std::vector<Joint>& joints, const std::vector<Pose
 // overlap and the turned joints between them; nullopt otherwise.
 std::optional<std::string> bonesThroughEachOther(const Skeleton& skeleton, const std::vector<Joint>& joints, const std::vector<PoseJoint>& angles,
                                                  double maxPercent);
+// The same with the skeleton's bones indexed once (the viewer's session).
+std::optional<std::string> bonesThroughEachOther(const BoneOverlapIndex& bones, const std::vector<Joint>& joints,
+                                                 const std::vector<PoseJoint>& angles, double maxPercent);
 
 // A rigid motion as a pose transform: a screw about an axis through the
 // point nearest `near` (so a single joint's rotation has its centre on the

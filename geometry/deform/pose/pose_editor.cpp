@@ -61,6 +61,7 @@ PoseEditor::PoseEditor(const LabelGrid& grid, std::optional<OrganTable> organs, 
                     : std::make_unique<skeleton::Skeleton>(skeleton::buildSkeleton(grid_, *organs_, {"grid", "organ table", "body parts"}));
     options = skeleton::skeletalPoseOptions(shaping, setupSource, *skeleton_, organs_);
     separations_ = options.pose->separations;
+    bones_ = std::make_unique<skeleton::BoneOverlapIndex>(skeleton_->parts);
   } else {
     options = poseOptions(shaping, setupSource, organs_);
   }
@@ -417,6 +418,10 @@ bool PoseEditor::update() {
     embeddedPose_ = pose;
   }
   if (changed) refreshFigures();
+  if (changed && bones_)
+    figures_.bonesThroughEachOther =
+        skeleton::bonesThroughEachOther(*bones_, skeleton::posedJoints(*skeleton_, state_.pose.joints, setupSource_), state_.pose.joints,
+                                        skeleton::JointPoseOptions{}.maxBoneOverlapPercent);
   figures_.deformMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return changed;
 }

@@ -38,6 +38,7 @@
 namespace vox::skeleton {
 struct Skeleton;
 struct Joint;
+class BoneOverlapIndex;
 }  // namespace vox::skeleton
 
 namespace vox {
@@ -66,6 +67,10 @@ struct PoseFigures {
   std::vector<double> deformedVoxels;  // per label: V'_l (label_volumes.h)
   std::size_t tmOutsideCage = 0;       // TM vertices placed by the propagation
   std::size_t tmInverted = 0;          // deformed TM tets with volume <= 0
+  // A joint pose that presses two parts' bones through each other beyond
+  // the deform run's default bound (skeleton::bonesThroughEachOther): what
+  // an export is refused for.
+  std::optional<std::string> bonesThroughEachOther;
   double deformMs = 0.0;               // last update()
 };
 
@@ -171,6 +176,7 @@ private:
   std::string setupSource_;
   std::vector<PoseSeparation> separations_;
   std::unique_ptr<skeleton::Skeleton> skeleton_;  // built for a joint pose
+  std::unique_ptr<skeleton::BoneOverlapIndex> bones_;  // its bones, for bonesThroughEachOther
   std::unique_ptr<DeformationPipeline> pipeline_;
   TetLabelVoxels tetVoxels_;
   EditState state_;
