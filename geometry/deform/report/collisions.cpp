@@ -4,6 +4,7 @@
 #include "geometry/raster/lattice_tets.h"
 
 #include <algorithm>
+#include <array>
 #include <mutex>
 
 namespace vox {
@@ -22,12 +23,21 @@ Collisions findCollisions(const TetMesh& rest, std::span<const Eigen::Vector3d> 
   std::vector<std::int64_t> pairCounts(kParts * kParts, 0);
   std::mutex merge;
   const std::int64_t nx = lattice.dims[0], ny = lattice.dims[1];
+  // Face areas of the lattice (mm^2): x faces, y faces, z faces.
+  const Eigen::Vector3d faceArea(lattice.spacing[1] * lattice.spacing[2], lattice.spacing[0] * lattice.spacing[2],
+                                 lattice.spacing[0] * lattice.spacing[1]);
+  // Faces between two parts' points, counted per axis (exact sums in any
+  // order of the ranges).
+  std::vector<std::array<std::int64_t, 3>> contactFaces(kParts * kParts, {0, 0, 0});
   parallelRanges(lattice.dims[2], threads, [&](std::int64_t z0, std::int64_t z1) {
-    std::vector<Label> first(std::size_t(nx * ny));
+    std::vector<Label> first(std::size_t(nx * ny)), below(std::size_t(nx * ny), Label(0));
     std::vector<std::uint8_t> hit(std::size_t(nx * ny));
     std::vector<std::int64_t> localPairs(kParts * kParts, 0);
+    std::vector<std::array<std::int64_t, 3>> localContacts(kParts * kParts, {0, 0, 0});
     std::int64_t body = 0, colliding = 0;
-    for (std::int64_t z = z0; z < z1; ++z) {
+    // The part of every point of slice z (its first tet's), and the points
+    // where a second tet brings another part.
+    const auto fillSlice = [&](std::int64_t z, bool count) {
       std::fill(first.begin(), first.end(), Label(0));
       std::fill(hit.begin(), hit.end(), std::uint8_t(0));
       for (std::int64_t e = slab.sliceStart[std::size_t(z)]; e < slab.sliceStart[std::size_t(z) + 1]; ++e) {
@@ -51,15 +61,34 @@ Collisions findCollisions(const TetMesh& rest, std::span<const Eigen::Vector3d> 
             } else if (first[i] != part && !hit[i]) {
               hit[i] = 1;
               const Label a = std::min(first[i], part), b = std::max(first[i], part);
-              ++localPairs[std::size_t(a) * kParts + b];
+              if (count) ++localPairs[std::size_t(a) * kParts + b];
             }
           }
         }
       }
+    };
+    const auto touch = [&](Label a, Label b, int axis) {
+      if (a != 0 && b != 0 && a != b) ++localContacts[std::size_t(std::min(a, b)) * kParts + std::max(a, b)][std::size_t(axis)];
+    };
+    if (z0 > 0) {
+      fillSlice(z0 - 1, false);
+      below = first;
+    }
+    for (std::int64_t z = z0; z < z1; ++z) {
+      fillSlice(z, true);
       for (std::size_t i = 0; i < first.size(); ++i) {
         body += first[i] != 0;
         colliding += hit[i];
       }
+      for (std::int64_t y = 0; y < ny; ++y)
+        for (std::int64_t x = 0; x < nx; ++x) {
+          const std::size_t i = std::size_t(x + nx * y);
+          if (first[i] == 0) continue;
+          if (x + 1 < nx) touch(first[i], first[i + 1], 0);
+          if (y + 1 < ny) touch(first[i], first[i + std::size_t(nx)], 1);
+          if (z > 0) touch(first[i], below[i], 2);
+        }
+      below = first;
       if (keepMask)
         for (std::size_t i = 0; i < hit.size(); ++i)
           if (hit[i]) out.mask.labels()[std::size_t(z * nx * ny) + i] = 1;
@@ -68,7 +97,42 @@ Collisions findCollisions(const TetMesh& rest, std::span<const Eigen::Vector3d> 
     out.bodyVoxels += body;
     out.voxels += colliding;
     for (std::size_t k = 0; k < localPairs.size(); ++k) pairCounts[k] += localPairs[k];
+    for (std::size_t k = 0; k < localContacts.size(); ++k)
+      for (int axis = 0; axis < 3; ++axis) contactFaces[k][std::size_t(axis)] += localContacts[k][std::size_t(axis)];
   }, 1);
+  // The same faces of the rest body-part grid.
+  std::vector<double> restArea(kParts * kParts, 0.0);
+  {
+    const GridGeometry& r = restGrid;
+    const Eigen::Vector3d area(r.spacing[1] * r.spacing[2], r.spacing[0] * r.spacing[2], r.spacing[0] * r.spacing[1]);
+    const Label* l = parts.data();
+    const std::int64_t sx = 1, sy = r.dims[0], sz = r.dims[0] * r.dims[1];
+    for (std::int64_t k = 0; k < r.dims[2]; ++k)
+      for (std::int64_t j = 0; j < r.dims[1]; ++j)
+        for (std::int64_t i = 0; i < r.dims[0]; ++i) {
+          const std::int64_t v = r.index(i, j, k);
+          const Label a = l[v];
+          if (a == 0 || a >= kParts) continue;
+          const auto meet = [&](std::int64_t u, double face) {
+            const Label b = l[u];
+            if (b != 0 && b != a && b < kParts) restArea[std::size_t(std::min(a, b)) * kParts + std::max(a, b)] += face;
+          };
+          if (i + 1 < r.dims[0]) meet(v + sx, area[0]);
+          if (j + 1 < r.dims[1]) meet(v + sy, area[1]);
+          if (k + 1 < r.dims[2]) meet(v + sz, area[2]);
+        }
+  }
+  for (std::size_t a = 0; a < kParts; ++a)
+    for (std::size_t b = a + 1; b < kParts; ++b)
+      if (const std::size_t k = a * kParts + b;
+          contactFaces[k][0] + contactFaces[k][1] + contactFaces[k][2] > 0 || restArea[k] > 0.0) {
+        const double posed = double(contactFaces[k][0]) * faceArea[0] + double(contactFaces[k][1]) * faceArea[1] +
+                             double(contactFaces[k][2]) * faceArea[2];
+        out.contacts.push_back({Label(a), Label(b), restArea[k], posed});
+      }
+  std::sort(out.contacts.begin(), out.contacts.end(), [](const ContactPair& p, const ContactPair& q) {
+    return p.newMm2() != q.newMm2() ? p.newMm2() > q.newMm2() : (p.partA != q.partA ? p.partA < q.partA : p.partB < q.partB);
+  });
   for (std::size_t a = 0; a < kParts; ++a)
     for (std::size_t b = a + 1; b < kParts; ++b)
       if (const std::int64_t n = pairCounts[a * kParts + b]; n > 0) out.pairs.push_back({Label(a), Label(b), n});

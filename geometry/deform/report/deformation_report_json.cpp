@@ -199,12 +199,19 @@ std::string deformationReportJson(const DeformationReport& r) {
       pairs.push_back({{"parts", {skeleton::partName(skeleton::Part(p.partA)), skeleton::partName(skeleton::Part(p.partB))}},
                        {"voxels", p.voxels},
                        {"volume_ml", double(p.voxels) * c->lattice.voxelVolume() * 1e-3}});
+    json contacts = json::array();
+    for (const ContactPair& p : c->contacts)
+      contacts.push_back({{"parts", {skeleton::partName(skeleton::Part(p.partA)), skeleton::partName(skeleton::Part(p.partB))}},
+                          {"rest_cm2", p.restMm2 * 1e-2},
+                          {"posed_cm2", p.posedMm2 * 1e-2},
+                          {"new_cm2", p.newMm2() * 1e-2}});
     root["collisions"] = {{"lattice", toJson(c->lattice)},
                           {"body_voxels", c->bodyVoxels},
                           {"voxels", c->voxels},
                           {"volume_ml", c->volumeMm3() * 1e-3},
                           {"body_fraction", c->bodyFraction()},
-                          {"pairs", pairs}};
+                          {"pairs", pairs},
+                          {"contacts", contacts}};
   }
   root["warnings"] = deformationWarnings(r);
   if (const auto& c = r.volumeCorrection)

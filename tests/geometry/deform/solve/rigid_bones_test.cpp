@@ -157,6 +157,55 @@ TEST(Collisions, TissueOfTwoPartsMovedOntoEachOtherIsCounted) {
   EXPECT_LE(c.bodyFraction(), 1.0);
 }
 
+// Two blocks of 10 x 10 x 10 voxels (1 mm), 5 voxels apart, each covered by
+// a box of six tets: at rest they do not meet; part 2 slid against part 1,
+// they meet over one 10 x 10 face, 100 mm2 of new contact; the rest faces
+// come from the body-part grid (where the two blocks touch there too).
+TEST(Collisions, PartsMovedAgainstEachOtherMeetOnAContact) {
+  GridGeometry g;
+  g.dims = {30, 12, 12};
+  LabelGrid parts(g, 0);
+  for (std::int64_t k = 1; k < 11; ++k)
+    for (std::int64_t j = 1; j < 11; ++j)
+      for (std::int64_t i = 0; i < 30; ++i)
+        if (i >= 2 && i < 12) parts.at(i, j, k) = 1;
+        else if (i >= 17 && i < 27) parts.at(i, j, k) = 2;
+  TetMesh tm;
+  // A box [lo, hi] as six tets about its diagonal.
+  const auto box = [&](const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+    const std::int32_t base = std::int32_t(tm.positions.size());
+    for (int c = 0; c < 8; ++c) tm.positions.push_back({c & 1 ? hi.x() : lo.x(), c & 2 ? hi.y() : lo.y(), c & 4 ? hi.z() : lo.z()});
+    for (const Tet& t : std::vector<Tet>{{0, 1, 3, 7}, {0, 1, 5, 7}, {0, 2, 3, 7}, {0, 2, 6, 7}, {0, 4, 5, 7}, {0, 4, 6, 7}}) {
+      tm.tets.push_back({base + t[0], base + t[1], base + t[2], base + t[3]});
+      tm.labels.push_back(1);
+    }
+  };
+  box({1.5, 0.5, 0.5}, {11.5, 10.5, 10.5});
+  box({16.5, 0.5, 0.5}, {26.5, 10.5, 10.5});
+  const Collisions atRest = findCollisions(tm, tm.positions, parts, g);
+  EXPECT_TRUE(atRest.contacts.empty());
+  std::vector<Eigen::Vector3d> moved = tm.positions;
+  for (std::size_t v = 8; v < 16; ++v) moved[v].x() -= 5.0;
+  for (const int threads : {1, 3}) {
+    const Collisions c = findCollisions(tm, moved, parts, g, false, threads);
+    EXPECT_EQ(c.voxels, 0);
+    ASSERT_EQ(c.contacts.size(), 1u);
+    EXPECT_EQ(c.contacts[0].partA, 1);
+    EXPECT_EQ(c.contacts[0].partB, 2);
+    EXPECT_DOUBLE_EQ(c.contacts[0].restMm2, 0.0);
+    EXPECT_DOUBLE_EQ(c.contacts[0].posedMm2, 100.0);
+    EXPECT_DOUBLE_EQ(c.contacts[0].newMm2(), 100.0);
+  }
+  // Blocks that touch at rest: their face is rest contact, not new.
+  LabelGrid touching = parts;
+  for (std::int64_t k = 1; k < 11; ++k)
+    for (std::int64_t j = 1; j < 11; ++j)
+      for (std::int64_t i = 12; i < 17; ++i) touching.at(i, j, k) = 2;
+  const Collisions t = findCollisions(tm, moved, touching, g);
+  ASSERT_FALSE(t.contacts.empty());
+  EXPECT_DOUBLE_EQ(t.contacts[0].restMm2, 100.0);
+}
+
 }  // namespace
 }  // namespace vox::skeleton
 
