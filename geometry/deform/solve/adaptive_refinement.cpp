@@ -223,9 +223,14 @@ std::vector<std::int32_t> bisectEdges(TetMesh& mesh, std::span<const TetEdge> ed
     keys.emplace_back(edgeKey(e[0], e[1]), std::int32_t(k));
   }
   std::sort(keys.begin(), keys.end());
+  // Only a tet with two ends of split edges can hold one: the rest are
+  // passed over without a search.
+  std::vector<std::uint8_t> end(nv, 0);
+  for (const TetEdge& e : edges) end[std::size_t(e[0])] = end[std::size_t(e[1])] = 1;
   for (const TetEdge& e : edges) mesh.positions.push_back(0.5 * (mesh.positions[std::size_t(e[0])] + mesh.positions[std::size_t(e[1])]));
   for (std::size_t t = 0; t < nt; ++t) {
     Tet tet = mesh.tets[t];
+    if (end[std::size_t(tet[0])] + end[std::size_t(tet[1])] + end[std::size_t(tet[2])] + end[std::size_t(tet[3])] < 2) continue;
     int split = -1, at = -1, other = -1;
     for (int i = 0; i < 4; ++i)
       for (int j = i + 1; j < 4; ++j) {
