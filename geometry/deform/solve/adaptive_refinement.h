@@ -19,9 +19,9 @@
 // Every tet is bisected by its own longest edge (Rivara's longest-edge
 // propagation path: when a neighbour on a marked tet's longest edge has a
 // longer one, that neighbour is split first). Bisecting other edges makes
-// slivers within a few rounds, and on a sliver B_t magnifies the small
-// difference between the Green coordinates of a midpoint and its tet's
-// affine map into a large, spurious distortion.
+// slivers, within one round of three bisections, and on a sliver B_t
+// magnifies the small difference between the Green coordinates of a
+// midpoint and its tet's affine map into a large, spurious distortion.
 //
 // Edge bisection keeps the mesh conforming (every tet on the edge is split
 // at the same midpoint), the tets positively oriented (each child keeps its
