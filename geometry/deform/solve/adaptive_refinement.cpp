@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <chrono>
 #include <compare>
-#include <numeric>
 
 namespace vox {
 
@@ -17,11 +16,6 @@ namespace {
 // A marked tet is bisected this many times in a round: three bisections of
 // a tet shrink it about as one regular 1-to-8 subdivision would.
 constexpr int kBisectionsPerRound = 3;
-// A round bisects in at most this many conflict-free passes (in one pass no
-// tet holds two split edges; a marked tet whose longest edge is not the
-// longest of a tet around it waits for that tet's split, a pass each);
-// tets still due after them are measured again in the next round.
-constexpr int kPassesPerRound = 16 * kBisectionsPerRound;
 
 // e_t of every tet and the grid error of the vertex errors.
 struct MeasuredError {
@@ -50,25 +44,6 @@ MeasuredError measureError(const TetMesh& rest, std::span<const Eigen::Vector3d>
 std::uint64_t edgeKey(std::int32_t a, std::int32_t b) {
   if (a > b) std::swap(a, b);
   return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b);
-}
-
-// The tets of each vertex, ascending (compressed rows).
-struct VertexTets {
-  std::vector<std::int64_t> offsets;  // #V + 1
-  std::vector<std::int32_t> tets;
-};
-
-VertexTets vertexTets(const TetMesh& mesh) {
-  VertexTets out;
-  out.offsets.assign(mesh.vertexCount() + 1, 0);
-  for (const Tet& t : mesh.tets)
-    for (const std::int32_t v : t) ++out.offsets[std::size_t(v) + 1];
-  std::partial_sum(out.offsets.begin(), out.offsets.end(), out.offsets.begin());
-  out.tets.resize(std::size_t(out.offsets.back()));
-  std::vector<std::int64_t> fill(out.offsets.begin(), out.offsets.end() - 1);
-  for (std::size_t t = 0; t < mesh.tetCount(); ++t)
-    for (const std::int32_t v : mesh.tets[t]) out.tets[std::size_t(fill[std::size_t(v)]++)] = std::int32_t(t);
-  return out;
 }
 
 // Rest edges ordered by length, ties by their vertex pair: a strict order,
@@ -113,20 +88,14 @@ bool hasPlacedEdge(const Tet& tet, const std::vector<std::uint8_t>& placed) {
 // ill-conditioned: midpoints that Green coordinates put a few per cent of
 // an edge off their tet's affine map stretch a sliver far beyond what the
 // deformation does (on the stick figure's separated arm, to more than twice
-// the unrefined TM's largest stretch). `around` receives the tets on the
-// terminal edge.
-TetEdge terminalEdge(const TetMesh& mesh, const VertexTets& incident, std::int32_t t, std::vector<std::int32_t>& around) {
+// the unrefined TM's largest stretch).
+TetEdge terminalEdge(const TetMesh& mesh, EdgeBisection& bisection, std::int32_t t) {
   TetEdge edge = longestEdge(mesh, mesh.tets[std::size_t(t)]);
   for (;;) {
-    around.clear();
     TetEdge next = edge;
     EdgeRank nextRank = edgeRank(mesh, edge[0], edge[1]);
-    for (std::int64_t k = incident.offsets[std::size_t(edge[0])]; k < incident.offsets[std::size_t(edge[0]) + 1]; ++k) {
-      const std::int32_t u = incident.tets[std::size_t(k)];
-      const Tet& tet = mesh.tets[std::size_t(u)];
-      if (std::find(tet.begin(), tet.end(), edge[1]) == tet.end()) continue;
-      around.push_back(u);
-      const TetEdge longest = longestEdge(mesh, tet);
+    for (const std::int32_t u : bisection.tetsAround(edge)) {
+      const TetEdge longest = longestEdge(mesh, mesh.tets[std::size_t(u)]);
       if (const EdgeRank r = edgeRank(mesh, longest[0], longest[1]); r > nextRank) {
         nextRank = r;
         next = longest;
@@ -152,54 +121,45 @@ struct RoundSplits {
 RoundSplits splitMarkedTets(TetMesh& mesh, std::vector<std::uint8_t> placed, std::span<const double> tetError,
                             double threshold, std::int64_t maxTets) {
   RoundSplits out;
-  // Per tet: bisections still due, and the e_t of the marked tet it comes from.
+  // Per tet: bisections still due. The marked tets, most distorted first,
+  // then the children that still owe bisections, in the order they appear.
   std::vector<std::int8_t> due(mesh.tetCount(), 0);
-  std::vector<double> priority(mesh.tetCount(), 0.0);
+  std::vector<std::int32_t> queue;
   for (std::size_t t = 0; t < mesh.tetCount(); ++t)
     if (tetError[t] > threshold && hasPlacedEdge(mesh.tets[t], placed)) {
       due[t] = kBisectionsPerRound;
-      priority[t] = tetError[t];
+      queue.push_back(std::int32_t(t));
     }
-  std::vector<std::int32_t> order, around;
-  for (int pass = 0; pass < kPassesPerRound; ++pass) {
-    throwIfCancelled();
-    order.clear();
-    for (std::size_t t = 0; t < mesh.tetCount(); ++t)
-      if (due[t] > 0) order.push_back(std::int32_t(t));
-    if (order.empty()) break;
-    std::stable_sort(order.begin(), order.end(), [&](std::int32_t a, std::int32_t b) { return priority[std::size_t(a)] > priority[std::size_t(b)]; });
-    const VertexTets incident = vertexTets(mesh);
-    std::vector<std::uint8_t> claimed(mesh.tetCount(), 0);
-    std::vector<TetEdge> edges;
-    std::int64_t tets = std::int64_t(mesh.tetCount());
-    for (const std::int32_t t : order) {
-      if (claimed[std::size_t(t)]) continue;
-      const TetEdge e = terminalEdge(mesh, incident, t, around);
-      if (std::any_of(around.begin(), around.end(), [&](std::int32_t u) { return claimed[std::size_t(u)] != 0; })) continue;
-      if (tets + std::int64_t(around.size()) > maxTets) {
+  std::stable_sort(queue.begin(), queue.end(), [&](std::int32_t a, std::int32_t b) { return tetError[std::size_t(a)] > tetError[std::size_t(b)]; });
+  EdgeBisection bisection(mesh);
+  std::vector<std::int32_t> around;
+  for (std::size_t k = 0; k < queue.size(); ++k) {
+    const std::int32_t t = queue[k];
+    while (due[std::size_t(t)] > 0) {
+      if (out.parents.size() % 1024 == 0) throwIfCancelled();
+      // A child that lost its placed edge cannot gain from more splits.
+      if (!hasPlacedEdge(mesh.tets[std::size_t(t)], placed)) {
+        due[std::size_t(t)] = 0;
+        break;
+      }
+      const TetEdge e = terminalEdge(mesh, bisection, t);
+      around = bisection.tetsAround(e);
+      if (std::int64_t(mesh.tetCount() + around.size()) > maxTets) {
         out.budgetReached = true;
         due[std::size_t(t)] = 0;
-        continue;
+        break;
       }
-      for (const std::int32_t u : around) claimed[std::size_t(u)] = 1;
-      tets += std::int64_t(around.size());
-      edges.push_back(e);
-    }
-    if (edges.empty()) break;
-    const std::vector<std::int32_t> splitFrom = bisectEdges(mesh, edges);
-    for (std::size_t t = 0; t < claimed.size(); ++t)
-      if (claimed[t] && due[t] > 0) --due[t];
-    for (const std::int32_t t : splitFrom) {
-      due.push_back(due[std::size_t(t)]);
-      priority.push_back(priority[std::size_t(t)]);
-    }
-    for (const TetEdge& e : edges) {
+      const std::size_t first = mesh.tetCount();
+      bisection.bisect(e);
+      for (std::size_t i = 0; i < around.size(); ++i) {
+        std::int8_t& d = due[std::size_t(around[i])];
+        if (d > 0) --d;
+        due.push_back(d);
+        if (d > 0) queue.push_back(std::int32_t(first + i));
+      }
       placed.push_back(placed[std::size_t(e[0])] && placed[std::size_t(e[1])]);
       out.parents.push_back(e);
     }
-    // A child that lost its placed edge cannot gain from more splits.
-    for (std::size_t t = 0; t < mesh.tetCount(); ++t)
-      if (due[t] > 0 && !hasPlacedEdge(mesh.tets[t], placed)) due[t] = 0;
   }
   return out;
 }
@@ -211,48 +171,49 @@ GridError gridDeformationError(const TetMesh& rest, std::span<const Eigen::Vecto
   return measureError(rest, deformed, geometry, interpolate).grid;
 }
 
-std::vector<std::int32_t> bisectEdges(TetMesh& mesh, std::span<const TetEdge> edges) {
-  const std::size_t nv = mesh.vertexCount(), nt = mesh.tetCount();
-  std::vector<std::int32_t> splitFrom;
-  std::vector<std::pair<std::uint64_t, std::int32_t>> keys;
-  keys.reserve(edges.size());
-  for (std::size_t k = 0; k < edges.size(); ++k) {
-    const TetEdge& e = edges[k];
-    if (e[0] < 0 || e[1] < 0 || std::size_t(e[0]) >= nv || std::size_t(e[1]) >= nv || e[0] == e[1])
-      throw RuntimeFailure("bisectEdges: edge " + std::to_string(k) + " is not an edge of the mesh's vertices");
-    keys.emplace_back(edgeKey(e[0], e[1]), std::int32_t(k));
+EdgeBisection::EdgeBisection(TetMesh& mesh) : mesh_(mesh), incident_(mesh.vertexCount()) {
+  for (std::size_t t = 0; t < mesh.tetCount(); ++t)
+    for (const std::int32_t v : mesh.tets[t]) incident_[std::size_t(v)].push_back(std::int32_t(t));
+}
+
+const std::vector<std::int32_t>& EdgeBisection::tetsAround(TetEdge edge) {
+  around_.clear();
+  if (edge[0] < 0 || std::size_t(edge[0]) >= incident_.size() || edge[0] == edge[1]) return around_;
+  for (const std::int32_t u : incident_[std::size_t(edge[0])]) {
+    const Tet& tet = mesh_.tets[std::size_t(u)];
+    if (std::find(tet.begin(), tet.end(), edge[1]) != tet.end()) around_.push_back(u);
   }
-  std::sort(keys.begin(), keys.end());
-  // Only a tet with two ends of split edges can hold one: the rest are
-  // passed over without a search.
-  std::vector<std::uint8_t> end(nv, 0);
-  for (const TetEdge& e : edges) end[std::size_t(e[0])] = end[std::size_t(e[1])] = 1;
-  for (const TetEdge& e : edges) mesh.positions.push_back(0.5 * (mesh.positions[std::size_t(e[0])] + mesh.positions[std::size_t(e[1])]));
-  for (std::size_t t = 0; t < nt; ++t) {
-    Tet tet = mesh.tets[t];
-    if (end[std::size_t(tet[0])] + end[std::size_t(tet[1])] + end[std::size_t(tet[2])] + end[std::size_t(tet[3])] < 2) continue;
-    int split = -1, at = -1, other = -1;
-    for (int i = 0; i < 4; ++i)
-      for (int j = i + 1; j < 4; ++j) {
-        const std::uint64_t key = edgeKey(tet[std::size_t(i)], tet[std::size_t(j)]);
-        const auto it = std::lower_bound(keys.begin(), keys.end(), std::make_pair(key, std::int32_t(0)));
-        if (it == keys.end() || it->first != key) continue;
-        if (split >= 0) throw RuntimeFailure("bisectEdges: tet " + std::to_string(t) + " holds two of the edges");
-        split = it->second;
-        at = i;
-        other = j;
-      }
-    if (split < 0) continue;
-    const std::int32_t midpoint = std::int32_t(nv) + split;
-    Tet second = tet;
-    second[std::size_t(at)] = midpoint;
-    tet[std::size_t(other)] = midpoint;
-    mesh.tets[t] = tet;
-    mesh.tets.push_back(second);
-    mesh.labels.push_back(mesh.labels[t]);
-    splitFrom.push_back(std::int32_t(t));
+  std::sort(around_.begin(), around_.end());
+  return around_;
+}
+
+std::size_t EdgeBisection::bisect(TetEdge edge) {
+  const std::vector<std::int32_t> around = tetsAround(edge);
+  if (around.empty())
+    throw RuntimeFailure("EdgeBisection: vertices " + std::to_string(edge[0]) + " and " + std::to_string(edge[1]) + " are no edge of the mesh");
+  const auto midpoint = std::int32_t(mesh_.vertexCount());
+  mesh_.positions.push_back(0.5 * (mesh_.positions[std::size_t(edge[0])] + mesh_.positions[std::size_t(edge[1])]));
+  incident_.emplace_back();
+  for (const std::int32_t u : around) {
+    Tet& first = mesh_.tets[std::size_t(u)];
+    Tet second = first;
+    for (std::size_t i = 0; i < 4; ++i) {
+      if (first[i] == edge[1]) first[i] = midpoint;
+      if (second[i] == edge[0]) second[i] = midpoint;
+    }
+    const auto appended = std::int32_t(mesh_.tetCount());
+    mesh_.tets.push_back(second);
+    mesh_.labels.push_back(mesh_.labels[std::size_t(u)]);
+    // The first child holds a, the midpoint and the two others; the second
+    // replaces the parent at b and joins the midpoint and the two others.
+    std::vector<std::int32_t>& atB = incident_[std::size_t(edge[1])];
+    *std::find(atB.begin(), atB.end(), u) = appended;
+    incident_.back().push_back(u);
+    incident_.back().push_back(appended);
+    for (const std::int32_t v : second)
+      if (v != midpoint && v != edge[1]) incident_[std::size_t(v)].push_back(appended);
   }
-  return splitFrom;
+  return around.size();
 }
 
 RefinementResult refineTransferMesh(const RefinementSubject& subject, const GridGeometry& geometry,

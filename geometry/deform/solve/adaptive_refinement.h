@@ -76,13 +76,27 @@ GridError gridDeformationError(const TetMesh& rest, std::span<const Eigen::Vecto
 // An edge of a TM: two vertex indices.
 using TetEdge = std::array<std::int32_t, 2>;
 
-// Splits every edge of `edges` at its midpoint: each tet holding edge (a, b)
-// becomes the tet with b replaced by the midpoint (in its place) and the tet
-// with a replaced by it (appended, in tet order), both with its label. New
-// vertex k (index #V + k) is the midpoint of edges[k]. No tet may hold two
-// of the edges (RuntimeFailure otherwise). Returns, per appended tet, the
-// tet it was split from.
-std::vector<std::int32_t> bisectEdges(TetMesh& mesh, std::span<const TetEdge> edges);
+// Edge bisections of a TM, one at a time, with the tets of every vertex
+// kept up to date so that a split costs the tets around its edge. The mesh
+// must outlive the bisection and change only through it.
+class EdgeBisection {
+public:
+  explicit EdgeBisection(TetMesh& mesh);
+  // The tets holding edge (a, b), ascending (empty when it is no edge of the
+  // mesh). Valid until the next call.
+  const std::vector<std::int32_t>& tetsAround(TetEdge edge);
+  // Splits the edge at its midpoint, the new vertex #V: each tet holding it
+  // (tetsAround order) becomes the tet with b replaced by the midpoint (in
+  // its place) and the tet with a replaced by it (appended, in the same
+  // order), both with its label. Returns how many tets it appended.
+  // RuntimeFailure for a pair of vertices that is no edge of the mesh.
+  std::size_t bisect(TetEdge edge);
+
+private:
+  TetMesh& mesh_;
+  std::vector<std::vector<std::int32_t>> incident_;  // #V: the tets of each vertex
+  std::vector<std::int32_t> around_;
+};
 
 // One measured TM of the loop.
 struct RefinementStep {

@@ -88,19 +88,33 @@ TEST(AdaptiveRefinement, BisectionSplitsEveryTetOnTheEdgeKeepingOrientationAndVo
   const TetEdge edge{t0[0], t0[1]};
   std::size_t onEdge = 0;
   for (const Tet& t : mesh.tets) onEdge += std::count(t.begin(), t.end(), edge[0]) && std::count(t.begin(), t.end(), edge[1]);
-  bisectEdges(mesh, std::span<const TetEdge>(&edge, 1));
+  EdgeBisection bisection(mesh);
+  EXPECT_EQ(bisection.tetsAround(edge).size(), onEdge);
+  EXPECT_EQ(bisection.bisect(edge), onEdge);
   EXPECT_EQ(mesh.vertexCount(), before.vertexCount() + 1);
   EXPECT_EQ(mesh.tetCount(), before.tetCount() + onEdge);
   EXPECT_EQ(mesh.labels.size(), mesh.tetCount());
   EXPECT_TRUE(mesh.positions.back().isApprox(0.5 * (before.positions[std::size_t(edge[0])] + before.positions[std::size_t(edge[1])])));
+  EXPECT_TRUE(bisection.tetsAround(edge).empty());
+  // Another edge of the same tet, then one of a child: the tets of each
+  // vertex stay those of the mesh.
+  EXPECT_GT(bisection.bisect({t0[2], t0[3]}), 0u);
+  const Tet child = mesh.tets.back();
+  EXPECT_GT(bisection.bisect({child[0], child[1]}), 0u);
+  for (std::int32_t a = 0; a < std::int32_t(mesh.vertexCount()); ++a)
+    for (std::int32_t b = a + 1; b < std::int32_t(mesh.vertexCount()); ++b) {
+      std::vector<std::int32_t> holding;
+      for (std::size_t t = 0; t < mesh.tetCount(); ++t)
+        if (std::count(mesh.tets[t].begin(), mesh.tets[t].end(), a) && std::count(mesh.tets[t].begin(), mesh.tets[t].end(), b))
+          holding.push_back(std::int32_t(t));
+      EXPECT_EQ(bisection.tetsAround({a, b}), holding) << a << " " << b;
+    }
   for (const Tet& t : mesh.tets) EXPECT_GT(signedVolume(mesh.positions, t), 0.0);
   EXPECT_NEAR(volume(mesh), volume(before), 1e-12);
   // Conforming: every face is shared by at most two tets (faceNeighbors throws otherwise).
   EXPECT_NO_THROW(faceNeighbors(mesh, "refined"));
-
-  TetMesh twice = before;
-  const std::array<TetEdge, 2> two{{{t0[0], t0[1]}, {t0[2], t0[3]}}};
-  EXPECT_THROW(bisectEdges(twice, two), RuntimeFailure);
+  EXPECT_THROW(bisection.bisect({0, 0}), RuntimeFailure);
+  EXPECT_THROW(bisection.bisect({edge[0], edge[1]}), RuntimeFailure);
 }
 
 TEST(AdaptiveRefinement, SplitsOnlyTheDistortedTetsAndStopsWhenTheErrorStopsImproving) {
