@@ -81,10 +81,10 @@ bool hasPlacedEdge(const Tet& tet, const std::vector<std::uint8_t>& placed) {
 // (Rivara): t's longest edge if it is the longest edge of every tet around
 // it, else the path from the tet around it with the longest edge. Bisecting
 // the terminal edge splits every tet around it by its own longest edge,
-// which bounds how far the children's shapes fall from their ancestors'.
-// Splitting an edge that is not the longest of a tet around it makes
-// slivers there over a few rounds (children with a long edge across a short
-// height), and on a sliver the basis change B_t of a smooth map is
+// which keeps the children's shapes close to their ancestors' (on the Kuhn
+// tets of a voxel mesh, in a few classes of similar tets). Splitting an edge
+// that is not the longest of a tet around it makes slivers there within a
+// round (children with a long edge across a short height), and on a sliver the basis change B_t of a smooth map is
 // ill-conditioned: midpoints that Green coordinates put a few per cent of
 // an edge off their tet's affine map stretch a sliver far beyond what the
 // deformation does (on the stick figure's separated arm, to more than twice
