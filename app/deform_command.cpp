@@ -186,7 +186,7 @@ void addDeformCommand(CLI::App& app) {
   cmd->add_option("--max-tets", o->run.maxTets, "Tet budget of the refined transfer mesh")->capture_default_str()
       ->check(integerIn(1000, std::int64_t(1) << 30));
   cmd->add_option("--refine-iterations", o->run.refineIterations,
-                  "Transfer-mesh regenerations of the deformation-adaptive refinement at most (0: none)")
+                  "Splitting rounds of the deformation-adaptive refinement at most (0: none)")
       ->capture_default_str()
       ->check(integerIn(0, 100));
   cmd->add_flag("-q,--quiet", o->quiet, "No progress or summary (warnings still go to stderr)");

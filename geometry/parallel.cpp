@@ -18,6 +18,7 @@ namespace vox {
 namespace {
 
 thread_local bool tInsideLoop = false;
+thread_local int tWorkerThreads = 0;  // ScopedWorkerThreads' count (0: none)
 
 // Runs task(k) for k in [0, parts) on the caller and up to parts - 1
 // workers. Workers are created on demand and kept until exit.
@@ -117,8 +118,13 @@ void runParts(int parts, const std::function<void(int)>& part, std::atomic<bool>
 
 }  // namespace
 
+ScopedWorkerThreads::ScopedWorkerThreads(int threads) : outer_(tWorkerThreads) { tWorkerThreads = std::max(1, threads); }
+
+ScopedWorkerThreads::~ScopedWorkerThreads() { tWorkerThreads = outer_; }
+
 int workerThreads(int requested) {
   if (requested > 0) return requested;
+  if (tWorkerThreads > 0) return tWorkerThreads;
   // The CPUs this process may run on: a batch job's allocation (Slurm's
   // cpuset) or taskset's mask, not every CPU of the node.
   cpu_set_t mask;

@@ -19,8 +19,24 @@
 namespace vox {
 
 // Threads to use for `requested` (0 or less: every CPU the process may run
-// on, as its affinity mask allows).
+// on, as its affinity mask allows, or the count a ScopedWorkerThreads of the
+// calling thread sets).
 int workerThreads(int requested);
+
+// While it lives, workerThreads(0) on the constructing thread returns
+// `threads` (at least 1), more than the CPUs if asked: a stage run on one
+// thread and on several must give the same bytes, and the tests that check
+// it pick both counts. Scopes nest; the destructor restores the outer one.
+class ScopedWorkerThreads {
+public:
+  explicit ScopedWorkerThreads(int threads);
+  ~ScopedWorkerThreads();
+  ScopedWorkerThreads(const ScopedWorkerThreads&) = delete;
+  ScopedWorkerThreads& operator=(const ScopedWorkerThreads&) = delete;
+
+private:
+  int outer_;
+};
 
 // Calls fn(i) for every i in [0, count) from up to workerThreads(threads)
 // threads. The first exception thrown by fn is rethrown after all threads

@@ -153,16 +153,16 @@ DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOp
   sizing_ = defaultSizingField(groups_.geometry(), options_.sizingFraction);
   {
     StageTimer timer("transfer mesh");
-    buildTransferMesh(true);
+    buildTransferMesh();
     stats_.stages.push_back(timer.stop());
   }
   if (options_.pose) setPose(*options_.pose, options_.poseSource);
 }
 
-void DeformationPipeline::buildTransferMesh(bool initial) {
+void DeformationPipeline::buildTransferMesh() {
   const bool separated = !options_.cage.separations.empty();
   const std::vector<LimbSeparation>& cuts = options_.cuts ? *options_.cuts : options_.cage.separations;
-  PreparedState* prepared = initial ? options_.prepared.get() : nullptr;
+  PreparedState* prepared = options_.prepared.get();
   PreparedMeshQuery query;
   if (prepared)
     query = {(separated ? gridDigest(meshGroups_) : groupsDigest_) + " " + groupsDigest_ + " " + gridDigest(sizing_) + " " +
@@ -317,11 +317,23 @@ std::vector<std::uint8_t> DeformationPipeline::acrossSeparation() const {
   for (const LimbSeparation& s : cuts)
     for (const Label g : {s.groupA, s.groupB})
       if (g < separated.size()) separated[g] = 1;
-  const std::vector<std::uint8_t> inside = insideCage(cage_, transferMesh_.positions);
-  auto candidate = [&](std::size_t v) {
+  // Only the vertices of a separated group that are not placed otherwise
+  // need the cage's winding number.
+  const auto ofSeparatedGroup = [&](std::size_t v) {
     const Label g = vertexGroup[v];
-    return inside[v] && !out[v] && g != kMixed && g < separated.size() && separated[g];
+    return !out[v] && g != kMixed && g < separated.size() && separated[g];
   };
+  std::vector<std::size_t> classified;
+  std::vector<Eigen::Vector3d> points;
+  for (std::size_t v = 0; v < nv; ++v)
+    if (ofSeparatedGroup(v)) {
+      classified.push_back(v);
+      points.push_back(transferMesh_.positions[v]);
+    }
+  const std::vector<std::uint8_t> pointInside = insideCage(cage_, points);
+  std::vector<std::uint8_t> inside(nv, 0);
+  for (std::size_t k = 0; k < classified.size(); ++k) inside[classified[k]] = pointInside[k];
+  auto candidate = [&](std::size_t v) { return inside[v] && ofSeparatedGroup(v); };
   DisjointSets islands(nv);
   const auto find = [&](std::int32_t v) { return islands.find(v); };
   for (std::size_t t = 0; t < transferMesh_.tetCount(); ++t) {
@@ -365,6 +377,7 @@ void DeformationPipeline::setPose(const Pose& pose, const std::string& source) {
   for (std::int32_t& v : handles.vertices) v = index[std::size_t(v)];
   handles_ = std::move(handles);
   pose_ = pose;
+  refined_ = false;
   precomputeFrame(options_.envelope);
   fraction_ = 0.0;
   deformedEnvelope_ = envelope_.positions;
@@ -374,6 +387,7 @@ void DeformationPipeline::setPose(const Pose& pose, const std::string& source) {
 void DeformationPipeline::deform(double fraction) {
   if (handles_.vertices.empty()) throw RuntimeFailure("DeformationPipeline::deform: no pose set");
   StageTimer timer("deformation");
+  embedRefinedMesh();
   fraction_ = fraction;
   updateFrame(fraction);
   if (deformer_.envelopePositions().size() == envelope_.vertexCount()) deformedEnvelope_ = deformer_.envelopePositions();
@@ -385,6 +399,7 @@ void DeformationPipeline::deformTo(const Eigen::MatrixX3d& handleTargets, int ar
   if (std::size_t(handleTargets.rows()) != handles_.vertices.size())
     throw RuntimeFailure("DeformationPipeline::deformTo: " + std::to_string(handleTargets.rows()) + " targets for " +
                          std::to_string(handles_.vertices.size()) + " handles");
+  embedRefinedMesh();
   deformer_.update(handleTargets, arapIterations);
   if (deformer_.envelopePositions().size() == envelope_.vertexCount()) deformedEnvelope_ = deformer_.envelopePositions();
 }
@@ -394,19 +409,89 @@ RefinementResult DeformationPipeline::refine(const RefinementOptions& options, c
   StageTimer timer("refinement");
   const RefinementSubject subject{
       .restMesh = [this]() -> const TetMesh& { return transferMesh_; },
-      .deformedPositions = [this]() -> const std::vector<Eigen::Vector3d>& { return deformer_.transferMeshPositions(); },
-      .regenerate =
-          [this](const ScalarGrid&) {
-            // The envelope is display only: the regenerated frames leave it
-            // where the last full frame put it.
-            buildTransferMesh();
-            precomputeFrame(false);
-            updateFrame(fraction_);
-          },
+      .deformedPositions = [this]() -> const std::vector<Eigen::Vector3d>& { return deformedTransferMesh(); },
+      .placedByDeformation = [this] { return placedByGreenCoordinates(); },
+      .placeMidpoints = [this](const TetMesh& refined, std::span<const TetEdge> parents, std::vector<Eigen::Vector3d>& deformed,
+                               std::vector<std::uint8_t>& placed) { placeMidpoints(refined, parents, deformed, placed); },
+      .adopt = [this](TetMesh refined, std::vector<Eigen::Vector3d> deformed, std::vector<std::uint8_t> placed) {
+        adoptRefinedMesh(std::move(refined), std::move(deformed), std::move(placed));
+      },
   };
-  RefinementResult result = refineTransferMesh(subject, sizing_, interpolate, options);
+  RefinementResult result = refineTransferMesh(subject, sizing_.geometry, interpolate, options);
   recordStage(timer.stop());
   return result;
+}
+
+std::vector<std::uint8_t> DeformationPipeline::placedByGreenCoordinates() const {
+  std::vector<std::uint8_t> placed = transferMeshInside();
+  if (!options_.rigidBones || rigidBones_.vertexGroup.size() != placed.size()) return placed;
+  // A rigid bone's vertices move with its fit, the band around them by the
+  // propagation (FrameDeformerOptions::rigidBandRings).
+  std::vector<std::uint8_t> held(placed.size(), 0);
+  for (std::size_t v = 0; v < held.size(); ++v) held[v] = rigidBones_.vertexGroup[v] >= 0;
+  for (int ring = 0; ring < options_.frame.rigidBandRings; ++ring) {
+    std::vector<std::uint8_t> next = held;
+    for (const Tet& t : transferMesh_.tets)
+      if (held[std::size_t(t[0])] || held[std::size_t(t[1])] || held[std::size_t(t[2])] || held[std::size_t(t[3])])
+        for (const std::int32_t v : t) next[std::size_t(v)] = 1;
+    held = std::move(next);
+  }
+  for (std::size_t v = 0; v < placed.size(); ++v)
+    if (held[v]) placed[v] = 0;
+  return placed;
+}
+
+void DeformationPipeline::placeMidpoints(const TetMesh& refined, std::span<const TetEdge> parents,
+                                         std::vector<Eigen::Vector3d>& deformed, std::vector<std::uint8_t>& placed) const {
+  const std::size_t old = deformed.size(), nv = refined.vertexCount();
+  // A midpoint between two vertices the Green coordinates place, inside the
+  // cage, is placed by them too: the deformation itself, which the split
+  // tets now follow more closely. Any other midpoint stays on its edge's
+  // deformed image (the propagation and a rigid motion are affine on a tet).
+  const std::span<const Eigen::Vector3d> added(refined.positions.data() + old, nv - old);
+  const std::vector<std::uint8_t> inCage = insideCage(cage_, added);
+  placed.resize(nv, 0);
+  std::vector<Eigen::Vector3d> points;
+  std::vector<std::size_t> ids;
+  for (std::size_t v = old; v < nv; ++v) {
+    const TetEdge& e = parents[v - old];
+    placed[v] = placed[std::size_t(e[0])] && placed[std::size_t(e[1])] && inCage[v - old];
+    if (!placed[v]) continue;
+    ids.push_back(v);
+    points.push_back(refined.positions[v]);
+  }
+  deformed.resize(nv);
+  if (!points.empty()) {
+    const GreenCoordinates coordinates = greenCoordinates(cage_, points, options_.frame.precision);
+    const GreenCageFrame frame = greenCageDisplacement(cage_, deformer_.cagePositions(), coordinates.stride());
+    std::vector<Eigen::Vector3d> out(points.size());
+    applyGreenCoordinates(coordinates, frame, out, points);
+    for (std::size_t k = 0; k < ids.size(); ++k) deformed[ids[k]] = out[k];
+  }
+  for (std::size_t v = old; v < nv; ++v)
+    if (!placed[v]) deformed[v] = 0.5 * (deformed[std::size_t(parents[v - old][0])] + deformed[std::size_t(parents[v - old][1])]);
+}
+
+void DeformationPipeline::adoptRefinedMesh(TetMesh refined, std::vector<Eigen::Vector3d> deformed, std::vector<std::uint8_t> placed) {
+  // Inside: the initial vertices keep theirs; a midpoint is inside when the
+  // Green coordinates placed it.
+  std::vector<std::uint8_t> inside = transferMeshInside();
+  const std::size_t old = inside.size();
+  inside.resize(refined.vertexCount(), 0);
+  for (std::size_t v = old; v < inside.size(); ++v) inside[v] = placed[v];
+  transferMesh_ = std::move(refined);
+  refinedPositions_ = std::move(deformed);
+  refinedInside_ = std::move(inside);
+  refined_ = true;
+  // The bone groups of the refined TM, for the report (its midpoints took
+  // their parents' motion).
+  rigidBones_ = boneKeys_.voxelCount() > 0 ? rigidBoneGroups(transferMesh_, boneKeys_, options_.rigidJointRings) : RigidBoneGroups{};
+}
+
+void DeformationPipeline::embedRefinedMesh() {
+  if (!refined_) return;
+  refined_ = false;
+  precomputeFrame(options_.envelope);
 }
 
 }  // namespace vox

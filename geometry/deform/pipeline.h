@@ -5,7 +5,7 @@
 //   DeformationPipeline pipeline(workingGrid, options);  // pre-process
 //   pipeline.setPose(pose, "pose.json");                  // handles, factorizations
 //   pipeline.deform();                                    // one frame
-//   pipeline.refine(refinementOptions, interpolation);    // post-process, eq. 4.5-4.7
+//   pipeline.refine(refinementOptions, interpolation);    // post-process, eq. 4.5-4.6
 //   ... rasterize pipeline.transferMesh() / deformedTransferMesh() (rasterize.h,
 //       gpu/kernels/rasterize.h, out_of_core.h), or ray-cast them.
 //
@@ -53,6 +53,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -159,7 +160,11 @@ public:
   // propagation run on what setPose precomputed; nothing is refactorized.
   // Returns the deformed TM (deformedTransferMesh) and envelope.
   void deformTo(const Eigen::MatrixX3d& handleTargets, int arapIterations);
-  // Post-process: refines the TM under the current pose (eq. 4.5-4.7).
+  // Post-process: refines the TM under the current pose (eq. 4.5-4.6,
+  // adaptive_refinement.h): the tets it splits gain midpoints placed by the
+  // frame's Green coordinates, the rest of the TM keeps its embedding. The
+  // deformer keeps its precomputation of the unrefined TM until the next
+  // setPose, deform or deformTo, which embed the refined TM whole.
   RefinementResult refine(const RefinementOptions& options, const VertexFieldInterpolation& interpolate);
 
   const LabelGrid& groups() const { return groups_; }   // S (or B) on the working grid
@@ -170,11 +175,14 @@ public:
   const TriMesh& envelope() const { return envelope_; }
   const ScalarGrid& sizingField() const { return sizing_; }
   const TetMesh& transferMesh() const { return transferMesh_; }  // rest TM (cut)
-  const std::vector<Eigen::Vector3d>& deformedTransferMesh() const { return deformer_.transferMeshPositions(); }
+  const std::vector<Eigen::Vector3d>& deformedTransferMesh() const {
+    return refined_ ? refinedPositions_ : deformer_.transferMeshPositions();
+  }
   const std::vector<Eigen::Vector3d>& deformedCage() const { return deformer_.cagePositions(); }
   const std::vector<Eigen::Vector3d>& deformedEnvelope() const { return deformedEnvelope_; }
   // #TM vertices: 1 inside the cage (Green coordinates), 0 outside (propagation).
-  const std::vector<std::uint8_t>& transferMeshInside() const { return deformer_.transferMeshInside(); }
+  const std::vector<std::uint8_t>& transferMeshInside() const { return refined_ ? refinedInside_ : deformer_.transferMeshInside(); }
+  // The frame deformer (after refine: of the TM before the refinement).
   const FrameDeformer& deformer() const { return deformer_; }
   // Per cage() vertex: its vertex in builtCage().
   const std::vector<std::int32_t>& cageSource() const { return cageSource_; }
@@ -194,9 +202,8 @@ public:
   const PipelineStats& stats() const { return stats_; }
 
 private:
-  // initial: the pre-processing's TM (from options_.prepared where it has
-  // it); the refinement's regenerations build theirs.
-  void buildTransferMesh(bool initial = false);
+  // The pre-processing's TM (from options_.prepared where it has it).
+  void buildTransferMesh();
   void precomputeFrame(bool withEnvelope);
   // One frame of the deformer at `fraction` of the pose (handles and rigid
   // bone motions).
@@ -204,6 +211,16 @@ private:
   std::vector<std::uint8_t> acrossSeparation() const;
   std::size_t markTornVertices(std::vector<std::uint8_t>& propagate) const;
   void recordStage(StageTime time);
+  // 1 per TM vertex that the frame's Green coordinates place (inside the
+  // cage, not propagated, neither a rigid bone's nor in its band).
+  std::vector<std::uint8_t> placedByGreenCoordinates() const;
+  // The refinement's subject (adaptive_refinement.h): places a round's
+  // midpoints in the current frame, and takes the TM the refinement keeps.
+  void placeMidpoints(const TetMesh& refined, std::span<const TetEdge> parents, std::vector<Eigen::Vector3d>& deformed,
+                      std::vector<std::uint8_t>& placed) const;
+  void adoptRefinedMesh(TetMesh refined, std::vector<Eigen::Vector3d> deformed, std::vector<std::uint8_t> placed);
+  // Embeds the refined TM whole when refine() left the deformer behind it.
+  void embedRefinedMesh();
 
   PipelineOptions options_;
   std::vector<Label> cageGroups_;          // per built-cage vertex: nearest label group (selections by group)
@@ -222,6 +239,11 @@ private:
   double fraction_ = 0.0;
   bool posed_ = false;
   std::vector<Eigen::Vector3d> deformedEnvelope_;
+  // After refine(): the refined TM's deformed positions and inside flags
+  // (the deformer's describe the TM before it).
+  bool refined_ = false;
+  std::vector<Eigen::Vector3d> refinedPositions_;
+  std::vector<std::uint8_t> refinedInside_;
   PipelineStats stats_;
 };
 

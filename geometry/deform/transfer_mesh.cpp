@@ -4,6 +4,7 @@
 #include "geometry/distance_transform.h"
 #include "geometry/deform/cage/restricted_delaunay.h"
 #include "geometry/error.h"
+#include "geometry/parallel.h"
 #include "geometry/progress.h"
 
 #include <Eigen/Dense>
@@ -62,18 +63,13 @@ private:
   double offset_;
 };
 
-// Foreground voxels of `grid` (linear indices) whose centres lie in no tet.
-std::vector<std::int64_t> uncoveredVoxels(const TetMesh& mesh, const LabelGrid& grid) {
-  const GridGeometry& g = grid.geometry();
-  std::vector<std::uint8_t> covered(std::size_t(g.voxelCount()), 0);
+// Marks covered[v] for the voxels of z in [k0, k1) whose centres lie in a
+// tet of `mesh`.
+void markCoveredVoxels(const TetMesh& mesh, const GridGeometry& g, std::int64_t k0, std::int64_t k1, std::vector<std::uint8_t>& covered) {
   std::size_t visited = 0;
   for (const Tet& t : mesh.tets) {
     if ((++visited & 0xfff) == 0) throwIfCancelled();
     const Eigen::Vector3d& a = mesh.positions[t[0]];
-    Eigen::Matrix3d m;
-    m << mesh.positions[t[1]] - a, mesh.positions[t[2]] - a, mesh.positions[t[3]] - a;
-    const Eigen::Matrix3d inv = m.inverse();
-    if (!inv.allFinite()) continue;
     Eigen::Vector3d lo = a, hi = a;
     for (int k = 1; k < 4; ++k) {
       lo = lo.cwiseMin(mesh.positions[t[k]]);
@@ -85,6 +81,13 @@ std::vector<std::int64_t> uncoveredVoxels(const TetMesh& mesh, const LabelGrid& 
       i0[d] = std::max<std::int64_t>(0, std::int64_t(std::ceil(clo[d])));
       i1[d] = std::min<std::int64_t>(g.dims[d] - 1, std::int64_t(std::floor(chi[d])));
     }
+    i0[2] = std::max(i0[2], k0);
+    i1[2] = std::min(i1[2], k1 - 1);
+    if (i0[2] > i1[2]) continue;
+    Eigen::Matrix3d m;
+    m << mesh.positions[t[1]] - a, mesh.positions[t[2]] - a, mesh.positions[t[3]] - a;
+    const Eigen::Matrix3d inv = m.inverse();
+    if (!inv.allFinite()) continue;
     // Barycentric inclusion with a tolerance: a centre on a shared face
     // counts for both tets.
     constexpr double kTolerance = 1e-9;
@@ -95,6 +98,15 @@ std::vector<std::int64_t> uncoveredVoxels(const TetMesh& mesh, const LabelGrid& 
           if (l.minCoeff() >= -kTolerance && l.sum() <= 1.0 + kTolerance) covered[std::size_t(g.index(i, j, k))] = 1;
         }
   }
+}
+
+// Foreground voxels of `grid` (linear indices) whose centres lie in no tet.
+// On the parallel loop by slabs of z: each slab's voxels are marked by the
+// tets that reach it, so no two threads write one voxel.
+std::vector<std::int64_t> uncoveredVoxels(const TetMesh& mesh, const LabelGrid& grid) {
+  const GridGeometry& g = grid.geometry();
+  std::vector<std::uint8_t> covered(std::size_t(g.voxelCount()), 0);
+  parallelRanges(g.dims[2], workerThreads(0), [&](std::int64_t k0, std::int64_t k1) { markCoveredVoxels(mesh, g, k0, k1, covered); }, 8);
   std::vector<std::int64_t> uncovered;
   for (std::size_t v = 0; v < covered.size(); ++v)
     if (grid.labels()[v] != 0 && !covered[v]) uncovered.push_back(std::int64_t(v));
@@ -148,9 +160,13 @@ TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, con
 
   const double radius = 4.0 * g.spacing.maxCoeff();
   for (int pass = 0;; ++pass) {
-    for (std::int64_t k = 0; k < padded.dims[2]; ++k)
-      for (std::int64_t j = 0; j < padded.dims[1]; ++j)
-        for (std::int64_t i = 0; i < padded.dims[0]; ++i) atCentres.at(i, j, k) = Label(label(padded.voxelCenter(i, j, k)));
+    parallelRanges(padded.dims[2], workerThreads(0), [&](std::int64_t k0, std::int64_t k1) {
+      for (std::int64_t k = k0; k < k1; ++k) {
+        throwIfCancelled();
+        for (std::int64_t j = 0; j < padded.dims[1]; ++j)
+          for (std::int64_t i = 0; i < padded.dims[0]; ++i) atCentres.at(i, j, k) = Label(label(padded.voxelCenter(i, j, k)));
+      }
+    }, 8);
     reportProgress("transfer mesh", 0.1);
     TetMesh mesh = restrictedDelaunayVolume(domain, criteria);
     orientPositively(mesh);

@@ -44,7 +44,8 @@ ScalarGrid defaultSizingField(const GridGeometry& geometry, double fraction = 0.
 // grid without foreground or a sizing field with non-positive values.
 // `relabel`, when given, takes each foreground point's group and returns the
 // label the mesher resolves there (> 0): analytic interfaces, such as a
-// joint's articular sphere, that the grid's voxels would only staircase.
+// joint's articular sphere, that the grid's voxels would only staircase;
+// it is called from the parallel loop's threads at once.
 using TransferMeshRelabel = std::function<int(const Eigen::Vector3d& p, int group)>;
 TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, const TransferMeshOptions& options = {},
                           const TransferMeshRelabel& relabel = {});

@@ -1,8 +1,10 @@
 #include "geometry/deform/cage/envelope.h"
 
+#include "geometry/cancellation.h"
 #include "geometry/distance_transform.h"
 #include "geometry/deform/cage/restricted_delaunay.h"
 #include "geometry/error.h"
+#include "geometry/parallel.h"
 #include "geometry/progress.h"
 
 #include <cmath>
@@ -19,7 +21,6 @@ void gaussianSmooth(ScalarGrid& field, double sigmaMm) {
   const GridGeometry& g = field.geometry;
   const std::int64_t dims[3] = {g.dims[0], g.dims[1], g.dims[2]};
   const std::int64_t stride[3] = {1, dims[0], dims[0] * dims[1]};
-  std::vector<float> line;
   for (int axis = 0; axis < 3; ++axis) {
     const double sigma = sigmaMm / g.spacing[axis];
     const int radius = int(std::ceil(3.0 * sigma));
@@ -30,20 +31,25 @@ void gaussianSmooth(ScalarGrid& field, double sigmaMm) {
     for (double& w : kernel) w /= sum;
     const std::int64_t len = dims[axis];
     const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
-    line.resize(std::size_t(len));
-    for (std::int64_t u = 0; u < dims[a2]; ++u)
-      for (std::int64_t t = 0; t < dims[a1]; ++t) {
-        const std::int64_t base = t * stride[a1] + u * stride[a2];
-        for (std::int64_t p = 0; p < len; ++p) line[p] = field.values[base + p * stride[axis]];
-        for (std::int64_t p = 0; p < len; ++p) {
-          double v = 0.0;
-          for (int r = -radius; r <= radius; ++r) {
-            const std::int64_t q = p + r;
-            if (q >= 0 && q < len) v += kernel[r + radius] * line[q];
+    // Lines are independent: ranges of them on the parallel loop.
+    parallelRanges(dims[a2], workerThreads(0), [&](std::int64_t u0, std::int64_t u1) {
+      std::vector<float> line(static_cast<std::size_t>(len));
+      for (std::int64_t u = u0; u < u1; ++u) {
+        throwIfCancelled();
+        for (std::int64_t t = 0; t < dims[a1]; ++t) {
+          const std::int64_t base = t * stride[a1] + u * stride[a2];
+          for (std::int64_t p = 0; p < len; ++p) line[std::size_t(p)] = field.values[std::size_t(base + p * stride[axis])];
+          for (std::int64_t p = 0; p < len; ++p) {
+            double v = 0.0;
+            for (int r = -radius; r <= radius; ++r) {
+              const std::int64_t q = p + r;
+              if (q >= 0 && q < len) v += kernel[std::size_t(r + radius)] * line[std::size_t(q)];
+            }
+            field.values[std::size_t(base + p * stride[axis])] = float(v);
           }
-          field.values[base + p * stride[axis]] = float(v);
         }
       }
+    }, 4);
   }
 }
 

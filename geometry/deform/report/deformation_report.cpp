@@ -134,8 +134,8 @@ void describePipeline(DeformationReport& report, const DeformationPipeline& pipe
   report.envelopeFaces = pipeline.envelope().faceCount();
   report.envelopeOutside = pipeline.deformer().stats().envelopeOutside;
   const TetMesh& tm = pipeline.transferMesh();
-  report.tmInside = pipeline.deformer().stats().transferMeshInside;
-  report.tmOutside = pipeline.deformer().stats().transferMeshOutside;
+  report.tmInside = std::size_t(std::count(pipeline.transferMeshInside().begin(), pipeline.transferMeshInside().end(), 1));
+  report.tmOutside = tm.vertexCount() - report.tmInside;
   report.uncoveredVoxels = s.uncoveredVoxels;
   report.cuts = s.cuts;
   const auto& deformed = pipeline.deformedTransferMesh();

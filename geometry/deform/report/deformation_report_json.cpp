@@ -98,10 +98,10 @@ std::string deformationReportJson(const DeformationReport& r) {
                      {"tets", s.tets},
                      {"mean_error", s.meanError},
                      {"max_error", s.maxError},
-                     {"update_strength", s.strength},
+                     {"split_edges", s.splitEdges},
                      {"seconds", s.seconds}});
   }
-  root["refinement"] = {{"iterations", steps}, {"stop", r.refinement.stopReason}};
+  root["refinement"] = {{"iterations", steps}, {"kept", r.refinement.kept}, {"stop", r.refinement.stopReason}};
   root["distortion"] = {{"volume_mm3", r.distortion.volume},
                         {"angle_deg", toJson(r.distortion.angle)},
                         {"stretch", toJson(r.distortion.stretch)}};

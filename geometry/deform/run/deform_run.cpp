@@ -270,6 +270,10 @@ PosedMesh poseByCage(const DeformGridRequest& o, const Source& source, RasterEng
   StageTimer skeletonTimer("skeleton");
   PipelineOptions options = deformPipelineOptions(o, source.workingGrid(), source.factor, prepared.get());
   options.prepared = prepared;
+  // The posed grid comes from the transfer mesh alone: the envelope (its
+  // build, and the Green coordinates of its vertices in the embedding) is
+  // for the interactive display, and leaving it out changes no output byte.
+  options.envelope = false;
   if (options.bodyParts) report.stages.push_back(skeletonTimer.stop());
   if (options.bonesThroughEachOther) refuseOrForce(o, report, *options.bonesThroughEachOther);
   const bool separated = !options.cage.separations.empty();

@@ -4,10 +4,11 @@
 // both run it, on the engines the caller chooses (raster/raster_engines.h:
 // the GPU kernels of gpu/raster_engines.h, or the CPU references):
 //   a pose with joints compiled against the skeleton (deform/pose/joint_pose.h) ->
-//   pre-process (label groups, envelope, cage, transfer mesh, embedding) ->
+//   pre-process (label groups, cage, transfer mesh, embedding; not the
+//   envelope, which only the interactive display draws) ->
 //   deformation (ARAP -> Green coordinates -> propagation) ->
-//   deformation-adaptive refinement (eq. 4.5-4.7; the engines' field
-//   interpolation) -> rasterization of G' (the engines' rasterizer), streamed
+//   deformation-adaptive refinement (eq. 4.5-4.6, the marked tets bisected;
+//   the engines' field interpolation) -> rasterization of G' (the engines' rasterizer), streamed
 //   slab by slab to the output file (held in memory and corrected with
 //   preserveVolumes) -> report.
 // The memory budgets of the out-of-core path and the report's assembly live

@@ -1,9 +1,11 @@
 #include "geometry/deform/solve/deformation_metrics.h"
 
 #include "geometry/error.h"
+#include "geometry/parallel.h"
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -115,27 +117,41 @@ std::vector<Eigen::Matrix3d> basisChanges(const TetMesh& rest, std::span<const E
     throw InputError("transfer mesh", "deformed positions (" + std::to_string(deformed.size()) + ") do not match its " +
                                           std::to_string(rest.vertexCount()) + " vertices");
   std::vector<Eigen::Matrix3d> b(rest.tetCount());
-  for (std::size_t t = 0; t < rest.tetCount(); ++t) {
-    const Eigen::Matrix3d e = edgeMatrix(rest.positions, rest.tets[t]);
-    if (!(std::abs(e.determinant()) > 0)) throw InputError("transfer mesh", "tet " + std::to_string(t) + " is degenerate");
-    b[t] = edgeMatrix(deformed, rest.tets[t]) * e.inverse();
-  }
+  // Each range stops at its first degenerate tet; the smallest of those is
+  // the mesh's first, whatever the thread count.
+  std::atomic<std::int64_t> degenerate{std::numeric_limits<std::int64_t>::max()};
+  parallelRanges(std::int64_t(rest.tetCount()), workerThreads(0), [&](std::int64_t begin, std::int64_t end) {
+    for (std::int64_t t = begin; t < end; ++t) {
+      const Tet& tet = rest.tets[std::size_t(t)];
+      const Eigen::Matrix3d e = edgeMatrix(rest.positions, tet);
+      if (!(std::abs(e.determinant()) > 0)) {
+        for (std::int64_t first = degenerate.load(); t < first && !degenerate.compare_exchange_weak(first, t);) {
+        }
+        return;
+      }
+      b[std::size_t(t)] = edgeMatrix(deformed, tet) * e.inverse();
+    }
+  });
+  if (degenerate.load() != std::numeric_limits<std::int64_t>::max())
+    throw InputError("transfer mesh", "tet " + std::to_string(degenerate.load()) + " is degenerate");
   return b;
 }
 
 std::vector<Eigen::Matrix3d> basisChangeLaplacian(std::span<const Eigen::Matrix3d> basis, std::span<const double> volumes,
                                                   std::span<const std::array<std::int32_t, 4>> neighbors) {
   std::vector<Eigen::Matrix3d> delta(basis.size(), Eigen::Matrix3d::Zero());
-  for (std::size_t t = 0; t < basis.size(); ++t) {
-    Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
-    double weight = 0;
-    for (std::int32_t n : neighbors[t]) {
-      if (n < 0) continue;
-      sum += volumes[std::size_t(n)] * basis[std::size_t(n)];
-      weight += volumes[std::size_t(n)];
+  parallelRanges(std::int64_t(basis.size()), workerThreads(0), [&](std::int64_t begin, std::int64_t end) {
+    for (auto t = std::size_t(begin); t < std::size_t(end); ++t) {
+      Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+      double weight = 0;
+      for (std::int32_t n : neighbors[t]) {
+        if (n < 0) continue;
+        sum += volumes[std::size_t(n)] * basis[std::size_t(n)];
+        weight += volumes[std::size_t(n)];
+      }
+      if (weight > 0) delta[t] = basis[t] - sum / weight;
     }
-    if (weight > 0) delta[t] = basis[t] - sum / weight;
-  }
+  });
   return delta;
 }
 
@@ -145,7 +161,9 @@ std::vector<double> tetDeformationError(const TetMesh& rest, std::span<const Eig
   const auto neighbors = faceNeighbors(rest, "transfer mesh");
   const auto delta = basisChangeLaplacian(basis, volumes, neighbors);
   std::vector<double> e(delta.size());
-  for (std::size_t t = 0; t < delta.size(); ++t) e[t] = delta[t].norm();
+  parallelRanges(std::int64_t(delta.size()), workerThreads(0), [&](std::int64_t begin, std::int64_t end) {
+    for (auto t = std::size_t(begin); t < std::size_t(end); ++t) e[t] = delta[t].norm();
+  });
   return e;
 }
 

@@ -8,8 +8,12 @@
 
 #include "geometry/deform/solve/label_volumes.h"
 #include "geometry/deform/pipeline.h"
+#include "geometry/deform/solve/deformation_metrics.h"
 #include "geometry/raster/rasterize.h"
 #include "geometry/io/grid_io.h"
+#include "geometry/parallel.h"
+#include "geometry/raster/field_interpolation.h"
+#include "geometry/synth.h"
 #include "geometry/label_stats.h"
 #include "tests/support/pose_fixtures.h"
 #include "tests/support/test_environment.h"
@@ -156,6 +160,149 @@ TEST(DeformationPipeline, RigidPoseMovesTheTransferMeshRigidlyAndKeepsLabelCount
             << " relabelled (" << 100.0 * double(c.relabelled) / double(foregroundBefore) << " % of the foreground) in "
             << c.sweeps << " sweeps; largest count change " << largest << " % (label " << largestLabel << ", "
             << before[largestLabel] << " voxels)\n";
+}
+
+// The stick figure with its upper half (z above the middle) turned 25
+// degrees about x and the rest fixed: a bend at the waist.
+Pose waistBend(const GridGeometry& g) {
+  const Eigen::Vector3d lo = g.boxMin() - Eigen::Vector3d::Constant(1e3), hi = g.boxMax() + Eigen::Vector3d::Constant(1e3);
+  const double middle = 0.5 * (g.boxMin().z() + g.boxMax().z());
+  PoseSelection upper, lower;
+  upper.name = "upper";
+  upper.boxMin = {lo.x(), lo.y(), middle + 0.15 * (g.boxMax().z() - middle)};
+  upper.boxMax = hi;
+  upper.transform.axis = Eigen::Vector3d::UnitX();
+  upper.transform.angleDeg = 25.0;
+  upper.transform.center = {0.5 * (g.boxMin().x() + g.boxMax().x()), 0.5 * (g.boxMin().y() + g.boxMax().y()), middle};
+  lower.name = "lower";
+  lower.boxMin = lo;
+  lower.boxMax = {hi.x(), hi.y(), middle - 0.15 * (middle - g.boxMin().z())};
+  lower.fixed = true;
+  Pose pose;
+  pose.name = "waist bend";
+  pose.selections = {upper, lower};
+  return pose;
+}
+
+// A TM fine enough for the bend's error to fall when its tets split, and
+// one refinement round that marks the tets above 1.5 e_mean.
+constexpr double kFineSizing = 0.025;
+constexpr RefinementOptions kOneRound{.maxIterations = 1, .uniformRatio = 1.5};
+
+struct PipelineRun {
+  TetMesh rest;
+  std::vector<Eigen::Vector3d> deformed, envelope;
+  std::vector<std::uint8_t> inside;
+  RefinementResult refinement;
+};
+
+// Envelope, cage, TM, embedding, one frame and the refinement on `threads`
+// threads.
+PipelineRun runOnThreads(const LabelGrid& grid, int threads) {
+  const ScopedWorkerThreads scope(threads);
+  PipelineOptions options;
+  options.sizingFraction = kFineSizing;
+  options.pose = waistBend(grid.geometry());
+  DeformationPipeline pipeline(grid, options);
+  pipeline.deform();
+  PipelineRun run;
+  run.envelope = pipeline.deformedEnvelope();
+  run.refinement = pipeline.refine(kOneRound, cpuFieldInterpolation());
+  run.rest = pipeline.transferMesh();
+  run.deformed = pipeline.deformedTransferMesh();
+  run.inside = pipeline.transferMeshInside();
+  return run;
+}
+
+TEST(DeformationPipeline, TheSameBytesOnOneTwoAndSevenThreads) {
+  const LabelGrid grid = synthesize(SynthKind::StickFigure, 64);
+  const PipelineRun one = runOnThreads(grid, 1);
+  ASSERT_EQ(one.refinement.kept, 1u) << one.refinement.stopReason;
+  for (const int threads : {2, 7}) {
+    const PipelineRun many = runOnThreads(grid, threads);
+    EXPECT_EQ(one.rest.positions, many.rest.positions) << threads;
+    EXPECT_EQ(one.rest.tets, many.rest.tets) << threads;
+    EXPECT_EQ(one.rest.labels, many.rest.labels) << threads;
+    EXPECT_EQ(one.deformed, many.deformed) << threads;
+    EXPECT_EQ(one.envelope, many.envelope) << threads;
+    EXPECT_EQ(one.inside, many.inside) << threads;
+    EXPECT_EQ(one.refinement.stopReason, many.refinement.stopReason) << threads;
+  }
+}
+
+TEST(DeformationPipeline, RefinementEmbedsItsMidpointsAsTheWholeEmbeddingWould) {
+  const LabelGrid grid = synthesize(SynthKind::StickFigure, 64);
+  PipelineOptions options;
+  options.envelope = false;
+  options.sizingFraction = kFineSizing;
+  options.pose = waistBend(grid.geometry());
+  DeformationPipeline pipeline(grid, options);
+  pipeline.deform();
+  const std::vector<Eigen::Vector3d> before = pipeline.deformedTransferMesh();
+  const TetMesh initial = pipeline.transferMesh();
+  const RefinementResult result = pipeline.refine(kOneRound, cpuFieldInterpolation());
+  ASSERT_EQ(result.kept, 1u) << result.stopReason;
+  EXPECT_LT(result.steps[1].maxError, result.steps[0].maxError);
+  const TetMesh& rest = pipeline.transferMesh();
+  ASSERT_GT(rest.vertexCount(), initial.vertexCount());
+  ASSERT_EQ(pipeline.deformedTransferMesh().size(), rest.vertexCount());
+  ASSERT_EQ(pipeline.transferMeshInside().size(), rest.vertexCount());
+  // The vertices of the initial TM keep their places and coordinates.
+  EXPECT_TRUE(std::equal(initial.positions.begin(), initial.positions.end(), rest.positions.begin()));
+  EXPECT_TRUE(std::equal(before.begin(), before.end(), pipeline.deformedTransferMesh().begin()));
+  for (const Tet& t : rest.tets) EXPECT_GT(signedVolume(rest.positions, t), 0.0);
+  EXPECT_EQ(countUncoveredVoxels(rest, grid), countUncoveredVoxels(initial, grid));
+
+  // Embedding the refined TM whole (the next frame does) places the
+  // midpoints the refinement gave Green coordinates where it put them.
+  const std::vector<Eigen::Vector3d> refined = pipeline.deformedTransferMesh();
+  const std::vector<std::uint8_t> inside = pipeline.transferMeshInside();
+  pipeline.deform();
+  std::size_t compared = 0;
+  double worst = 0.0;
+  for (std::size_t v = initial.vertexCount(); v < rest.vertexCount(); ++v)
+    if (inside[v] && pipeline.transferMeshInside()[v]) {
+      worst = std::max(worst, (pipeline.deformedTransferMesh()[v] - refined[v]).norm());
+      ++compared;
+    }
+  EXPECT_GT(compared, 0u);
+  EXPECT_LE(worst, 1e-9 * grid.geometry().diagonal());
+}
+
+// The stick figure's right arm turned 30 degrees, separated from the
+// trunk: the TM vertices next to the cut are placed by the propagation, the
+// others by Green coordinates. One round of the refinement lowers the error
+// without making the map more distorted than the unrefined TM shows it:
+// split by their longest edges, the refined tets keep their shapes, and no
+// sliver magnifies the small offset of a midpoint's Green coordinates from
+// its tet's affine map into a large stretch.
+TEST(DeformationPipeline, RefinementNextToTheCutAddsNoDistortion) {
+  const LabelGrid grid = synthesize(SynthKind::StickFigure, 48);
+  const Pose pose = parsePose(R"({
+    "selections": [
+      {"name": "body", "box": {"min": [-1000, -1000, -1000], "max": [1000, 1000, 1000]}, "fixed": true},
+      {"name": "right arm", "box": {"min": [-1000, -1000, 40], "max": [10, 1000, 80]}, "group": "right_arm",
+       "transform": {"rotation": {"axis": [0, 1, 0], "angle_deg": 30, "center": [12, 14, 80]}}}
+    ],
+    "separations": [{"groups": ["right_arm", "trunk"]}]})",
+                              "arm");
+  PipelineOptions options = poseOptions(pose, "arm", synthOrganTable(SynthKind::StickFigure));
+  options.envelope = false;
+  DeformationPipeline pipeline(grid, options);
+  pipeline.deform();
+  const DistortionHistograms before = distortionHistograms(pipeline.transferMesh(), pipeline.deformedTransferMesh());
+  const RefinementResult result = pipeline.refine({.maxIterations = 1}, cpuFieldInterpolation());
+  ASSERT_EQ(result.kept, 1u) << result.stopReason;
+  EXPECT_LT(result.steps[1].maxError, 0.7 * result.steps[0].maxError);
+  const DistortionHistograms after = distortionHistograms(pipeline.transferMesh(), pipeline.deformedTransferMesh());
+  std::cout << "[ stats    ] " << result.steps[0].tets << " -> " << result.steps[1].tets << " tets, max e_g " << result.steps[0].maxError
+            << " -> " << result.steps[1].maxError << "; stretch " << before.stretch.min << "-" << before.stretch.max << " -> "
+            << after.stretch.min << "-" << after.stretch.max << ", angles " << before.angle.min << "-" << before.angle.max << " -> "
+            << after.angle.min << "-" << after.angle.max << " deg\n";
+  EXPECT_LE(after.stretch.max, 1.1 * before.stretch.max);
+  EXPECT_GE(after.stretch.min, before.stretch.min / 1.1);
+  EXPECT_GE(after.angle.min, before.angle.min - 5.0);
+  EXPECT_LE(after.angle.max, before.angle.max + 5.0);
 }
 
 }  // namespace
