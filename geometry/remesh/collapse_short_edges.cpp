@@ -58,6 +58,7 @@ std::int32_t EdgeCollapser::tryCollapse(std::int32_t u, std::int32_t v, bool app
   if (rule.condition == EdgeCondition::Exclusion) return -1;
   if (complex_.hasPinches() && nearPinch()) return -1;
   if (!topologyTests(suv) || !linkCondition()) return -1;
+  if (mergesTaggedEdges(u, v)) return -1;
 
   worstBefore_[0] = worstBefore_[1] = kUnknownCosine;
 
@@ -93,6 +94,16 @@ std::int32_t EdgeCollapser::tryCollapse(std::int32_t u, std::int32_t v, bool app
     return k.vertex;
   }
   return -1;
+}
+
+bool EdgeCollapser::mergesTaggedEdges(std::int32_t u, std::int32_t v) const {
+  // A common neighbour w with (u, w) and (v, w) both tagged: the collapse
+  // would fold a tagged line onto itself (the Figure 2.16 case of a line).
+  const FeatureEdges& features = complex_.features();
+  if (features.degree(u) == 0 || features.degree(v) == 0) return false;
+  for (std::int32_t w : ring_.ring)
+    if (features.lineOf(u, w) >= 0 && features.lineOf(v, w) >= 0) return true;
+  return false;
 }
 
 bool EdgeCollapser::nearPinch() const {
@@ -317,6 +328,11 @@ std::int32_t EdgeCollapser::applyPlan(std::int32_t u, std::int32_t v, CollapseMo
 
 void EdgeCollapser::collapse(const VertexNeighborhood& r, const VertexNeighborhood& k, const Eigen::Vector3d& p) {
   const std::int32_t rv = r.vertex, kv = k.vertex;
+  if (complex_.features().degree(rv) > 0) {
+    std::vector<std::int32_t> ring;
+    complex_.starVertices(r.tets, rv, ring);
+    complex_.features().merge(rv, kv, ring);
+  }
   for (std::int32_t q : r.tets)
     if (complex_.localIndex(q, kv) < 0) complex_.setTetVertex(q, complex_.localIndex(q, rv), kv);
   std::int32_t survivor = -1;

@@ -121,11 +121,27 @@ void remeshComplex(RemeshComplex& complex, const RemeshOptions& options, RemeshS
   }
 }
 
+void tagFeatures(RemeshComplex& complex, const RemeshOptions& options, RemeshStats* stats) {
+  std::size_t lines = 0;
+  if (options.featureSegments && !options.featureSegments->empty())
+    lines += tagPolylines(complex, *options.featureSegments, options.targetLength, options.featureAngle,
+                          options.featureSource);
+  if (options.sharpFeatures) lines += tagSharpFeatures(complex, options.featureAngle);
+  if (stats) {
+    stats->featureLines = lines;
+    stats->featureEdges = complex.features().edgeCount();
+    stats->featureInput.clear();
+    for (const TaggedEdge& e : complex.features().list())
+      stats->featureInput.push_back({complex.position(e.a), complex.position(e.b)});
+  }
+}
+
 TetMesh remeshTetMesh(const TetMesh& mesh, const RemeshOptions& options, RemeshStats* stats, bool keepImaginary,
-                      const std::string& source) {
+                      const std::string& source, std::vector<TaggedEdge>* features) {
   RemeshComplex complex(mesh, source);
+  tagFeatures(complex, options, stats);
   remeshComplex(complex, options, stats);
-  return complex.toTetMesh(keepImaginary);
+  return complex.toTetMesh(keepImaginary, features);
 }
 
 }  // namespace vox::remesh
