@@ -1,7 +1,9 @@
 // Gmsh MSH 4.1 (.msh), ASCII and binary: the format of Gmsh and of the FEM
 // codes that read it. Nodes and elements come in blocks, one per geometric
 // entity; an element's label is the first physical tag of its volume entity
-// ($Entities), or the entity tag when the entity has none.
+// ($Entities), or the entity tag when the entity has none. Feature lines
+// (MeshEdges) are 2-node lines on curve entities, one per reference, the
+// reference as the curve's physical tag.
 // Spec: https://gmsh.info/doc/texinfo/gmsh.html#MSH-file-format
 //
 // Vertex order on read is ascending node tag, tet order ascending element

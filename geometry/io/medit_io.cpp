@@ -1,7 +1,8 @@
 // Medit / Gamma Mesh Format: ASCII .mesh and binary .meshb, the tet mesh
 // format of MMG, CGAL, TetGen and Gmsh. Keywords are followed by a count and
 // that many records; indices are 1-based; the last integer of a record is its
-// reference, which for tetrahedra is our label.
+// reference, which for tetrahedra is our label and for Edges (feature
+// lines, MeshEdges) the line's reference.
 // Spec: libMeshb (github.com/LoicMarechal/libMeshb).
 #include "geometry/ascii_text.h"
 #include "geometry/error.h"

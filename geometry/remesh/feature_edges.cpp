@@ -143,7 +143,7 @@ std::vector<TaggedEdge> FeatureEdges::list() const {
   return out;
 }
 
-std::size_t tagSharpFeatures(RemeshComplex& complex, double angleDeg) {
+std::size_t tagSharpFeatures(RemeshComplex& complex, double angleDeg, double minPatchArea) {
   // The outer boundary facets, with their outward unit normals.
   std::vector<Tri> facets;
   std::vector<Eigen::Vector3d> normals;
@@ -182,6 +182,33 @@ std::size_t tagSharpFeatures(RemeshComplex& complex, double angleDeg) {
   forEachManifoldEdge([&](std::int32_t, std::int32_t, std::int32_t f, std::int32_t g) {
     if (normals[std::size_t(f)].dot(normals[std::size_t(g)]) > joined) patches.unite(f, g);
   });
+  // Patches smaller than minPatchArea join the neighbour they share the
+  // longest boundary with (ties: the smaller id), until none is left.
+  std::vector<double> facetArea(facets.size());
+  for (std::size_t i = 0; i < facets.size(); ++i) {
+    const Eigen::Vector3d a = complex.position(facets[i][0]);
+    facetArea[i] = 0.5 * (complex.position(facets[i][1]) - a).cross(complex.position(facets[i][2]) - a).norm();
+  }
+  for (bool merged = true; merged;) {
+    merged = false;
+    std::map<std::int32_t, double> area;
+    for (std::size_t i = 0; i < facets.size(); ++i) area[patches.find(std::int32_t(i))] += facetArea[i];
+    std::map<std::pair<std::int32_t, std::int32_t>, double> shared;
+    forEachManifoldEdge([&](std::int32_t a, std::int32_t b, std::int32_t f, std::int32_t g) {
+      const std::int32_t p = patches.find(f), q = patches.find(g);
+      if (p == q) return;
+      const double length = (complex.position(a) - complex.position(b)).norm();
+      shared[{p, q}] += length;
+      shared[{q, p}] += length;
+    });
+    std::map<std::int32_t, std::pair<double, std::int32_t>> best;  // small patch -> (shared length, neighbour)
+    for (const auto& [pq, length] : shared) {
+      if (area[pq.first] >= minPatchArea) continue;
+      auto [it, added] = best.try_emplace(pq.first, length, pq.second);
+      if (!added && length > it->second.first) it->second = {length, pq.second};
+    }
+    for (const auto& [p, choice] : best) merged = patches.unite(p, choice.second) || merged;
+  }
   // One line per pair of patches, in order of the pairs (patch ids are their
   // smallest facet index, so the numbering depends only on the complex).
   std::map<std::pair<std::int32_t, std::int32_t>, std::vector<std::pair<std::int32_t, std::int32_t>>> byPair;

@@ -99,9 +99,12 @@ private:
 // of the two facets differ by less than `angleDeg`; the edges between two
 // patches are tagged, one line per pair of patches. The patches are closed
 // regions, so a crease that fades out inside one patch is not a feature.
-// Where a line turns by more than `angleDeg`, its vertex is a corner.
-// Returns the number of lines added.
-std::size_t tagSharpFeatures(RemeshComplex& complex, double angleDeg);
+// A patch smaller than `minPatchArea` (mm^2; the remesher passes l^2: no
+// output facet fits in it) joins the neighbour it shares the longest
+// boundary with, as the proxies of Variational Shape Approximation would
+// absorb it. Where a line turns by more than `angleDeg`, its vertex is a
+// corner. Returns the number of lines added.
+std::size_t tagSharpFeatures(RemeshComplex& complex, double angleDeg, double minPatchArea = 0.0);
 
 // User polylines (2.3.8, "marked features"): `segments` joined where they
 // share an end point (same coordinates) into lines, one per connected set.

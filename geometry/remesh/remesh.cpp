@@ -126,7 +126,8 @@ void tagFeatures(RemeshComplex& complex, const RemeshOptions& options, RemeshSta
   if (options.featureSegments && !options.featureSegments->empty())
     lines += tagPolylines(complex, *options.featureSegments, options.targetLength, options.featureAngle,
                           options.featureSource);
-  if (options.sharpFeatures) lines += tagSharpFeatures(complex, options.featureAngle);
+  if (options.sharpFeatures)
+    lines += tagSharpFeatures(complex, options.featureAngle, options.targetLength * options.targetLength);
   if (stats) {
     stats->featureLines = lines;
     stats->featureEdges = complex.features().edgeCount();

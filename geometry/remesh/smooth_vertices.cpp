@@ -68,7 +68,7 @@ public:
           // A tagged line: the mean of its two neighbours on it, onto its input geometry.
           out = complex_.features().projectOnLine(
               nb.featureLine, 0.5 * (complex_.position(nb.tagged[0]) + complex_.position(nb.tagged[1])));
-          return true;
+          return keepsBend(nb, out);
         }
         // Neighbours along the same 1-junction (Table 2.3 similarity or inclusion).
         for (std::size_t i = 0; i < nb.neighbors.size(); ++i)
@@ -171,7 +171,7 @@ public:
         if (nb.featureLine >= 0) {
           project = [this, &nb](Eigen::Vector3d& p) {
             p = complex_.features().projectOnLine(nb.featureLine, p);
-            return true;
+            return keepsBend(nb, p);
           };
         } else if (surfaces_) {
           project = [this, &nb](Eigen::Vector3d& p) { return surfaces_->projectOnCurve(nb.labels, p); };
@@ -211,6 +211,22 @@ public:
   }
 
 private:
+  // A vertex of a tagged line lies on the input line, where it may bend:
+  // with the vertex at p its two edges must still pass within a sixteenth
+  // of the shorter one of where it is, so that the line does not cut the
+  // bend (the collapse keeps the same bound).
+  bool keepsBend(const VertexNeighborhood& nb, const Eigen::Vector3d& p) const {
+    const Eigen::Vector3d v = complex_.position(nb.vertex);
+    const Eigen::Vector3d a = complex_.position(nb.tagged[0]), b = complex_.position(nb.tagged[1]);
+    const double tolerance = std::min((a - v).norm(), (b - v).norm()) / 16.0;
+    auto distance = [&](const Eigen::Vector3d& x, const Eigen::Vector3d& y) {
+      const Eigen::Vector3d d = y - x;
+      const double t = d.squaredNorm() > 0.0 ? std::clamp((v - x).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
+      return (x + t * d - v).norm();
+    };
+    return std::min(distance(a, p), distance(p, b)) <= tolerance;
+  }
+
   // Largest cosine of the smallest dihedral angle over v's domain tets with v
   // at p (lower is better); 3 when a tet around v inverts or falls under the
   // quality floor that it met before.

@@ -174,6 +174,55 @@ TEST(FeatureEdges, UserPolylineIsKeptWithItsEndsAndBend) {
   for (const TaggedEdge& e : edges) EXPECT_EQ(e.line, 0);
 }
 
+LabelGrid plainCube() {
+  GridGeometry g;
+  g.dims = {20, 20, 20};
+  LabelGrid grid(g, 0);
+  for (int z = 3; z < 17; ++z)
+    for (int y = 3; y < 17; ++y)
+      for (int x = 3; x < 17; ++x) grid.at(x, y, z) = 1;
+  return grid;
+}
+
+// A staircase polyline whose right-angle steps are not corners (feature
+// angle 100 degrees): coarsening and smoothing it towards l = 3 mm would cut
+// its steps by 0.35 mm or more; the line stays within 0.1 l.
+TEST(FeatureEdges, LinesAreNotCutAtTheirBends) {
+  const LabelGrid grid = plainCube();
+  std::vector<FeatureSegment> stairs;
+  Eigen::Vector3d p(4.5, 4.5, 16.5);
+  for (int step = 0; step < 8; ++step)
+    for (const Eigen::Vector3d& d : {Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(0, 1, 0)}) {
+      stairs.push_back({p, p + d});
+      p += d;
+    }
+  const double l = 3.0;
+  RemeshOptions options;
+  options.targetLength = l;
+  options.iterations = 4;
+  options.flipSmoothCycles = 2;
+  options.featureAngle = 100.0;
+  options.featureSegments = &stairs;
+  std::vector<TaggedEdge> edges;
+  const TetMesh output = remeshTetMesh(tetrahedralizeVoxels(grid), options, nullptr, false, "cube", &edges);
+  expectValid(output, edges);
+  const std::vector<FeatureSegment> kept = segmentsOf(output.positions, edges);
+  EXPECT_LT(oneSidedDistance(stairs, kept, 0.05 * l), 0.1 * l);
+  EXPECT_LT(oneSidedDistance(kept, stairs, 0.05 * l), 0.1 * l);
+}
+
+// Patches smaller than l^2 (a one-voxel bump on a face) join their
+// neighbours: only the cube's 12 edges remain.
+TEST(FeatureEdges, PatchesSmallerThanTheTargetJoinTheirNeighbours) {
+  LabelGrid grid = plainCube();
+  grid.at(9, 9, 17) = 1;
+  RemeshComplex all(tetrahedralizeVoxels(grid)), merged(tetrahedralizeVoxels(grid));
+  // The bump: its top and four sides against each other and the face, 12 more lines.
+  EXPECT_EQ(tagSharpFeatures(all, 60.0), 12u + 12u);
+  EXPECT_EQ(tagSharpFeatures(merged, 60.0, 9.0), 12u);
+  EXPECT_NEAR(totalLength(segmentsOf(merged.positions(), merged.features().list())), 12 * 14.0, 1e-9);
+}
+
 TEST(FeatureEdges, PolylineOffTheMeshIsRefusedNamingTheFile) {
   const LabelGrid grid = notchedCube();
   RemeshComplex complex(tetrahedralizeVoxels(grid));
