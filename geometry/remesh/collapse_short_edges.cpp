@@ -101,8 +101,8 @@ bool EdgeCollapser::keepsTaggedLine(const VertexNeighborhood& r, const VertexNei
                                     const Eigen::Vector3d& p) const {
   if (r.featureLine < 0 || !r.taggedEdgeTo(k.vertex)) return true;
   // The line's new edges at p: to r's other neighbour on the line, and to
-  // k's when k moves. The vertices they replace lie on the input line; the
-  // new edges must pass within a sixteenth of e_min (l / 20) of them, so
+  // k's when k moves. They must pass within a sixteenth of e_min (l / 20)
+  // of the input line's points nearest to the vertices they replace, so
   // that the line coarsened towards l stays within 0.1 l of the input.
   auto pos = [&](std::int32_t w) { return complex_.position(w); };
   const std::int32_t wr = r.tagged[0] == k.vertex ? r.tagged[1] : r.tagged[0];
@@ -118,7 +118,9 @@ bool EdgeCollapser::keepsTaggedLine(const VertexNeighborhood& r, const VertexNei
     }
     return false;
   };
-  return near(pos(r.vertex)) && (!kMoves || near(pos(k.vertex)));
+  const FeatureEdges& features = complex_.features();
+  return near(features.projectOnLine(r.featureLine, pos(r.vertex))) &&
+         (!kMoves || near(k.featureLine >= 0 ? features.projectOnLine(k.featureLine, pos(k.vertex)) : pos(k.vertex)));
 }
 
 bool EdgeCollapser::mergesTaggedEdges(std::int32_t u, std::int32_t v) const {

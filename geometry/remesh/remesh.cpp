@@ -131,9 +131,13 @@ void tagFeatures(RemeshComplex& complex, const RemeshOptions& options, RemeshSta
   if (stats) {
     stats->featureLines = lines;
     stats->featureEdges = complex.features().edgeCount();
+    // What the output's lines are measured against: the creases' edges and
+    // the user's polylines as given (not the mesh paths they snapped to).
     stats->featureInput.clear();
-    for (const TaggedEdge& e : complex.features().list())
-      stats->featureInput.push_back({complex.position(e.a), complex.position(e.b)});
+    for (std::int32_t line = 0; line < complex.features().lineCount(); ++line) {
+      const std::vector<FeatureSegment>& g = complex.features().lineGeometry(line);
+      stats->featureInput.insert(stats->featureInput.end(), g.begin(), g.end());
+    }
   }
 }
 

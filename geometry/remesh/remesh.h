@@ -78,7 +78,8 @@ struct RemeshStep {
 
 struct RemeshStats {
   std::vector<RemeshStep> steps;
-  // Tagged before the first round: lines, edges, and the edges' segments.
+  // Tagged before the first round: lines, edges, and the lines' input
+  // geometry (the creases' edges, the user's polylines as given).
   std::size_t featureLines = 0, featureEdges = 0;
   std::vector<FeatureSegment> featureInput;
   std::size_t polished = 0;  // vertices the polish moved (both polishes)

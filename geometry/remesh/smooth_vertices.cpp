@@ -211,12 +211,12 @@ public:
   }
 
 private:
-  // A vertex of a tagged line lies on the input line, where it may bend:
-  // with the vertex at p its two edges must still pass within a sixteenth
-  // of the shorter one of where it is, so that the line does not cut the
-  // bend (the collapse keeps the same bound).
+  // Where a vertex of a tagged line is, the input line may bend: with the
+  // vertex at p its two edges must still pass within a sixteenth of the
+  // shorter one of the input line's point nearest to it, so that the line
+  // does not cut the bend (the collapse keeps the same bound).
   bool keepsBend(const VertexNeighborhood& nb, const Eigen::Vector3d& p) const {
-    const Eigen::Vector3d v = complex_.position(nb.vertex);
+    const Eigen::Vector3d v = complex_.features().projectOnLine(nb.featureLine, complex_.position(nb.vertex));
     const Eigen::Vector3d a = complex_.position(nb.tagged[0]), b = complex_.position(nb.tagged[1]);
     const double tolerance = std::min((a - v).norm(), (b - v).norm()) / 16.0;
     auto distance = [&](const Eigen::Vector3d& x, const Eigen::Vector3d& y) {
