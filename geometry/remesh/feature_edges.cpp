@@ -12,6 +12,7 @@
 #include <map>
 #include <queue>
 #include <tuple>
+#include <unordered_map>
 
 namespace vox::remesh {
 
@@ -274,15 +275,41 @@ std::size_t tagPolylines(RemeshComplex& complex, const std::vector<FeatureSegmen
   for (const auto& e : edges) ++start[std::size_t(e.first) + 1];
   for (std::size_t v = 1; v < start.size(); ++v) start[v] += start[v - 1];
 
+  // Domain vertices in cells of `tolerance`: the nearest one within reach
+  // is in the 27 cells around a point.
+  auto cellOf = [&](const Eigen::Vector3d& p) {
+    std::array<std::int64_t, 3> c{};
+    for (int k = 0; k < 3; ++k) c[std::size_t(k)] = std::clamp<std::int64_t>(std::int64_t(std::floor(p[k] / tolerance)), -(1 << 20), 1 << 20);
+    return c;
+  };
+  auto key = [](std::int64_t x, std::int64_t y, std::int64_t z) {
+    return ((x + (1 << 21)) << 44) | ((y + (1 << 21)) << 22) | (z + (1 << 21));
+  };
+  std::unordered_map<std::int64_t, std::vector<std::int32_t>> cells;
+  for (std::int32_t v = 0; v < nv; ++v)
+    if (domain[std::size_t(v)]) {
+      const auto c = cellOf(complex.position(v));
+      cells[key(c[0], c[1], c[2])].push_back(v);
+    }
   auto nearest = [&](const Eigen::Vector3d& p, std::size_t segment) {
     std::int32_t best = -1;
     double bestDistance = std::numeric_limits<double>::infinity();
-    for (std::int32_t v = 0; v < nv; ++v) {
-      if (!domain[std::size_t(v)]) continue;
-      const double d = (complex.position(v) - p).squaredNorm();
-      if (d < bestDistance) bestDistance = d, best = v;
-    }
+    const auto c = cellOf(p);
+    for (std::int64_t dz = -1; dz <= 1; ++dz)
+      for (std::int64_t dy = -1; dy <= 1; ++dy)
+        for (std::int64_t dx = -1; dx <= 1; ++dx) {
+          const auto it = cells.find(key(c[0] + dx, c[1] + dy, c[2] + dz));
+          if (it == cells.end()) continue;
+          for (std::int32_t v : it->second) {
+            const double d = (complex.position(v) - p).squaredNorm();
+            if (d < bestDistance || (d == bestDistance && v < best)) bestDistance = d, best = v;
+          }
+        }
     if (best < 0 || std::sqrt(bestDistance) > tolerance) {
+      // Out of reach: the distance the message gives, from every vertex.
+      for (std::int32_t v = 0; v < nv; ++v)
+        if (domain[std::size_t(v)]) bestDistance = std::min(bestDistance, (complex.position(v) - p).squaredNorm());
+      best = bestDistance < std::numeric_limits<double>::infinity() ? 0 : -1;
       char text[160];
       std::snprintf(text, sizeof text, " is %.4g mm from the mesh (more than %.4g mm)",
                     best < 0 ? std::numeric_limits<double>::infinity() : std::sqrt(bestDistance), tolerance);
