@@ -2,7 +2,9 @@
 
 #include "geometry/disjoint_sets.h"
 #include "geometry/error.h"
+#include "geometry/remesh/element_classification.h"
 #include "geometry/remesh/remesh_complex.h"
+#include "geometry/remesh/split_long_edges.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -238,6 +240,84 @@ std::string formatPoint(const Eigen::Vector3d& p) {
   return text;
 }
 
+// The point of segment [p0, p1] closest to segment [q0, q1], and its
+// parameter t along [p0, p1].
+Eigen::Vector3d closestBetweenSegments(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& q0,
+                                       const Eigen::Vector3d& q1, double& t) {
+  const Eigen::Vector3d d1 = p1 - p0, d2 = q1 - q0, r = p0 - q0;
+  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r), c = d1.dot(r), b = d1.dot(d2);
+  const double denom = a * e - b * b;
+  t = denom > 1e-12 * a * e ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
+  double u = e > 0.0 ? (b * t + f) / e : 0.0;
+  if (u < 0.0 || u > 1.0) {
+    u = std::clamp(u, 0.0, 1.0);
+    t = a > 0.0 ? std::clamp((b * u - c) / a, 0.0, 1.0) : 0.0;
+  }
+  return p0 + t * d1;
+}
+
+// Splits, for each inner path vertex farther than tolerance / 40 from the
+// path's segment, the edge near it (up to 8 vertices away, along edges
+// whose label sets lie in the vertex's: on a boundary vertex's junction or
+// interfaces, not into a label) that passes closest to the segment, at that
+// closest point, when it is inside the edge and at most half as far from
+// the segment as the vertex. The new vertex has the edge's label set, so
+// the split changes no junction.
+// Returns the number of splits.
+std::size_t splitCrossings(RemeshComplex& complex, const std::vector<FeatureSegment>& segments,
+                           const std::vector<std::vector<std::int32_t>>& walks, double tolerance) {
+  std::map<std::pair<std::int32_t, std::int32_t>, Eigen::Vector3d> splits;
+  VertexNeighborhood nb;
+  for (std::size_t s = 0; s < segments.size(); ++s)
+    for (std::size_t i = 1; i + 1 < walks[s].size(); ++i) {
+      const std::int32_t v = walks[s][i];
+      if (complex.isPinned(v)) continue;
+      const Eigen::Vector3d pv = complex.position(v);
+      const double off = distanceToSegment(segments[s], pv);
+      if (!(off > tolerance / 40.0)) continue;
+      gatherNeighborhood(complex, v, nb);
+      if (nb.labels.overflow()) continue;
+      const LabelSet stratum = nb.labels;
+      // The edges of v's junction or interface (or label) within a few
+      // steps of v: the segment may cross them an edge or two away from the
+      // vertex the path went through.
+      double best = 0.5 * off;
+      std::pair<std::int32_t, std::int32_t> bestEdge{-1, -1};
+      Eigen::Vector3d bestQ = pv;
+      std::vector<std::int32_t> reached{v};
+      for (std::size_t r = 0; r < reached.size() && r < 8; ++r) {
+        const std::int32_t x = reached[r];
+        if (x != v) gatherNeighborhood(complex, x, nb);
+        for (std::size_t k = 0; k < nb.neighbors.size(); ++k) {
+          const std::int32_t w = nb.neighbors[k];
+          const LabelSet& edge = nb.edgeLabels[k];
+          if (w == complex.dummyVertex() || edge.overflow() || !edge.subsetOf(stratum) ||
+              edge.size() < std::min(2, stratum.size()))
+            continue;
+          if (std::find(reached.begin(), reached.end(), w) == reached.end()) reached.push_back(w);
+          double t = 0.0;
+          const Eigen::Vector3d q =
+              closestBetweenSegments(complex.position(x), complex.position(w), segments[s][0], segments[s][1], t);
+          const double d = distanceToSegment(segments[s], q);
+          if (t > 0.05 && t < 0.95 && d < best) best = d, bestEdge = std::minmax(x, w), bestQ = q;
+        }
+      }
+      if (bestEdge.first >= 0) splits.try_emplace(bestEdge, bestQ);
+    }
+  std::size_t made = 0;
+  EdgeRing ring;
+  for (const auto& [e, q] : splits) {
+    const std::int32_t t = complex.findEdgeTet(e.first, e.second);
+    if (t < 0) continue;
+    complex.edgeRing(e.first, e.second, t, ring);
+    if (splitChangesAContact(complex, ring)) continue;
+    const std::int32_t m = splitEdge(complex, e.first, e.second, t);
+    complex.setPosition(m, q);
+    ++made;
+  }
+  return made;
+}
+
 }  // namespace
 
 std::size_t tagPolylines(RemeshComplex& complex, const std::vector<FeatureSegment>& segments, double tolerance,
@@ -253,30 +333,17 @@ std::size_t tagPolylines(RemeshComplex& complex, const std::vector<FeatureSegmen
   DisjointSets joined(pointIds.size());
   for (const auto& e : ends) joined.unite(e[0], e[1]);
 
-  // The vertices of domain tets and the edges between them.
-  const std::int32_t nv = complex.vertexSlots();
-  std::vector<char> domain(std::size_t(nv), 0);
+  // The vertices of domain tets, the edges between them, and those vertices
+  // in cells of `tolerance` (the nearest one within reach of a point is in
+  // the 27 cells around it); built again after the crossings are split.
+  std::int32_t nv = 0;
+  std::vector<char> domain;
   std::vector<std::pair<std::int32_t, std::int32_t>> edges;
-  for (std::int32_t t = 0; t < complex.tetSlots(); ++t) {
-    if (!complex.tetAlive(t) || complex.isDummyTet(t) || complex.label(t) <= 0) continue;
-    const Tet& q = complex.tet(t);
-    for (int i = 0; i < 4; ++i) {
-      domain[std::size_t(q[std::size_t(i)])] = 1;
-      for (int j = i + 1; j < 4; ++j) {
-        const auto e = std::minmax(q[std::size_t(i)], q[std::size_t(j)]);
-        edges.push_back(e);
-        edges.push_back({e.second, e.first});
-      }
-    }
-  }
-  std::sort(edges.begin(), edges.end());
-  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-  std::vector<std::int64_t> start(std::size_t(nv) + 1, 0);
-  for (const auto& e : edges) ++start[std::size_t(e.first) + 1];
-  for (std::size_t v = 1; v < start.size(); ++v) start[v] += start[v - 1];
-
-  // Domain vertices in cells of `tolerance`: the nearest one within reach
-  // is in the 27 cells around a point.
+  std::vector<std::int64_t> start;
+  std::unordered_map<std::int64_t, std::vector<std::int32_t>> cells;
+  std::vector<double> cost;
+  std::vector<std::int32_t> from;
+  std::vector<std::uint32_t> seen;
   auto cellOf = [&](const Eigen::Vector3d& p) {
     std::array<std::int64_t, 3> c{};
     for (int k = 0; k < 3; ++k) c[std::size_t(k)] = std::clamp<std::int64_t>(std::int64_t(std::floor(p[k] / tolerance)), -(1 << 20), 1 << 20);
@@ -285,12 +352,38 @@ std::size_t tagPolylines(RemeshComplex& complex, const std::vector<FeatureSegmen
   auto key = [](std::int64_t x, std::int64_t y, std::int64_t z) {
     return ((x + (1 << 21)) << 44) | ((y + (1 << 21)) << 22) | (z + (1 << 21));
   };
-  std::unordered_map<std::int64_t, std::vector<std::int32_t>> cells;
-  for (std::int32_t v = 0; v < nv; ++v)
-    if (domain[std::size_t(v)]) {
-      const auto c = cellOf(complex.position(v));
-      cells[key(c[0], c[1], c[2])].push_back(v);
+  auto buildIndex = [&] {
+    nv = complex.vertexSlots();
+    domain.assign(std::size_t(nv), 0);
+    edges.clear();
+    for (std::int32_t t = 0; t < complex.tetSlots(); ++t) {
+      if (!complex.tetAlive(t) || complex.isDummyTet(t) || complex.label(t) <= 0) continue;
+      const Tet& q = complex.tet(t);
+      for (int i = 0; i < 4; ++i) {
+        domain[std::size_t(q[std::size_t(i)])] = 1;
+        for (int j = i + 1; j < 4; ++j) {
+          const auto e = std::minmax(q[std::size_t(i)], q[std::size_t(j)]);
+          edges.push_back(e);
+          edges.push_back({e.second, e.first});
+        }
+      }
     }
+    std::sort(edges.begin(), edges.end());
+    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+    start.assign(std::size_t(nv) + 1, 0);
+    for (const auto& e : edges) ++start[std::size_t(e.first) + 1];
+    for (std::size_t v = 1; v < start.size(); ++v) start[v] += start[v - 1];
+    cells.clear();
+    for (std::int32_t v = 0; v < nv; ++v)
+      if (domain[std::size_t(v)]) {
+        const auto c = cellOf(complex.position(v));
+        cells[key(c[0], c[1], c[2])].push_back(v);
+      }
+    cost.assign(std::size_t(nv), 0.0);
+    from.assign(std::size_t(nv), -1);
+    seen.assign(std::size_t(nv), 0);
+  };
+  buildIndex();
   auto nearest = [&](const Eigen::Vector3d& p, std::size_t segment) {
     std::int32_t best = -1;
     double bestDistance = std::numeric_limits<double>::infinity();
@@ -318,11 +411,9 @@ std::size_t tagPolylines(RemeshComplex& complex, const std::vector<FeatureSegmen
     return best;
   };
 
-  // Shortest paths along the edges, each edge costing its length plus twice
-  // the distance of its end points from the segment: the path hugs it.
-  std::vector<double> cost(std::size_t(nv), 0.0);
-  std::vector<std::int32_t> from(std::size_t(nv), -1);
-  std::vector<std::uint32_t> seen(std::size_t(nv), 0);
+  // Shortest paths along the edges, each edge costing its length plus four
+  // times the distances of its end points from the segment: the path hugs
+  // it, through the vertices split onto it below rather than past them.
   std::uint32_t stamp = 0;
   auto path = [&](std::int32_t a, std::int32_t b, const FeatureSegment& s, std::size_t segment) {
     ++stamp;
@@ -341,7 +432,7 @@ std::size_t tagPolylines(RemeshComplex& complex, const std::vector<FeatureSegmen
       for (std::int64_t i = start[std::size_t(x)]; i < start[std::size_t(x) + 1]; ++i) {
         const std::int32_t y = edges[std::size_t(i)].second;
         const double next = c + (complex.position(y) - complex.position(x)).norm() +
-                            (dx + distanceToSegment(s, complex.position(y)));
+                            4.0 * (dx + distanceToSegment(s, complex.position(y)));
         if (seen[std::size_t(y)] == stamp && next >= cost[std::size_t(y)]) continue;
         seen[std::size_t(y)] = stamp;
         cost[std::size_t(y)] = next;
@@ -359,11 +450,23 @@ std::size_t tagPolylines(RemeshComplex& complex, const std::vector<FeatureSegmen
   // Every path is found before anything is tagged: a refused file leaves the complex as it was.
   std::vector<std::vector<std::int32_t>> walks(segments.size());
   std::vector<std::int32_t> snapped(pointIds.size(), -1);
-  for (std::size_t s = 0; s < segments.size(); ++s) {
-    const std::int32_t a = nearest(segments[s][0], s), b = nearest(segments[s][1], s);
-    snapped[std::size_t(ends[s][0])] = a;
-    snapped[std::size_t(ends[s][1])] = b;
-    if (a != b) walks[s] = path(a, b, segments[s], s);
+  auto findWalks = [&] {
+    for (std::size_t s = 0; s < segments.size(); ++s) {
+      const std::int32_t a = nearest(segments[s][0], s), b = nearest(segments[s][1], s);
+      snapped[std::size_t(ends[s][0])] = a;
+      snapped[std::size_t(ends[s][1])] = b;
+      walks[s] = a != b ? path(a, b, segments[s], s) : std::vector<std::int32_t>{};
+    }
+  };
+  findWalks();
+  // The polyline is inserted by splits where the paths stray from it: the
+  // vertices where a path crosses a 1-junction of the labels are corners
+  // that will not move, and the others start off the line. The edges near
+  // them are split where they come closest to the segment, and the paths
+  // are found again through the new vertices (up to three rounds).
+  for (int round = 0; round < 3 && splitCrossings(complex, segments, walks, tolerance) > 0; ++round) {
+    buildIndex();
+    findWalks();
   }
   FeatureEdges& features = complex.features();
   std::map<std::int32_t, std::int32_t> lineOfRoot;

@@ -109,7 +109,11 @@ std::size_t tagSharpFeatures(RemeshComplex& complex, double angleDeg, double min
 // User polylines (2.3.8, "marked features"): `segments` joined where they
 // share an end point (same coordinates) into lines, one per connected set.
 // Each segment's end points snap to the nearest vertex of a domain tet, and
-// the path between them follows the mesh edges closest to the segment.
+// the path between them follows the mesh edges closest to the segment;
+// where it strays from the segment (it crosses a 1-junction of the labels
+// at a vertex, which would be a corner, or the mesh has no vertex nearer),
+// the edges nearby are split at their points closest to the segment and
+// the path is found again (inserted by splits, as the thesis says).
 // Where a line turns by more than `angleDeg`, its vertex is a corner.
 // Throws InputError(source, ...) for a point farther than `tolerance` from
 // every domain vertex, leaving the complex as it was. Returns the number of
