@@ -382,6 +382,30 @@ TEST(RemeshCli, KeepsSharpFeaturesAndPolylinesAndWritesThem) {
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
     EXPECT_FALSE(fs::exists(target));
   }
+  // The same polyline as a Medit file of Vertices and Edges (no tetrahedra).
+  {
+    std::ofstream f(dir + "/lines.mesh");
+    f << "MeshVersionFormatted 2\nDimension 3\nVertices\n3\n4.5 4.5 16.5 0\n6.5 4.5 16.5 0\n6.5 14.5 16.5 0\n"
+         "Edges\n2\n1 2 7\n2 3 7\nEnd\n";
+  }
+  r = runCommand(voxmorph("remesh " + quote(dir + "/cube.mesh") + " -l 3 -q --iterations 4 --features " +
+                          quote(dir + "/lines.mesh") + " -o " + quote(dir + "/medit.mesh") + " --report -"));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const nlohmann::json fromMedit = nlohmann::json::parse(r.out);
+  EXPECT_EQ(fromMedit["features"]["lines"].get<int>(), 1);
+  EXPECT_LT(fromMedit["features"]["hausdorff_over_l"]["input_to_output"].get<double>(), 0.1);
+  {
+    std::ofstream f(dir + "/bad.mesh");
+    f << "MeshVersionFormatted 2\nDimension 3\nVertices\n2\n4.5 4.5 16.5 0\n6.5 4.5 16.5 0\nEdges\n1\n1 3 7\nEnd\n";
+  }
+  r = runCommand(voxmorph("remesh " + quote(dir + "/cube.mesh") + " -l 3 -q --features " + quote(dir + "/bad.mesh") +
+                          " -o " + quote(dir + "/bad_out.mesh")));
+  EXPECT_EQ(r.exitCode, 1);
+  EXPECT_NE(r.err.find("bad.mesh"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("edge 1 references vertex 3"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(fs::exists(dir + "/bad_out.mesh"));
+
   // Lines have no place in a .vtu: a usage error.
   r = runCommand(voxmorph("remesh " + quote(dir + "/cube.mesh") + " -l 3 -q --sharp-features -o " + quote(dir + "/o.vtu")));
   EXPECT_EQ(r.exitCode, 2) << r.err;
