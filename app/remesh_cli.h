@@ -37,6 +37,11 @@ struct RemeshCliOptions {
   std::string sizeGrid;
   ScalarGrid sizeGridLengths;  // read from `sizeGrid` by checkRemeshArguments
   std::shared_ptr<const remesh::SizingField> sizing;  // what remesh.sizing points to
+  // Tagged features (thesis 2.3.8): the user's polylines (read from
+  // `features` by checkRemeshArguments, world mm) and the outer boundary's
+  // sharp creases (remesh.sharpFeatures, remesh.featureAngle).
+  std::string features;
+  std::vector<remesh::FeatureSegment> featureSegments;
   std::string surface = "hpss";
   bool keepImaginary = false;
   bool noDistances = false;
@@ -85,6 +90,18 @@ inline void addRemeshOptions(CLI::App& cmd, RemeshCliOptions& o) {
                  "lifts the worst angle around it; 0 skips it")
       ->capture_default_str()
       ->check(numberIn(0, 60, "degrees"));
+  cmd.add_flag("--sharp-features", o.remesh.sharpFeatures,
+               "Keep the sharp creases of the outer boundary: its facets clustered into patches of normals within "
+               "--feature-angle, the lines between patches tagged and written (.mesh Edges, .msh physical lines)");
+  cmd.add_option("--feature-angle", o.remesh.featureAngle,
+                 "Crease angle (degrees between facet normals) for --sharp-features; a feature line turning by more "
+                 "is kept exactly at that point")
+      ->capture_default_str()
+      ->check(numberIn(1, 179, "degrees"));
+  cmd.add_option("--features", o.features,
+                 "Polylines to keep (world mm): a Medit .mesh with Vertices and Edges, or a text file of segments "
+                 "'x0 y0 z0 x1 y1 z1' per line; snapped to the mesh's edges (split where they stray from it), tagged and "
+                 "written like --sharp-features");
   cmd.add_option("--threads", o.remesh.threads, "Threads")->capture_default_str()->check(integerIn(1, 64));
   cmd.add_option("--organs", o.organs,
                  "Organ table (ID name tissue density): label names in the report, the .msh physical names and the "
@@ -122,8 +139,14 @@ inline void checkRemeshArguments(RemeshCliOptions& o) {
     o.remesh.targetLength = o.sizeBoundary;
   }
   checkOutputPath(o.output, OutputKind::TetMesh, "--output");
+  if ((o.remesh.sharpFeatures || !o.features.empty()) && meshFormatFromPath(o.output) == MeshFormat::Vtu)
+    throw UsageError("--output", "feature lines are written to .mesh and .msh only, not to " + o.output);
   checkOutputPath(o.report, OutputKind::Json, "--report");
   if (!o.organs.empty()) o.organTable = OrganTable::read(o.organs);
+  if (!o.features.empty()) {
+    o.featureSegments = readPolylineSegments(o.features);
+    o.remesh.featureSource = o.features;
+  }
   if (!o.sizeGrid.empty()) {
     o.sizeGridLengths = readSizingGrid(o.sizeGrid);
     remesh::checkSizingGrid(o.sizeGridLengths, o.sizeGrid);
@@ -136,6 +159,7 @@ inline void checkRemeshArguments(RemeshCliOptions& o) {
 inline std::vector<std::pair<std::string, std::string>> remeshInputs(const RemeshCliOptions& o, const std::string& role) {
   std::vector<std::pair<std::string, std::string>> files{{role, o.input}};
   if (!o.sizeGrid.empty()) files.emplace_back("size_grid", o.sizeGrid);
+  if (!o.features.empty()) files.emplace_back("features", o.features);
   return files;
 }
 
@@ -197,15 +221,28 @@ inline void runRemesh(RemeshCliOptions& o, const TetMesh& initial, const std::fu
                       double setupSeconds, const Provenance& provenance, const GridGeometry* toWorld = nullptr) {
   o.remesh.projectOnInterfaces = o.surface != "none";
   o.remesh.hermite = o.surface == "hpss";
+  // The polylines are in world mm; the mesh of a grid is in the grid's frame.
+  std::vector<remesh::FeatureSegment> segments = o.featureSegments;
+  if (toWorld)
+    for (remesh::FeatureSegment& s : segments)
+      for (Eigen::Vector3d& p : s) p = worldToGrid(*toWorld, p);
+  o.remesh.featureSegments = &segments;
   remesh::RemeshStats stats;
-  TetMesh output = remesh::remeshTetMesh(initial, o.remesh, &stats, o.keepImaginary, o.input);
+  std::vector<remesh::TaggedEdge> tagged;
+  TetMesh output = remesh::remeshTetMesh(initial, o.remesh, &stats, o.keepImaginary, o.input, &tagged);
   nameLabels(output, o, initial);
+  // One reference per line, from 1.
+  MeshEdges edges;
+  for (const remesh::TaggedEdge& e : tagged) {
+    edges.edges.push_back({e.a, e.b});
+    edges.refs.push_back(e.line + 1);
+  }
   if (toWorld) {
     TetMesh world = output;
     tetMeshGridToWorld(world, *toWorld);
-    writeTetMesh(o.output, world);
+    writeTetMesh(o.output, world, edges);
   } else {
-    writeTetMesh(o.output, output);
+    writeTetMesh(o.output, output, edges);
   }
   remesh::ReportOptions reportOptions;
   reportOptions.distances = !o.noDistances;
@@ -219,6 +256,12 @@ inline void runRemesh(RemeshCliOptions& o, const TetMesh& initial, const std::fu
     report.sizingMax = o.sizing->maximum();
   }
   report.provenance = provenance;
+  if (o.remesh.sharpFeatures || !o.features.empty()) {
+    std::vector<remesh::FeatureSegment> kept;
+    for (const remesh::TaggedEdge& e : tagged)
+      kept.push_back({output.positions[std::size_t(e.a)], output.positions[std::size_t(e.b)]});
+    remesh::measureFeatures(report, kept);
+  }
   if (o.report == "-") {
     std::cout << remesh::reportJson(report);
     return;

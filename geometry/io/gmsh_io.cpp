@@ -1,7 +1,9 @@
 // Gmsh MSH 4.1 (.msh), ASCII and binary: the format of Gmsh and of the FEM
 // codes that read it. Nodes and elements come in blocks, one per geometric
 // entity; an element's label is the first physical tag of its volume entity
-// ($Entities), or the entity tag when the entity has none.
+// ($Entities), or the entity tag when the entity has none. Feature lines
+// (MeshEdges) are 2-node lines on curve entities, one per reference, the
+// reference as the curve's physical tag.
 // Spec: https://gmsh.info/doc/texinfo/gmsh.html#MSH-file-format
 //
 // Vertex order on read is ascending node tag, tet order ascending element
@@ -25,6 +27,7 @@ namespace vox {
 namespace {
 
 constexpr int kTet4 = 4;
+constexpr int kLine2 = 1;
 
 // Nodes per element for the Gmsh element types (GmshDefines.h); 0 when unknown.
 int nodesPerElement(int type) {
@@ -163,6 +166,20 @@ private:
   std::size_t sizeT_ = 8;
   bool haveNodes_ = false, haveElements_ = false;
   std::unordered_map<std::int32_t, std::int32_t> volumePhysical_;  // volume entity tag -> first physical tag
+  std::unordered_map<std::int32_t, std::int32_t> curvePhysical_;   // curve entity tag -> first physical tag
+  struct LineRecord {
+    std::uint64_t tag = 0;
+    std::uint64_t nodes[2] = {0, 0};
+    std::int32_t entity = 0;
+  };
+  std::vector<LineRecord> lines_;
+  MeshEdges edges_;
+
+public:
+  // The 2-node lines on curves, after read(): the feature lines of our writer.
+  const MeshEdges& edges() const { return edges_; }
+
+private:
   std::map<std::int32_t, std::string> volumeNames_;                // physical tag -> name (dimension 3)
   std::vector<std::uint64_t> nodeTags_;
   std::vector<Eigen::Vector3d> nodes_;
@@ -211,6 +228,7 @@ void GmshReader::readEntities() {
       for (std::size_t p = 0; p < physicals; ++p) {
         const std::int32_t physical = readInt("physical tag");
         if (dim == 3 && p == 0) volumePhysical_[tag] = physical;
+        if (dim == 1 && p == 0) curvePhysical_[tag] = physical;
       }
       if (dim > 0) skipValues(readCount("bounding entity count", 2, 4), 4, "bounding entities");
     }
@@ -279,6 +297,14 @@ void GmshReader::readElements() {
         for (std::uint64_t& v : r.nodes) v = readSize("node tag");
         r.entity = entity;
         tets_.push_back(r);
+      }
+    } else if (type == kLine2 && dim == 1) {
+      for (std::size_t i = 0; i < n; ++i) {
+        LineRecord r;
+        r.tag = readSize("element tag");
+        for (std::uint64_t& v : r.nodes) v = readSize("node tag");
+        r.entity = entity;
+        lines_.push_back(r);
       }
     } else if (npe > 0) {
       skipValues(n * (std::size_t(npe) + 1), sizeT_, "elements");
@@ -430,6 +456,12 @@ TetMesh GmshReader::assemble() {
   }
   setLabelNames(mesh, volumeNames_);
   mesh.validate(path_);
+  for (const LineRecord& r : lines_) {
+    const std::int32_t a = vertexOf(r.nodes[0], r.tag), b = vertexOf(r.nodes[1], r.tag);
+    const auto physical = curvePhysical_.find(r.entity);
+    edges_.edges.push_back({a, b});
+    edges_.refs.push_back(physical != curvePhysical_.end() ? physical->second : r.entity);
+  }
   return mesh;
 }
 
@@ -440,8 +472,27 @@ TetMesh readGmsh(const std::string& path) {
   return GmshReader(path, bytes).read();
 }
 
-void writeGmsh(const std::string& path, const TetMesh& mesh) {
+MeshEdges readGmshEdges(const std::string& path) {
+  const std::string bytes = io::readWholeFile(path);
+  GmshReader reader(path, bytes);
+  reader.read();
+  return reader.edges();
+}
+
+void writeGmsh(const std::string& path, const TetMesh& mesh) { writeGmsh(path, mesh, MeshEdges{}); }
+
+void writeGmsh(const std::string& path, const TetMesh& mesh, const MeshEdges& edges) {
   mesh.validate(path);
+  checkMeshEdges(path, mesh, edges);
+  // Feature lines: one curve entity per reference (tags 1..c in ascending
+  // reference order), carrying the reference as its physical tag.
+  std::vector<std::int32_t> refs(edges.refs);
+  std::sort(refs.begin(), refs.end());
+  refs.erase(std::unique(refs.begin(), refs.end()), refs.end());
+  const std::size_t c = refs.size();
+  std::vector<std::vector<std::size_t>> curveEdges(c);
+  for (std::size_t i = 0; i < edges.edges.size(); ++i)
+    curveEdges[std::size_t(std::lower_bound(refs.begin(), refs.end(), edges.refs[i]) - refs.begin())].push_back(i);
   // One volume entity per label (tags 1..k in ascending label order), each
   // carrying the label as its physical tag, named by mesh.labelNames or
   // "label_<n>".
@@ -475,7 +526,7 @@ void writeGmsh(const std::string& path, const TetMesh& mesh) {
   AtomicFile file(path);
   {
     io::TextOutput out(file.openStdio());
-    out << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n" << k << '\n';
+    out << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$PhysicalNames\n" << k + c << '\n';
     for (std::int32_t l : labels) {
       const auto named = mesh.labelNames.find(l);
       std::string name = named != mesh.labelNames.end() ? named->second : "label_" + std::to_string(l);
@@ -483,7 +534,20 @@ void writeGmsh(const std::string& path, const TetMesh& mesh) {
       std::replace_if(name.begin(), name.end(), [](char c) { return c == '"' || c == '\n' || c == '\r'; }, '\'');
       out << "3 " << l << " \"" << name << "\"\n";
     }
-    out << "$EndPhysicalNames\n$Entities\n0 0 0 " << k << '\n';
+    for (std::int32_t r : refs) out << "1 " << r << " \"feature_" << r << "\"\n";
+    out << "$EndPhysicalNames\n$Entities\n0 " << c << " 0 " << k << '\n';
+    for (std::size_t e = 0; e < c; ++e) {
+      Eigen::Vector3d clo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), chi = -clo;
+      for (std::size_t i : curveEdges[e])
+        for (std::int32_t v : edges.edges[i]) {
+          clo = clo.cwiseMin(mesh.positions[std::size_t(v)]);
+          chi = chi.cwiseMax(mesh.positions[std::size_t(v)]);
+        }
+      out << std::int64_t(e + 1);
+      for (int d = 0; d < 3; ++d) out << ' ' << clo[d];
+      for (int d = 0; d < 3; ++d) out << ' ' << chi[d];
+      out << " 1 " << refs[e] << " 0\n";
+    }
     for (std::size_t e = 0; e < k; ++e) {
       out << std::int64_t(e + 1);
       for (int c = 0; c < 3; ++c) out << ' ' << lo[e][c];
@@ -498,7 +562,8 @@ void writeGmsh(const std::string& path, const TetMesh& mesh) {
       for (std::size_t v = 1; v <= nv; ++v) out << v << '\n';
       for (const Eigen::Vector3d& p : mesh.positions) out << p.x() << ' ' << p.y() << ' ' << p.z() << '\n';
     }
-    out << "$EndNodes\n$Elements\n" << k << ' ' << nt << " 1 " << nt << '\n';
+    const std::size_t ne = nt + edges.edges.size();
+    out << "$EndNodes\n$Elements\n" << k + c << ' ' << ne << " 1 " << ne << '\n';
     for (std::size_t e = 0; e < k; ++e) {
       out << "3 " << std::int64_t(e + 1) << " 4 " << perEntity[e] << '\n';
       for (std::size_t i = start[e]; i < start[e + 1]; ++i) {
@@ -506,6 +571,12 @@ void writeGmsh(const std::string& path, const TetMesh& mesh) {
         const Tet& q = mesh.tets[t];
         out << std::int64_t(t) + 1 << ' ' << q[0] + 1 << ' ' << q[1] + 1 << ' ' << q[2] + 1 << ' ' << q[3] + 1 << '\n';
       }
+    }
+    // Lines after the tets, numbered on from them in edge order.
+    for (std::size_t e = 0; e < c; ++e) {
+      out << "1 " << std::int64_t(e + 1) << " 1 " << curveEdges[e].size() << '\n';
+      for (std::size_t i : curveEdges[e])
+        out << std::int64_t(nt + i) + 1 << ' ' << edges.edges[i][0] + 1 << ' ' << edges.edges[i][1] + 1 << '\n';
     }
     out << "$EndElements\n";
   }

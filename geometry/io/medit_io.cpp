@@ -1,7 +1,8 @@
 // Medit / Gamma Mesh Format: ASCII .mesh and binary .meshb, the tet mesh
 // format of MMG, CGAL, TetGen and Gmsh. Keywords are followed by a count and
 // that many records; indices are 1-based; the last integer of a record is its
-// reference, which for tetrahedra is our label.
+// reference, which for tetrahedra is our label and for Edges (feature
+// lines, MeshEdges) the line's reference.
 // Spec: libMeshb (github.com/LoicMarechal/libMeshb).
 #include "geometry/ascii_text.h"
 #include "geometry/error.h"
@@ -36,7 +37,7 @@ std::int32_t toLabel(io::TextScanner& in, std::int64_t ref) {
 bool isBinaryPath(const std::string& path) { return endsWithIgnoringCase(path, ".meshb"); }
 
 // GMF binary keyword codes (libmeshb7.h).
-constexpr std::int32_t kGmfDimension = 3, kGmfVertices = 4, kGmfTetrahedra = 8, kGmfEnd = 54;
+constexpr std::int32_t kGmfDimension = 3, kGmfVertices = 4, kGmfEdges = 5, kGmfTetrahedra = 8, kGmfEnd = 54;
 
 // Binary GMF: int32 magic 1 (byte order), int32 version, then keywords: int32
 // code, position of the next keyword, and for blocks a count and records.
@@ -148,7 +149,7 @@ private:
 };
 
 // Binary GMF version 3: float64 coordinates, int32 indices, int64 positions.
-void writeMeditBinary(const std::string& path, const TetMesh& mesh) {
+void writeMeditBinary(const std::string& path, const TetMesh& mesh, const MeshEdges& edges) {
   AtomicFile file(path);
   {
     io::TextOutput out(file.openStdio());
@@ -168,12 +169,21 @@ void writeMeditBinary(const std::string& path, const TetMesh& mesh) {
       for (std::int32_t v : mesh.tets[t]) put(std::int32_t(v + 1));
       put(mesh.labels[t]);
     }
+    if (!edges.empty()) {
+      const auto ne = std::int32_t(edges.edges.size());
+      at += 4 + 8 + 4 + std::int64_t(ne) * 3 * 4;
+      put(kGmfEdges), put(at), put(ne);
+      for (std::size_t e = 0; e < edges.edges.size(); ++e)
+        put(std::int32_t(edges.edges[e][0] + 1)), put(std::int32_t(edges.edges[e][1] + 1)), put(edges.refs[e]);
+    }
     put(kGmfEnd), put(std::int64_t(0));
   }
   file.commit();
 }
 
-TetMesh readMeditText(const std::string& path, const std::string& bytes) {
+// The mesh of an ASCII .mesh, and its Edges when `edges` is given (the
+// tetrahedra are then optional).
+TetMesh parseMeditText(const std::string& path, const std::string& bytes, MeshEdges* edges) {
   io::TextScanner in(bytes, path, '#');
 
   const std::string_view magic = in.word();
@@ -228,6 +238,23 @@ TetMesh readMeditText(const std::string& path, const std::string& bytes) {
         }
         mesh.labels[t] = toLabel(in, in.integer("tetrahedron reference"));
       }
+    } else if (keyword == "Edges" && edges) {
+      if (!edges->edges.empty()) in.fail("a second Edges block");
+      const std::size_t n = in.count("edge count", 6);
+      const auto nv = std::int64_t(mesh.positions.size());
+      for (std::size_t e = 0; e < n; ++e) {
+        std::array<std::int32_t, 2> ends{};
+        for (int k = 0; k < 2; ++k) {
+          const std::int64_t v = in.integer("vertex index");
+          if (!haveVertices || v < 1 || v > nv)
+            in.fail("edge " + std::to_string(e + 1) + " references vertex " + std::to_string(v) + " (indices are 1-based; " +
+                    (haveVertices ? "the file has " + std::to_string(nv) + " vertices)" : "no Vertices before Edges)"));
+          ends[std::size_t(k)] = std::int32_t(v - 1);
+        }
+        if (ends[0] == ends[1]) in.fail("edge " + std::to_string(e + 1) + " joins vertex " + std::to_string(ends[0] + 1) + " to itself");
+        edges->edges.push_back(ends);
+        edges->refs.push_back(toLabel(in, in.integer("edge reference")));
+      }
     } else if (keyword == "Identifier" || keyword == "Geometry") {
       in.skipLine();  // a free-form string
     } else if (isKeyword(keyword)) {
@@ -237,12 +264,17 @@ TetMesh readMeditText(const std::string& path, const std::string& bytes) {
     }
   }
   if (!haveVertices) throw InputError(path, "no Vertices block");
+  return mesh;
+}
+
+TetMesh readMeditText(const std::string& path, const std::string& bytes) {
+  TetMesh mesh = parseMeditText(path, bytes, nullptr);
   if (mesh.tets.empty()) throw InputError(path, "no tetrahedra (the Tetrahedra block is missing or empty)");
   mesh.validate(path);
   return mesh;
 }
 
-void writeMeditText(const std::string& path, const TetMesh& mesh) {
+void writeMeditText(const std::string& path, const TetMesh& mesh, const MeshEdges& edges) {
   AtomicFile file(path);
   {
     io::TextOutput out(file.openStdio());
@@ -252,6 +284,11 @@ void writeMeditText(const std::string& path, const TetMesh& mesh) {
     for (std::size_t t = 0; t < mesh.tetCount(); ++t) {
       const Tet& q = mesh.tets[t];
       out << q[0] + 1 << ' ' << q[1] + 1 << ' ' << q[2] + 1 << ' ' << q[3] + 1 << ' ' << mesh.labels[t] << '\n';
+    }
+    if (!edges.empty()) {
+      out << "\nEdges\n" << edges.edges.size() << '\n';
+      for (std::size_t e = 0; e < edges.edges.size(); ++e)
+        out << edges.edges[e][0] + 1 << ' ' << edges.edges[e][1] + 1 << ' ' << edges.refs[e] << '\n';
     }
     out << "\nEnd\n";
   }
@@ -265,10 +302,23 @@ TetMesh readMedit(const std::string& path) {
   return isBinaryPath(path) ? GmfReader(path, bytes).read() : readMeditText(path, bytes);
 }
 
-void writeMedit(const std::string& path, const TetMesh& mesh) {
+void writeMedit(const std::string& path, const TetMesh& mesh) { writeMedit(path, mesh, MeshEdges{}); }
+
+void writeMedit(const std::string& path, const TetMesh& mesh, const MeshEdges& edges) {
   mesh.validate(path);
-  if (isBinaryPath(path)) writeMeditBinary(path, mesh);
-  else writeMeditText(path, mesh);
+  checkMeshEdges(path, mesh, edges);
+  if (isBinaryPath(path)) writeMeditBinary(path, mesh, edges);
+  else writeMeditText(path, mesh, edges);
+}
+
+MeshEdges readMeditEdges(const std::string& path, std::vector<Eigen::Vector3d>* positions) {
+  if (isBinaryPath(path)) throw InputError(path, "Edges are read from ASCII .mesh files only");
+  MeshEdges edges;
+  TetMesh mesh = parseMeditText(path, io::readWholeFile(path), &edges);
+  for (const Eigen::Vector3d& p : mesh.positions)
+    if (!p.allFinite()) throw InputError(path, "a vertex has a coordinate that is not finite");
+  if (positions) *positions = std::move(mesh.positions);
+  return edges;
 }
 
 }  // namespace vox

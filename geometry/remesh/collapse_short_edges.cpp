@@ -58,6 +58,7 @@ std::int32_t EdgeCollapser::tryCollapse(std::int32_t u, std::int32_t v, bool app
   if (rule.condition == EdgeCondition::Exclusion) return -1;
   if (complex_.hasPinches() && nearPinch()) return -1;
   if (!topologyTests(suv) || !linkCondition()) return -1;
+  if (mergesTaggedEdges(u, v)) return -1;
 
   worstBefore_[0] = worstBefore_[1] = kUnknownCosine;
 
@@ -88,11 +89,48 @@ std::int32_t EdgeCollapser::tryCollapse(std::int32_t u, std::int32_t v, bool app
     if (r.onHull() && !hull_.allows(planes[&r == &nu_ ? 0 : 1], o.p)) continue;
     if (keptMoves && k.onHull() && !hull_.allows(planes[&k == &nu_ ? 0 : 1], o.p)) continue;
     if (!test2NoLongEdges(r, k, o.p) || !test1PositiveVolumes(r, k, o.p)) continue;
+    if (!keepsTaggedLine(r, k, o.p)) continue;
     if (move) *move = o.move;
     if (apply) collapse(r, k, o.p);
     return k.vertex;
   }
   return -1;
+}
+
+bool EdgeCollapser::keepsTaggedLine(const VertexNeighborhood& r, const VertexNeighborhood& k,
+                                    const Eigen::Vector3d& p) const {
+  if (r.featureLine < 0 || !r.taggedEdgeTo(k.vertex)) return true;
+  // The line's new edges at p: to r's other neighbour on the line, and to
+  // k's when k moves. They must pass within a sixteenth of e_min (l / 20)
+  // of the input line's points nearest to the vertices they replace, so
+  // that the line coarsened towards l stays within 0.1 l of the input.
+  auto pos = [&](std::int32_t w) { return complex_.position(w); };
+  const std::int32_t wr = r.tagged[0] == k.vertex ? r.tagged[1] : r.tagged[0];
+  FeatureSegment edges[2] = {{pos(wr), p}, {p, p}};
+  const bool kMoves = p != pos(k.vertex);
+  if (kMoves && k.featureLine >= 0) edges[1][1] = pos(k.tagged[0] == r.vertex ? k.tagged[1] : k.tagged[0]);
+  const double tolerance = std::sqrt(bounds_.emin2(pos(r.vertex), pos(k.vertex))) / 16.0;
+  auto near = [&](const Eigen::Vector3d& x) {
+    for (const FeatureSegment& e : edges) {
+      const Eigen::Vector3d d = e[1] - e[0];
+      const double t = d.squaredNorm() > 0.0 ? std::clamp((x - e[0]).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
+      if ((e[0] + t * d - x).norm() <= tolerance) return true;
+    }
+    return false;
+  };
+  const FeatureEdges& features = complex_.features();
+  return near(features.projectOnLine(r.featureLine, pos(r.vertex))) &&
+         (!kMoves || near(k.featureLine >= 0 ? features.projectOnLine(k.featureLine, pos(k.vertex)) : pos(k.vertex)));
+}
+
+bool EdgeCollapser::mergesTaggedEdges(std::int32_t u, std::int32_t v) const {
+  // A common neighbour w with (u, w) and (v, w) both tagged: the collapse
+  // would fold a tagged line onto itself (the Figure 2.16 case of a line).
+  const FeatureEdges& features = complex_.features();
+  if (features.degree(u) == 0 || features.degree(v) == 0) return false;
+  for (std::int32_t w : ring_.ring)
+    if (features.lineOf(u, w) >= 0 && features.lineOf(v, w) >= 0) return true;
+  return false;
 }
 
 bool EdgeCollapser::nearPinch() const {
@@ -317,6 +355,11 @@ std::int32_t EdgeCollapser::applyPlan(std::int32_t u, std::int32_t v, CollapseMo
 
 void EdgeCollapser::collapse(const VertexNeighborhood& r, const VertexNeighborhood& k, const Eigen::Vector3d& p) {
   const std::int32_t rv = r.vertex, kv = k.vertex;
+  if (complex_.features().degree(rv) > 0) {
+    std::vector<std::int32_t> ring;
+    complex_.starVertices(r.tets, rv, ring);
+    complex_.features().merge(rv, kv, ring);
+  }
   for (std::int32_t q : r.tets)
     if (complex_.localIndex(q, kv) < 0) complex_.setTetVertex(q, complex_.localIndex(q, rv), kv);
   std::int32_t survivor = -1;

@@ -13,6 +13,9 @@
 // cases of it, and it also rejects the contractions that would merge two
 // simplices of different label sets or empty a label from a simplex, which
 // is what keeps every label region, 1-junction and 0-junction intact.
+// Tagged features (feature_edges.h) follow Table 2.4 (edgeRule), no
+// collapse merges the two tagged edges of a triangle, and a collapse along a
+// tagged line keeps its new edges within l / 20 of the vertices it removes.
 
 #include "geometry/remesh/edge_length_bounds.h"
 #include "geometry/remesh/element_classification.h"
@@ -59,6 +62,8 @@ public:
 private:
   bool anyPositionKeepsEdgesShort() const;
   bool nearPinch() const;
+  bool mergesTaggedEdges(std::int32_t u, std::int32_t v) const;
+  bool keepsTaggedLine(const VertexNeighborhood& removed, const VertexNeighborhood& kept, const Eigen::Vector3d& p) const;
   bool topologyTests(const LabelSet& edgeLabels) const;
   bool linkCondition() const;
   bool test1PositiveVolumes(const VertexNeighborhood& removed, const VertexNeighborhood& kept,

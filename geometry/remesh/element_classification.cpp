@@ -51,6 +51,29 @@ void classifyNeighborhood(const RemeshComplex& complex, std::int32_t v, VertexNe
   }
   out.kind = overflow || complex.isPinned(v) ? VertexKind::Corner
                                              : classifyVertex(out.labels.size(), out.featureEdges, agree);
+  out.tagged.clear();
+  out.featureLine = -1;
+  const FeatureEdges& features = complex.features();
+  if (features.degree(v) == 0) return;
+  // Table 2.4: two tagged edges of one line make a feature vertex of that
+  // line, anything else a corner; so does a tagged vertex on a 1-junction.
+  std::int32_t line = -1;
+  bool oneLine = true;
+  for (std::int32_t u : out.neighbors) {
+    const std::int32_t l = features.lineOf(v, u);
+    if (l < 0) continue;
+    out.tagged.push_back(u);
+    oneLine = oneLine && (line < 0 || line == l);
+    line = l;
+  }
+  if (out.tagged.empty()) return;
+  if (out.kind != VertexKind::Corner && out.kind != VertexKind::Feature && out.tagged.size() == 2 && oneLine &&
+      !features.isCorner(v)) {
+    out.kind = VertexKind::Feature;
+    out.featureLine = line;
+  } else {
+    out.kind = VertexKind::Corner;
+  }
 }
 
 void gatherNeighborhood(const RemeshComplex& complex, std::int32_t v, VertexNeighborhood& out) {
@@ -58,11 +81,11 @@ void gatherNeighborhood(const RemeshComplex& complex, std::int32_t v, VertexNeig
   classifyNeighborhood(complex, v, out);
 }
 
-EdgeRule edgeRule(const VertexNeighborhood& u, const VertexNeighborhood& v, const LabelSet& edgeLabels,
-                  std::int32_t dummyVertex) {
+namespace {
+
+// Table 2.3 from the label sets and kinds alone.
+EdgeRule labelRule(const VertexNeighborhood& u, const VertexNeighborhood& v, const LabelSet& edgeLabels) {
   EdgeRule rule;
-  if (u.vertex == dummyVertex || v.vertex == dummyVertex) return rule;
-  if (u.labels.overflow() || v.labels.overflow() || edgeLabels.overflow()) return rule;
   const bool uCorner = u.kind == VertexKind::Corner, vCorner = v.kind == VertexKind::Corner;
   if (edgeLabels == u.labels && edgeLabels == v.labels) {
     if (!uCorner && !vCorner && u.kind == v.kind) {
@@ -84,6 +107,24 @@ EdgeRule edgeRule(const VertexNeighborhood& u, const VertexNeighborhood& v, cons
     rule.condition = EdgeCondition::Inclusion;
     rule.moving = v.vertex;
   }
+  return rule;
+}
+
+}  // namespace
+
+EdgeRule edgeRule(const VertexNeighborhood& u, const VertexNeighborhood& v, const LabelSet& edgeLabels,
+                  std::int32_t dummyVertex) {
+  EdgeRule rule;
+  if (u.vertex == dummyVertex || v.vertex == dummyVertex) return rule;
+  if (u.labels.overflow() || v.labels.overflow() || edgeLabels.overflow()) return rule;
+  if (u.tagged.empty() && v.tagged.empty()) return labelRule(u, v, edgeLabels);
+  rule = labelRule(u, v, edgeLabels);
+  if (u.taggedEdgeTo(v.vertex)) return rule;  // along a tagged line: its kinds decide
+  if (!u.tagged.empty() && !v.tagged.empty()) return EdgeRule{};
+  // One tagged end: only the other one may move, onto it.
+  const std::int32_t free = u.tagged.empty() ? u.vertex : v.vertex;
+  if (rule.condition == EdgeCondition::Similarity) return EdgeRule{EdgeCondition::Inclusion, free};
+  if (rule.condition == EdgeCondition::Inclusion && rule.moving != free) return EdgeRule{};
   return rule;
 }
 

@@ -7,6 +7,7 @@
 #include "geometry/remesh/label_set.h"
 #include "geometry/remesh/remesh_complex.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -43,6 +44,12 @@ struct VertexNeighborhood {
   std::vector<LabelSet> edgeLabels;     // S(vertex, neighbors[i])
   int featureEdges = 0;
   VertexKind kind = VertexKind::Inside;
+  // Tagged features (feature_edges.h): the neighbours across tagged edges,
+  // and for a feature vertex of a tagged line (two tagged edges of one line,
+  // kind Feature) that line, else -1.
+  std::vector<std::int32_t> tagged;
+  std::int32_t featureLine = -1;
+  bool taggedEdgeTo(std::int32_t u) const { return std::find(tagged.begin(), tagged.end(), u) != tagged.end(); }
 
   // Index of u in `neighbors`, or -1.
   int find(std::int32_t u) const {
@@ -77,7 +84,9 @@ struct EdgeRule {
 // S(uv) = S(moving) is a subset of the other vertex's set and `moving` has
 // the higher dimension (fewer labels, or the other one is a corner); the
 // moving vertex is never a corner. Everything else, edges to the dummy
-// vertex and overflowing sets are Exclusion.
+// vertex and overflowing sets are Exclusion. With tagged features (Table
+// 2.4) an untagged edge between two tagged vertices is Exclusion, and of an
+// untagged edge with one tagged end only the untagged end may move.
 EdgeRule edgeRule(const VertexNeighborhood& u, const VertexNeighborhood& v, const LabelSet& edgeLabels,
                   std::int32_t dummyVertex);
 

@@ -91,6 +91,7 @@ bool EdgeFlipper::ringNearPinch() const {
 
 bool EdgeFlipper::tryFlipInnerEdge(std::int32_t a, std::int32_t b, bool apply, std::uint8_t* apex) {
   if (a == complex_.dummyVertex() || b == complex_.dummyVertex()) return false;
+  if (complex_.features().lineOf(a, b) >= 0) return false;
   if (!complex_.vertexAlive(a) || !complex_.vertexAlive(b)) return false;
   const std::int32_t t = walker_.findEdgeTet(complex_, a, b);
   if (t < 0) return false;
@@ -147,6 +148,7 @@ std::pair<int, int> EdgeFlipper::boundaryValence(std::int32_t v, std::int32_t x,
 
 bool EdgeFlipper::tryFlipSurfaceEdge(std::int32_t a, std::int32_t b, bool apply, std::uint8_t* apex) {
   if (a == complex_.dummyVertex() || b == complex_.dummyVertex()) return false;
+  if (complex_.features().lineOf(a, b) >= 0) return false;
   if (!complex_.vertexAlive(a) || !complex_.vertexAlive(b)) return false;
   const std::int32_t t = walker_.findEdgeTet(complex_, a, b);
   if (t < 0) return false;

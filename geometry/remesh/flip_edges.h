@@ -10,7 +10,7 @@
 //    a surface, when it lowers the deviation of the boundary valences from 6
 //    (surface vertices) and 4 (feature vertices), or when it lifts a worst
 //    dihedral angle under 30 degrees; no 3-2 boundary flip.
-//  - Feature edges are never flipped.
+//  - Feature edges are never flipped, nor are tagged edges (feature_edges.h).
 // Then the faces of the tets still under `innerFlipAngle` get 2-3 flips
 // (the face flip of the thesis' sliver removal, 2.3.6) when that helps.
 // Inner and face flips start from domain tets and from the imaginary tets

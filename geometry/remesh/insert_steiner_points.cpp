@@ -71,6 +71,8 @@ private:
   // is allowed or valid); `before` gets that of the ring as it is, `leaves`
   // whether p is off the interface or 1-junction the edge lies on.
   double bestSplit(std::int32_t a, std::int32_t b, std::int32_t t, Eigen::Vector3d& p, double& before, bool& leaves) {
+    // A tagged edge stays: its new vertex would leave the line.
+    if (complex_.features().lineOf(a, b) >= 0) return kInvalid;
     complex_.edgeRing(a, b, t, ring_);
     const std::size_t n = ring_.size();
     for (std::int32_t r : ring_.tets)

@@ -18,8 +18,9 @@
 //    facets fold at a sharp angle between pinned corners, and the tets
 //    inside the fold cannot be better than the fold), off the interface or
 //    the 1-junction by at most `interfaceOffset` times the edge's length;
-//  - edges on the hull of the complex, and splits that would make a vertex
-//    adjacent to two copies of a pinched vertex, are left alone.
+//  - edges on the hull of the complex, tagged edges (feature_edges.h), and
+//    splits that would make a vertex adjacent to two copies of a pinched
+//    vertex, are left alone.
 // The split is made only when the smallest dihedral angle of the domain tets
 // around the edge grows (so the mesh's smallest angle never drops), no tet
 // inverts, and no new tet falls under the quality floor (tet_shape.h).

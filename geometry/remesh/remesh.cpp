@@ -121,11 +121,32 @@ void remeshComplex(RemeshComplex& complex, const RemeshOptions& options, RemeshS
   }
 }
 
+void tagFeatures(RemeshComplex& complex, const RemeshOptions& options, RemeshStats* stats) {
+  std::size_t lines = 0;
+  if (options.featureSegments && !options.featureSegments->empty())
+    lines += tagPolylines(complex, *options.featureSegments, options.targetLength, options.featureAngle,
+                          options.featureSource);
+  if (options.sharpFeatures)
+    lines += tagSharpFeatures(complex, options.featureAngle, options.targetLength * options.targetLength);
+  if (stats) {
+    stats->featureLines = lines;
+    stats->featureEdges = complex.features().edgeCount();
+    // What the output's lines are measured against: the creases' edges and
+    // the user's polylines as given (not the mesh paths they snapped to).
+    stats->featureInput.clear();
+    for (std::int32_t line = 0; line < complex.features().lineCount(); ++line) {
+      const std::vector<FeatureSegment>& g = complex.features().lineGeometry(line);
+      stats->featureInput.insert(stats->featureInput.end(), g.begin(), g.end());
+    }
+  }
+}
+
 TetMesh remeshTetMesh(const TetMesh& mesh, const RemeshOptions& options, RemeshStats* stats, bool keepImaginary,
-                      const std::string& source) {
+                      const std::string& source, std::vector<TaggedEdge>* features) {
   RemeshComplex complex(mesh, source);
+  tagFeatures(complex, options, stats);
   remeshComplex(complex, options, stats);
-  return complex.toTetMesh(keepImaginary);
+  return complex.toTetMesh(keepImaginary, features);
 }
 
 }  // namespace vox::remesh

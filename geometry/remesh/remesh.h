@@ -14,6 +14,7 @@
 // with e_max = 4/3 l and e_min = 4/5 l for the target length l, uniform or
 // the sizing field's at each edge's mid-point.
 
+#include "geometry/remesh/feature_edges.h"
 #include "geometry/remesh/flip_edges.h"
 #include "geometry/remesh/insert_steiner_points.h"
 #include "geometry/remesh/remesh_complex.h"
@@ -53,6 +54,17 @@ struct RemeshOptions {
   // a new vertex lifts their worst angle (insertSteinerPoints); angle 0
   // skips it.
   SteinerOptions steiner;
+  // Tagged features (thesis 2.3.8, feature_edges.h), tagged by remeshTetMesh
+  // before the first round: with sharpFeatures, the creases of the outer
+  // boundary where the facets' normals differ by more than featureAngle
+  // (degrees; the thesis gives no value, 60 is the usual choice of mesh
+  // generators' crease detection); and the user's polylines (mm, not owned),
+  // snapped within targetLength of the mesh, `featureSource` naming them in
+  // errors. Points where a line turns by more than featureAngle are corners.
+  bool sharpFeatures = false;
+  double featureAngle = 60.0;
+  const std::vector<FeatureSegment>* featureSegments = nullptr;
+  std::string featureSource = "features";
 };
 
 struct RemeshStep {
@@ -66,6 +78,10 @@ struct RemeshStep {
 
 struct RemeshStats {
   std::vector<RemeshStep> steps;
+  // Tagged before the first round: lines, edges, and the lines' input
+  // geometry (the creases' edges, the user's polylines as given).
+  std::size_t featureLines = 0, featureEdges = 0;
+  std::vector<FeatureSegment> featureInput;
   std::size_t polished = 0;  // vertices the polish moved (both polishes)
   double polishSeconds = 0.0;  // the first polish
   std::size_t inserted = 0;     // Steiner points
@@ -78,9 +94,14 @@ struct RemeshStats {
 // for a target length that is not positive and finite.
 void remeshComplex(RemeshComplex& complex, const RemeshOptions& options, RemeshStats* stats = nullptr);
 
-// The extended complex of `mesh` (see RemeshComplex), remeshed; returns its
-// domain tets, plus the geometric imaginary tets with keepImaginary.
+// Tags the features the options ask for on `complex` (see RemeshOptions).
+void tagFeatures(RemeshComplex& complex, const RemeshOptions& options, RemeshStats* stats = nullptr);
+
+// The extended complex of `mesh` (see RemeshComplex), its features tagged,
+// remeshed; returns its domain tets, plus the geometric imaginary tets with
+// keepImaginary, and in `features` the tagged edges in its numbering.
 TetMesh remeshTetMesh(const TetMesh& mesh, const RemeshOptions& options, RemeshStats* stats = nullptr,
-                      bool keepImaginary = false, const std::string& source = "mesh");
+                      bool keepImaginary = false, const std::string& source = "mesh",
+                      std::vector<TaggedEdge>* features = nullptr);
 
 }  // namespace vox::remesh

@@ -351,7 +351,7 @@ void RemeshComplex::glueCone(std::size_t domainTets, const std::string& source) 
   }
 }
 
-TetMesh RemeshComplex::toTetMesh(bool keepImaginary) const {
+TetMesh RemeshComplex::toTetMesh(bool keepImaginary, std::vector<TaggedEdge>* features) const {
   TetMesh out;
   std::vector<std::int32_t> remap(positions_.size(), -1);
   auto kept = [&](std::size_t t) {
@@ -377,6 +377,14 @@ TetMesh RemeshComplex::toTetMesh(bool keepImaginary) const {
       out.tets.push_back(q);
       out.labels.push_back(labels_[t]);
     }
+  if (features) {
+    features->clear();
+    for (TaggedEdge e : features_.list()) {
+      const std::int32_t a = remap[std::size_t(original(e.a))], b = remap[std::size_t(original(e.b))];
+      if (a < 0 || b < 0 || a == b) continue;
+      features->push_back({std::min(a, b), std::max(a, b), e.line});
+    }
+  }
   return out;
 }
 
@@ -706,6 +714,7 @@ void RemeshComplex::reorderForLocality() {
   freeTets_.clear();
   freeTets_.shrink_to_fit();
   dummy_ = vmap[std::size_t(dummy_)];
+  if (!features_.empty()) features_.renumber(vmap);
 }
 
 }  // namespace vox::remesh

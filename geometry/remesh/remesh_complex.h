@@ -13,6 +13,7 @@
 // of the operations.
 
 #include "geometry/remesh/face_adjacency.h"
+#include "geometry/remesh/feature_edges.h"
 #include "geometry/tet_mesh.h"
 
 #include <Eigen/Core>
@@ -82,8 +83,13 @@ public:
 
   // Live tets with label > 0 (and, with keepImaginary, the geometric tets of
   // label 0). Vertices are renumbered in increasing slot order; tets keep
-  // their slot order, so the output depends only on the complex.
-  TetMesh toTetMesh(bool keepImaginary = false) const;
+  // their slot order, so the output depends only on the complex. `features`
+  // receives the tagged edges in the output's vertex numbering.
+  TetMesh toTetMesh(bool keepImaginary = false, std::vector<TaggedEdge>* features = nullptr) const;
+
+  // Tagged feature edges (feature_edges.h), renumbered with the vertices.
+  const FeatureEdges& features() const { return features_; }
+  FeatureEdges& features() { return features_; }
 
   // --- Sizes and liveness (slots include removed elements).
   std::int32_t vertexSlots() const { return std::int32_t(positions_.size()); }
@@ -190,6 +196,7 @@ private:
   std::vector<std::uint8_t> pinned_;
   std::vector<std::int32_t> pinchOf_;  // see pinchOf(); set by splitPinchedVertices
   bool hasPinches_ = false;
+  FeatureEdges features_;
 
   void splitPinchedVertices();
   // -1 when the walk around edge (a, b) from tet t closes up after exactly

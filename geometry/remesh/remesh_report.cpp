@@ -113,6 +113,13 @@ std::string reportText(const RemeshReport& r) {
         "output %.3g l, label %d)\n",
         std::max(worstOut, worstIn), std::max(worstOut, worstIn) / l, worstOut / l, worstOutLabel, worstIn / l, worstInLabel);
   }
+  if (r.featuresMeasured) {
+    const double l = r.targetLength;
+    add("features             %zu lines, %zu tagged edges in, %zu out; Hausdorff input to output %.3g l, output to "
+        "input %.3g l\n",
+        r.stats.featureLines, r.stats.featureEdges, r.featureEdgesOut, r.featureInputToOutput / l,
+        r.featureOutputToInput / l);
+  }
   add("topology             %s: %zu labels, 1-junctions of %zu label sets, 0-junctions of %zu label sets\n",
       r.topologyDifferences.empty() ? "preserved" : "CHANGED", r.labels.size(), r.junctionCurveSets, r.junctionPointSets);
   for (std::size_t i = 0; i < r.topologyDifferences.size() && i < 20; ++i) s += "  " + r.topologyDifferences[i] + "\n";
@@ -143,11 +150,27 @@ std::string reportText(const RemeshReport& r) {
   return s;
 }
 
+void measureFeatures(RemeshReport& r, const std::vector<FeatureSegment>& output) {
+  r.featuresMeasured = true;
+  r.featureEdgesOut = output.size();
+  const double step = r.targetLength / 20.0;
+  r.featureInputToOutput = oneSidedLineDistance(r.stats.featureInput, output, step);
+  r.featureOutputToInput = oneSidedLineDistance(output, r.stats.featureInput, step);
+}
+
 std::string reportJson(const RemeshReport& r) {
   nlohmann::json j;
   j["target_edge_length_mm"] = r.targetLength;
   if (r.sizingMax > 0.0) j["sizing_field_mm"] = {{"min", r.sizingMin}, {"max", r.sizingMax}};
   j["tets"] = {{"input", r.inputTets}, {"output", r.outputTets}};
+  if (r.featuresMeasured)
+    j["features"] = {{"lines", r.stats.featureLines},
+                     {"edges_in", r.stats.featureEdges},
+                     {"edges_out", r.featureEdgesOut},
+                     {"hausdorff_mm", {{"input_to_output", r.featureInputToOutput}, {"output_to_input", r.featureOutputToInput}}},
+                     {"hausdorff_over_l",
+                      {{"input_to_output", r.featureInputToOutput / r.targetLength},
+                       {"output_to_input", r.featureOutputToInput / r.targetLength}}}};
   j["vertices"] = r.outputVertices;
   j["dihedral_degrees"] = {{"min", r.quality.minDihedral},
                            {"max", r.quality.maxDihedral},

@@ -52,6 +52,12 @@ struct RemeshReport {
   bool distancesMeasured = false;
   std::size_t junctionCurveSets = 0, junctionPointSets = 0;  // label sets with 1- / 0-junctions in the input
   std::vector<std::string> topologyDifferences;              // empty: topology preserved
+  // Tagged features (feature_edges.h), when any: the output's tagged edges
+  // and the one-sided Hausdorff distances (mm) between the input lines and
+  // those edges (measureFeatures).
+  bool featuresMeasured = false;
+  std::size_t featureEdgesOut = 0;
+  double featureInputToOutput = 0.0, featureOutputToInput = 0.0;
   RemeshStats stats;
   double setupSeconds = 0.0;  // reading and decomposing the input
   Provenance provenance;
@@ -70,6 +76,10 @@ struct ReportOptions {
 // grid, or computeMeshTopology of the input mesh).
 RemeshReport buildRemeshReport(const TetMesh& input, const MeshTopology& inputTopology, const TetMesh& output,
                                double targetLength, const RemeshStats& stats, const ReportOptions& options = {});
+
+// Fills the report's feature rows from the input lines (report.stats) and
+// the output's tagged edges, sampled every l / 20.
+void measureFeatures(RemeshReport& report, const std::vector<FeatureSegment>& output);
 
 std::string reportText(const RemeshReport& report);
 std::string reportJson(const RemeshReport& report);

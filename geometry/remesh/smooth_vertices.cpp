@@ -64,6 +64,12 @@ public:
         out = g / count;
         return true;
       case VertexKind::Feature:
+        if (nb.featureLine >= 0) {
+          // A tagged line: the mean of its two neighbours on it, onto its input geometry.
+          out = complex_.features().projectOnLine(
+              nb.featureLine, 0.5 * (complex_.position(nb.tagged[0]) + complex_.position(nb.tagged[1])));
+          return keepsBend(nb, out);
+        }
         // Neighbours along the same 1-junction (Table 2.3 similarity or inclusion).
         for (std::size_t i = 0; i < nb.neighbors.size(); ++i)
           if (nb.neighbors[i] != dummy && isFeatureEdge(nb.edgeLabels[i]) && nb.edgeLabels[i] == nb.labels) {
@@ -149,16 +155,27 @@ public:
         break;
       }
       case VertexKind::Feature: {
-        // Along the chord of its two neighbours on the same 1-junction.
+        // Along the chord of its two neighbours on the same 1-junction (or tagged line).
         std::vector<Eigen::Vector3d> ends;
-        for (std::size_t i = 0; i < nb.neighbors.size(); ++i)
-          if (nb.neighbors[i] != dummy && isFeatureEdge(nb.edgeLabels[i]) && nb.edgeLabels[i] == nb.labels)
-            ends.push_back(complex_.position(nb.neighbors[i]));
+        if (nb.featureLine >= 0) {
+          for (std::int32_t w : nb.tagged) ends.push_back(complex_.position(w));
+        } else {
+          for (std::size_t i = 0; i < nb.neighbors.size(); ++i)
+            if (nb.neighbors[i] != dummy && isFeatureEdge(nb.edgeLabels[i]) && nb.edgeLabels[i] == nb.labels)
+              ends.push_back(complex_.position(nb.neighbors[i]));
+        }
         if (ends.size() != 2) return false;
         const Eigen::Vector3d t = ends[1] - ends[0];
         if (!(t.squaredNorm() > 0.0)) return false;
         dirs = {t.normalized(), -t.normalized()};
-        if (surfaces_) project = [this, &nb](Eigen::Vector3d& p) { return surfaces_->projectOnCurve(nb.labels, p); };
+        if (nb.featureLine >= 0) {
+          project = [this, &nb](Eigen::Vector3d& p) {
+            p = complex_.features().projectOnLine(nb.featureLine, p);
+            return keepsBend(nb, p);
+          };
+        } else if (surfaces_) {
+          project = [this, &nb](Eigen::Vector3d& p) { return surfaces_->projectOnCurve(nb.labels, p); };
+        }
         break;
       }
       case VertexKind::Corner:
@@ -194,6 +211,22 @@ public:
   }
 
 private:
+  // Where a vertex of a tagged line is, the input line may bend: with the
+  // vertex at p its two edges must still pass within a sixteenth of the
+  // shorter one of the input line's point nearest to it, so that the line
+  // does not cut the bend (the collapse keeps the same bound).
+  bool keepsBend(const VertexNeighborhood& nb, const Eigen::Vector3d& p) const {
+    const Eigen::Vector3d v = complex_.features().projectOnLine(nb.featureLine, complex_.position(nb.vertex));
+    const Eigen::Vector3d a = complex_.position(nb.tagged[0]), b = complex_.position(nb.tagged[1]);
+    const double tolerance = std::min((a - v).norm(), (b - v).norm()) / 16.0;
+    auto distance = [&](const Eigen::Vector3d& x, const Eigen::Vector3d& y) {
+      const Eigen::Vector3d d = y - x;
+      const double t = d.squaredNorm() > 0.0 ? std::clamp((v - x).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
+      return (x + t * d - v).norm();
+    };
+    return std::min(distance(a, p), distance(p, b)) <= tolerance;
+  }
+
   // Largest cosine of the smallest dihedral angle over v's domain tets with v
   // at p (lower is better); 3 when a tet around v inverts or falls under the
   // quality floor that it met before.

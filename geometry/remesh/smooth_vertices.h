@@ -5,6 +5,8 @@
 // (tangential Laplacian over the neighbours of their 2-junction, projected
 // onto its PSS), then inside vertices (Laplacian over the whole one-ring),
 // each level using the already smoothed positions of the level before.
+// A vertex of a tagged line (feature_edges.h) goes to the mean of its two
+// neighbours on the line, projected onto the line's input geometry.
 // Corners never move, nor do vertices without a domain tet (the imaginary
 // layer is not output); hull vertices slide within the planes of their hull facets. A move is
 // shortened until no incident tet inverts (nor drops under the quality

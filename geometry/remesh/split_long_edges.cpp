@@ -42,6 +42,7 @@ std::int32_t splitEdge(RemeshComplex& complex, std::int32_t a, std::int32_t b, s
   complex.setAnyTet(m, ring.tets[0]);
   complex.setAnyTet(b, ring.tets[0]);
   complex.setAnyTet(a, halves[0]);
+  complex.features().split(a, b, m);
   return m;
 }
 

@@ -4,6 +4,7 @@
 #include "geometry/io/mesh_io.h"
 #include "geometry/io/png_io.h"
 #include "geometry/remesh/mesh_topology.h"
+#include "geometry/voxel_tetrahedralization.h"
 #include "tests/support/test_environment.h"
 
 #include <gtest/gtest.h>
@@ -12,7 +13,9 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
+#include <tuple>
 #include <vector>
 
 namespace vox::remesh {
@@ -283,6 +286,130 @@ TEST(RemeshCli, AcceptsEitherOrientation) {
   EXPECT_TRUE(report["topology"]["preserved"].get<bool>());
   EXPECT_EQ(report["inverted_tets"].get<int>(), 0);
   for (const auto& l : report["labels"]) EXPECT_GT(l["volume_mm3"]["input"].get<double>(), 0.0);
+}
+
+// Features (thesis 2.3.8): a notched cube's creases and a polyline on its
+// top face, kept within 0.1 l and written as Medit Edges and Gmsh physical
+// lines that read back the same (and that meshio reads); bad polyline files
+// are refused in one line naming the file, nothing written.
+TEST(RemeshCli, KeepsSharpFeaturesAndPolylinesAndWritesThem) {
+  const std::string dir = test::tempDir();
+  GridGeometry g;
+  g.dims = {20, 20, 20};
+  LabelGrid grid(g, 0);
+  for (int z = 3; z < 17; ++z)
+    for (int y = 3; y < 17; ++y)
+      for (int x = 3; x < 17; ++x)
+        if (!(x >= 8 && x < 12 && z >= 12)) grid.at(x, y, z) = 1;
+  const TetMesh all = tetrahedralizeVoxels(grid);
+  TetMesh cube;
+  cube.positions = all.positions;
+  for (std::size_t t = 0; t < all.tetCount(); ++t)
+    if (all.labels[t] != 0) {
+      cube.tets.push_back(all.tets[t]);
+      cube.labels.push_back(all.labels[t]);
+    }
+  writeMedit(dir + "/cube.mesh", cube);
+  {
+    std::ofstream lines(dir + "/lines.txt");
+    lines << "# an L on the top face, left of the notch\n4.5 4.5 16.5 6.5 4.5 16.5\n6.5 4.5 16.5 6.5 14.5 16.5\n";
+  }
+  const std::string args = " -l 3 -q --iterations 4 --sharp-features --features " + quote(dir + "/lines.txt");
+  auto r = runCommand(voxmorph("remesh " + quote(dir + "/cube.mesh") + args + " -o " + quote(dir + "/out.mesh") +
+                               " --report " + quote(dir + "/r.json")));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const nlohmann::json report = nlohmann::json::parse(slurp(dir + "/r.json"));
+  ASSERT_TRUE(report.contains("features")) << report.dump();
+  EXPECT_LT(report["features"]["hausdorff_over_l"]["input_to_output"].get<double>(), 0.1);
+  EXPECT_LT(report["features"]["hausdorff_over_l"]["output_to_input"].get<double>(), 0.1);
+  EXPECT_GT(report["features"]["lines"].get<int>(), 20);  // the notched cube's 24 creases and the polyline
+  const TetMesh out = readTetMesh(dir + "/out.mesh");
+  const MeshEdges edges = readMeshEdges(dir + "/out.mesh");
+  ASSERT_FALSE(edges.empty());
+  EXPECT_EQ(edges.edges.size(), report["features"]["edges_out"].get<std::size_t>());
+  std::set<std::pair<std::int32_t, std::int32_t>> meshEdges;
+  for (const Tet& t : out.tets)
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) meshEdges.insert(std::minmax(t[std::size_t(i)], t[std::size_t(j)]));
+  for (const auto& [a, b] : edges.edges) EXPECT_TRUE(meshEdges.count(std::minmax(a, b))) << a << "-" << b;
+  const std::set<std::int32_t> refs(edges.refs.begin(), edges.refs.end());
+  EXPECT_EQ(*refs.begin(), 1);
+  EXPECT_EQ(std::size_t(*refs.rbegin()), refs.size());
+
+  // The same run to Gmsh: the same mesh and lines (vertex order kept).
+  r = runCommand(voxmorph("remesh " + quote(dir + "/cube.mesh") + args + " -o " + quote(dir + "/out.msh")));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_EQ(readTetMesh(dir + "/out.msh").positions, out.positions);
+  const MeshEdges lines = readMeshEdges(dir + "/out.msh");
+  auto sorted = [](const MeshEdges& m) {
+    std::vector<std::tuple<std::int32_t, std::int32_t, std::int32_t>> v;
+    for (std::size_t i = 0; i < m.edges.size(); ++i) v.emplace_back(m.refs[i], m.edges[i][0], m.edges[i][1]);
+    std::sort(v.begin(), v.end());
+    return v;
+  };
+  EXPECT_EQ(sorted(lines), sorted(edges));
+  if (!test::python().empty()) {
+    r = runCommand(quote(test::python()) + " -c " +
+                   quote("import meshio; m = meshio.read('" + dir + "/out.msh'); "
+                         "n = sum(len(c.data) for c in m.cells if c.type == 'line'); "
+                         "p = sorted({int(x) for c, d in zip(m.cells, m.cell_data['gmsh:physical']) if c.type == 'line' for x in d}); "
+                         "print(n, len(p), p[0], p[-1])"));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    const std::string expected = std::to_string(edges.edges.size()) + " " + std::to_string(refs.size()) + " 1 " +
+                                 std::to_string(refs.size()) + "\n";
+    EXPECT_NE(r.out.find(expected), std::string::npos) << r.out;
+  }
+
+  // Bad polyline files: exit 1, one line naming the file and the fault.
+  struct Bad {
+    const char* text;
+    const char* fault;
+  };
+  for (const Bad& bad : {Bad{"4.5 4.5 16.5 6.5 4.5\n", "line 1: 5 numbers"},
+                         Bad{"# nothing\n", "no segments"},
+                         Bad{"4.5 4.5 16.5 6.5 4.5 x\n", "'x' is not a finite number"},
+                         Bad{"4.5 4.5 16.5 6.5 4.5 16.5\n4.5 4.5 16.5 4.5 4.5 90\n", "segment 2: point (4.5, 4.5, 90)"}}) {
+    {
+      std::ofstream f(dir + "/bad.txt");
+      f << bad.text;
+    }
+    const std::string target = dir + "/bad_out.mesh";
+    r = runCommand(voxmorph("remesh " + quote(dir + "/cube.mesh") + " -l 3 -q --features " + quote(dir + "/bad.txt") +
+                            " -o " + quote(target)));
+    EXPECT_EQ(r.exitCode, 1) << bad.text;
+    EXPECT_NE(r.err.find("bad.txt"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(bad.fault), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_FALSE(fs::exists(target));
+  }
+  // The same polyline as a Medit file of Vertices and Edges (no tetrahedra).
+  {
+    std::ofstream f(dir + "/lines.mesh");
+    f << "MeshVersionFormatted 2\nDimension 3\nVertices\n3\n4.5 4.5 16.5 0\n6.5 4.5 16.5 0\n6.5 14.5 16.5 0\n"
+         "Edges\n2\n1 2 7\n2 3 7\nEnd\n";
+  }
+  r = runCommand(voxmorph("remesh " + quote(dir + "/cube.mesh") + " -l 3 -q --iterations 4 --features " +
+                          quote(dir + "/lines.mesh") + " -o " + quote(dir + "/medit.mesh") + " --report -"));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const nlohmann::json fromMedit = nlohmann::json::parse(r.out);
+  EXPECT_EQ(fromMedit["features"]["lines"].get<int>(), 1);
+  EXPECT_LT(fromMedit["features"]["hausdorff_over_l"]["input_to_output"].get<double>(), 0.1);
+  {
+    std::ofstream f(dir + "/bad.mesh");
+    f << "MeshVersionFormatted 2\nDimension 3\nVertices\n2\n4.5 4.5 16.5 0\n6.5 4.5 16.5 0\nEdges\n1\n1 3 7\nEnd\n";
+  }
+  r = runCommand(voxmorph("remesh " + quote(dir + "/cube.mesh") + " -l 3 -q --features " + quote(dir + "/bad.mesh") +
+                          " -o " + quote(dir + "/bad_out.mesh")));
+  EXPECT_EQ(r.exitCode, 1);
+  EXPECT_NE(r.err.find("bad.mesh"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("edge 1 references vertex 3"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(fs::exists(dir + "/bad_out.mesh"));
+
+  // Lines have no place in a .vtu: a usage error.
+  r = runCommand(voxmorph("remesh " + quote(dir + "/cube.mesh") + " -l 3 -q --sharp-features -o " + quote(dir + "/o.vtu")));
+  EXPECT_EQ(r.exitCode, 2) << r.err;
+  EXPECT_FALSE(fs::exists(dir + "/o.vtu"));
 }
 
 }  // namespace
