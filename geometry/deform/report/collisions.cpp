@@ -29,8 +29,12 @@ Collisions findCollisions(const TetMesh& rest, std::span<const Eigen::Vector3d> 
   // Faces between two parts' points, counted per axis (exact sums in any
   // order of the ranges).
   std::vector<std::array<std::int64_t, 3>> contactFaces(kParts * kParts, {0, 0, 0});
+  // Apart at rest: more than two of the rest grid's largest voxel sides.
+  const float apart2 = float(4.0 * restGrid.spacing.maxCoeff() * restGrid.spacing.maxCoeff());
   parallelRanges(lattice.dims[2], threads, [&](std::int64_t z0, std::int64_t z1) {
     std::vector<Label> first(std::size_t(nx * ny)), below(std::size_t(nx * ny), Label(0));
+    // Where the first tet's map puts each point at rest (grid frame).
+    std::vector<Eigen::Vector3f> from(std::size_t(nx * ny)), fromBelow(std::size_t(nx * ny));
     std::vector<std::uint8_t> hit(std::size_t(nx * ny));
     std::vector<std::int64_t> localPairs(kParts * kParts, 0);
     std::vector<std::array<std::int64_t, 3>> localContacts(kParts * kParts, {0, 0, 0});
@@ -58,6 +62,7 @@ Collisions findCollisions(const TetMesh& rest, std::span<const Eigen::Vector3d> 
             const std::size_t i = std::size_t(x + nx * y);
             if (first[i] == 0) {
               first[i] = part;
+              from[i] = p.cast<float>();
             } else if (first[i] != part && !hit[i]) {
               hit[i] = 1;
               const Label a = std::min(first[i], part), b = std::max(first[i], part);
@@ -67,12 +72,17 @@ Collisions findCollisions(const TetMesh& rest, std::span<const Eigen::Vector3d> 
         }
       }
     };
-    const auto touch = [&](Label a, Label b, int axis) {
-      if (a != 0 && b != 0 && a != b) ++localContacts[std::size_t(std::min(a, b)) * kParts + std::max(a, b)][std::size_t(axis)];
+    // Neighbouring points of two parts that lay apart at rest meet on a
+    // contact; those that were neighbours at rest (the joint's own
+    // interface, however it turned) do not count.
+    const auto touch = [&](Label a, Label b, const Eigen::Vector3f& pa, const Eigen::Vector3f& pb, int axis) {
+      if (a != 0 && b != 0 && a != b && (pa - pb).squaredNorm() > apart2)
+        ++localContacts[std::size_t(std::min(a, b)) * kParts + std::max(a, b)][std::size_t(axis)];
     };
     if (z0 > 0) {
       fillSlice(z0 - 1, false);
       below = first;
+      fromBelow = from;
     }
     for (std::int64_t z = z0; z < z1; ++z) {
       fillSlice(z, true);
@@ -84,11 +94,12 @@ Collisions findCollisions(const TetMesh& rest, std::span<const Eigen::Vector3d> 
         for (std::int64_t x = 0; x < nx; ++x) {
           const std::size_t i = std::size_t(x + nx * y);
           if (first[i] == 0) continue;
-          if (x + 1 < nx) touch(first[i], first[i + 1], 0);
-          if (y + 1 < ny) touch(first[i], first[i + std::size_t(nx)], 1);
-          if (z > 0) touch(first[i], below[i], 2);
+          if (x + 1 < nx) touch(first[i], first[i + 1], from[i], from[i + 1], 0);
+          if (y + 1 < ny) touch(first[i], first[i + std::size_t(nx)], from[i], from[i + std::size_t(nx)], 1);
+          if (z > 0) touch(first[i], below[i], from[i], fromBelow[i], 2);
         }
       below = first;
+      fromBelow = from;
       if (keepMask)
         for (std::size_t i = 0; i < hit.size(); ++i)
           if (hit[i]) out.mask.labels()[std::size_t(z * nx * ny) + i] = 1;
@@ -100,38 +111,14 @@ Collisions findCollisions(const TetMesh& rest, std::span<const Eigen::Vector3d> 
     for (std::size_t k = 0; k < localContacts.size(); ++k)
       for (int axis = 0; axis < 3; ++axis) contactFaces[k][std::size_t(axis)] += localContacts[k][std::size_t(axis)];
   }, 1);
-  // The same faces of the rest body-part grid.
-  std::vector<double> restArea(kParts * kParts, 0.0);
-  {
-    const GridGeometry& r = restGrid;
-    const Eigen::Vector3d area(r.spacing[1] * r.spacing[2], r.spacing[0] * r.spacing[2], r.spacing[0] * r.spacing[1]);
-    const Label* l = parts.data();
-    const std::int64_t sx = 1, sy = r.dims[0], sz = r.dims[0] * r.dims[1];
-    for (std::int64_t k = 0; k < r.dims[2]; ++k)
-      for (std::int64_t j = 0; j < r.dims[1]; ++j)
-        for (std::int64_t i = 0; i < r.dims[0]; ++i) {
-          const std::int64_t v = r.index(i, j, k);
-          const Label a = l[v];
-          if (a == 0 || a >= kParts) continue;
-          const auto meet = [&](std::int64_t u, double face) {
-            const Label b = l[u];
-            if (b != 0 && b != a && b < kParts) restArea[std::size_t(std::min(a, b)) * kParts + std::max(a, b)] += face;
-          };
-          if (i + 1 < r.dims[0]) meet(v + sx, area[0]);
-          if (j + 1 < r.dims[1]) meet(v + sy, area[1]);
-          if (k + 1 < r.dims[2]) meet(v + sz, area[2]);
-        }
-  }
   for (std::size_t a = 0; a < kParts; ++a)
     for (std::size_t b = a + 1; b < kParts; ++b)
-      if (const std::size_t k = a * kParts + b;
-          contactFaces[k][0] + contactFaces[k][1] + contactFaces[k][2] > 0 || restArea[k] > 0.0) {
-        const double posed = double(contactFaces[k][0]) * faceArea[0] + double(contactFaces[k][1]) * faceArea[1] +
-                             double(contactFaces[k][2]) * faceArea[2];
-        out.contacts.push_back({Label(a), Label(b), restArea[k], posed});
-      }
+      if (const std::size_t k = a * kParts + b; contactFaces[k][0] + contactFaces[k][1] + contactFaces[k][2] > 0)
+        out.contacts.push_back({Label(a), Label(b),
+                                double(contactFaces[k][0]) * faceArea[0] + double(contactFaces[k][1]) * faceArea[1] +
+                                    double(contactFaces[k][2]) * faceArea[2]});
   std::sort(out.contacts.begin(), out.contacts.end(), [](const ContactPair& p, const ContactPair& q) {
-    return p.newMm2() != q.newMm2() ? p.newMm2() > q.newMm2() : (p.partA != q.partA ? p.partA < q.partA : p.partB < q.partB);
+    return p.areaMm2 != q.areaMm2 ? p.areaMm2 > q.areaMm2 : (p.partA != q.partA ? p.partA < q.partA : p.partB < q.partB);
   });
   for (std::size_t a = 0; a < kParts; ++a)
     for (std::size_t b = a + 1; b < kParts; ++b)

@@ -10,9 +10,8 @@
 // the part (background maps to nothing). A point that two tets map to
 // tissue of two different parts collides. The lattice is processed slice by
 // slice (lattice_tets.h scan conversion), so only the optional mask grows
-// with the lattice. Each lattice point's part (the first tet's) also gives
-// the contacts: faces between neighbouring points of two parts, against the
-// same faces of the rest body-part grid.
+// with the lattice. Each lattice point's part and rest position (the first
+// tet's) also give the contacts (ContactPair).
 
 #include "geometry/label_grid.h"
 #include "geometry/tet_mesh.h"
@@ -30,15 +29,15 @@ struct CollisionPair {
   std::int64_t voxels = 0;
 };
 
-// Where two parts' tissue meets: the area of the faces between lattice
-// points (or rest voxels) holding tissue of partA and of partB. What a pose
-// adds beyond the rest's (posed - rest) is the contact the turn made: the
-// back of the knee against the thigh, the arm against the chest.
+// Where tissue of two parts that lay apart at rest meets in the pose: the
+// area of the faces between neighbouring lattice points of partA and partB
+// whose rest positions (through their tets' maps) are more than two rest
+// voxels apart (the back of the knee against the thigh, the arm against the
+// chest). A joint's own interface, whose points were neighbours at rest,
+// does not count, however it turned.
 struct ContactPair {
   Label partA = 0, partB = 0;  // partA < partB
-  double restMm2 = 0.0, posedMm2 = 0.0;
-
-  double newMm2() const { return posedMm2 - restMm2; }
+  double areaMm2 = 0.0;
 };
 
 struct Collisions {
@@ -46,7 +45,7 @@ struct Collisions {
   std::int64_t bodyVoxels = 0;     // lattice points covered by tissue of some part
   std::int64_t voxels = 0;         // lattice points covered by tissue of two parts
   std::vector<CollisionPair> pairs;  // by decreasing voxels
-  std::vector<ContactPair> contacts;  // every pair that meets at rest or posed, by decreasing newMm2()
+  std::vector<ContactPair> contacts;  // by decreasing area
   // With keepMask: 1 at colliding points, 0 elsewhere (the lattice's geometry).
   LabelGrid mask;
 

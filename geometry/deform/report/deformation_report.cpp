@@ -249,12 +249,12 @@ std::string deformationSummary(const DeformationReport& r) {
       s << (k ? ", " : ": ") << skeleton::partName(skeleton::Part(c->pairs[k].partA)) << " / "
         << skeleton::partName(skeleton::Part(c->pairs[k].partB)) << " " << c->pairs[k].voxels;
     s << "\n";
-    double made = 0.0;
-    for (const ContactPair& p : c->contacts) made += std::max(0.0, p.newMm2());
-    s << "  contacts: " << fixed(made * 1e-2, 1) << " cm2 of new contact between body parts";
-    for (std::size_t k = 0; k < c->contacts.size() && k < 3 && c->contacts[k].newMm2() > 0.0; ++k)
+    double area = 0.0;
+    for (const ContactPair& p : c->contacts) area += p.areaMm2;
+    s << "  contacts: " << fixed(area * 1e-2, 1) << " cm2 where tissue of two body parts apart at rest meets";
+    for (std::size_t k = 0; k < c->contacts.size() && k < 3; ++k)
       s << (k ? ", " : ": ") << skeleton::partName(skeleton::Part(c->contacts[k].partA)) << " / "
-        << skeleton::partName(skeleton::Part(c->contacts[k].partB)) << " " << fixed(c->contacts[k].newMm2() * 1e-2, 1);
+        << skeleton::partName(skeleton::Part(c->contacts[k].partB)) << " " << fixed(c->contacts[k].areaMm2 * 1e-2, 1);
     s << "\n";
   }
   s << "  distortion: angle mean " << fixed(r.distortion.angle.mean, 2) << " deg (rms deviation " << fixed(r.distortion.angle.rmsDeviation, 2)

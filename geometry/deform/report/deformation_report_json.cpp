@@ -202,9 +202,7 @@ std::string deformationReportJson(const DeformationReport& r) {
     json contacts = json::array();
     for (const ContactPair& p : c->contacts)
       contacts.push_back({{"parts", {skeleton::partName(skeleton::Part(p.partA)), skeleton::partName(skeleton::Part(p.partB))}},
-                          {"rest_cm2", p.restMm2 * 1e-2},
-                          {"posed_cm2", p.posedMm2 * 1e-2},
-                          {"new_cm2", p.newMm2() * 1e-2}});
+                          {"area_cm2", p.areaMm2 * 1e-2}});
     root["collisions"] = {{"lattice", toJson(c->lattice)},
                           {"body_voxels", c->bodyVoxels},
                           {"voxels", c->voxels},

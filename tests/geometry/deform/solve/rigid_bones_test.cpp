@@ -159,8 +159,8 @@ TEST(Collisions, TissueOfTwoPartsMovedOntoEachOtherIsCounted) {
 
 // Two blocks of 10 x 10 x 10 voxels (1 mm), 5 voxels apart, each covered by
 // a box of six tets: at rest they do not meet; part 2 slid against part 1,
-// they meet over one 10 x 10 face, 100 mm2 of new contact; the rest faces
-// come from the body-part grid (where the two blocks touch there too).
+// they meet over one 10 x 10 face, 100 mm2 of contact. Blocks that touch at
+// rest (a joint's interface) meet on no contact however they turn.
 TEST(Collisions, PartsMovedAgainstEachOtherMeetOnAContact) {
   GridGeometry g;
   g.dims = {30, 12, 12};
@@ -182,8 +182,7 @@ TEST(Collisions, PartsMovedAgainstEachOtherMeetOnAContact) {
   };
   box({1.5, 0.5, 0.5}, {11.5, 10.5, 10.5});
   box({16.5, 0.5, 0.5}, {26.5, 10.5, 10.5});
-  const Collisions atRest = findCollisions(tm, tm.positions, parts, g);
-  EXPECT_TRUE(atRest.contacts.empty());
+  EXPECT_TRUE(findCollisions(tm, tm.positions, parts, g).contacts.empty());
   std::vector<Eigen::Vector3d> moved = tm.positions;
   for (std::size_t v = 8; v < 16; ++v) moved[v].x() -= 5.0;
   for (const int threads : {1, 3}) {
@@ -192,18 +191,21 @@ TEST(Collisions, PartsMovedAgainstEachOtherMeetOnAContact) {
     ASSERT_EQ(c.contacts.size(), 1u);
     EXPECT_EQ(c.contacts[0].partA, 1);
     EXPECT_EQ(c.contacts[0].partB, 2);
-    EXPECT_DOUBLE_EQ(c.contacts[0].restMm2, 0.0);
-    EXPECT_DOUBLE_EQ(c.contacts[0].posedMm2, 100.0);
-    EXPECT_DOUBLE_EQ(c.contacts[0].newMm2(), 100.0);
+    EXPECT_DOUBLE_EQ(c.contacts[0].areaMm2, 100.0);
   }
-  // Blocks that touch at rest: their face is rest contact, not new.
-  LabelGrid touching = parts;
+  // One block of two parts (x below 7: part 1), one box of tets turned a
+  // quarter turn about z: the interface between the parts turns with it
+  // and is no contact.
+  LabelGrid joined(g, 0);
   for (std::int64_t k = 1; k < 11; ++k)
     for (std::int64_t j = 1; j < 11; ++j)
-      for (std::int64_t i = 12; i < 17; ++i) touching.at(i, j, k) = 2;
-  const Collisions t = findCollisions(tm, moved, touching, g);
-  ASSERT_FALSE(t.contacts.empty());
-  EXPECT_DOUBLE_EQ(t.contacts[0].restMm2, 100.0);
+      for (std::int64_t i = 2; i < 12; ++i) joined.at(i, j, k) = i < 7 ? 1 : 2;
+  tm = TetMesh{};
+  box({1.5, 0.5, 0.5}, {11.5, 10.5, 10.5});
+  const Eigen::Vector3d centre(6.5, 5.5, 5.5);
+  std::vector<Eigen::Vector3d> turned = tm.positions;
+  for (Eigen::Vector3d& p : turned) p = centre + Eigen::AngleAxisd(M_PI / 2.0, Eigen::Vector3d::UnitZ()) * (p - centre);
+  EXPECT_TRUE(findCollisions(tm, turned, joined, g).contacts.empty());
 }
 
 }  // namespace
