@@ -1,5 +1,6 @@
 #include "geometry/remesh/collapse_short_edges.h"
 
+#include "geometry/cancellation.h"
 #include "geometry/remesh/mesh_edges.h"
 #include "geometry/remesh/parallel_ranges.h"
 #include "geometry/remesh/tet_shape.h"
@@ -422,6 +423,7 @@ std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& b
     parallelRanges(std::int64_t(edges.size()), threads, [&](std::int64_t b, std::int64_t e) {
       EdgeCollapser screen(complex, bounds, hull);
       for (std::int64_t x = b; x < e; ++x) {
+        throwIfCancelled();
         const std::size_t i = std::size_t(byVertex[std::size_t(x)]);
         screen.tryCollapse(edges[i].a, edges[i].b, false, &plans[i]);
       }
@@ -431,6 +433,7 @@ std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& b
     touchedList.clear();
     next.clear();
     for (std::size_t i = 0; i < edges.size(); ++i) {
+      throwIfCancelled();
       if (plans[i] == CollapseMove::None) continue;
       const WeightedEdge& e = edges[i];
       if (!complex.vertexAlive(e.a) || !complex.vertexAlive(e.b)) continue;

@@ -1,5 +1,6 @@
 #include "geometry/remesh/face_adjacency.h"
 
+#include "geometry/cancellation.h"
 #include "geometry/error.h"
 
 #include <algorithm>
@@ -38,12 +39,14 @@ std::vector<std::array<std::int32_t, 4>> tetFaceAdjacency(const std::vector<Tet>
   std::vector<std::int64_t> fill(start.begin(), start.end() - 1);
   for (std::size_t t = 0; t < nt; ++t)
     for (int k = 0; k < 4; ++k) {
+      if (k == 0 && t % 4096 == 0) throwIfCancelled();  // a second and more on millions of tets
       const auto f = sortedFace(t, k);
       entries[std::size_t(fill[std::size_t(f[0])]++)] = {(std::uint64_t(std::uint32_t(f[1])) << 32) | std::uint32_t(f[2]),
                                                            std::int32_t(4 * t + std::size_t(k))};
     }
 
   for (std::size_t v = 0; v < std::size_t(vertexCount); ++v) {
+    if (v % 4096 == 0) throwIfCancelled();
     Entry* b = entries.data() + start[v];
     Entry* e = entries.data() + start[v + 1];
     std::sort(b, e, [](const Entry& x, const Entry& y) { return x.key < y.key || (x.key == y.key && x.face < y.face); });

@@ -1,5 +1,6 @@
 #include "geometry/remesh/flip_edges.h"
 
+#include "geometry/cancellation.h"
 #include "geometry/mesh_quality.h"
 #include "geometry/remesh/label_set.h"
 #include "geometry/remesh/parallel_ranges.h"
@@ -297,12 +298,15 @@ std::size_t screenAndFlip(RemeshComplex& complex, const FlipOptions& options, Ed
   parallelRanges(std::int64_t(edges.size()), options.threads, [&](std::int64_t b, std::int64_t e) {
     EdgeFlipper f(complex, options);
     f.useWorstCosines(&worst);
-    for (std::int64_t i = b; i < e; ++i)
+    for (std::int64_t i = b; i < e; ++i) {
+      throwIfCancelled();
       tryFlip(f, edges[std::size_t(i)].first, edges[std::size_t(i)].second, false, &apex[std::size_t(i)]);
+    }
   });
   std::vector<char> touched(std::size_t(complex.vertexSlots()), 0);
   std::size_t flips = 0;
   for (std::size_t i = 0; i < edges.size(); ++i) {
+    throwIfCancelled();
     if (apex[i] == kNone) continue;
     const auto [a, b] = edges[i];
     if (!flipper.applyEdgePlan(a, b, apex[i], touched) && !tryFlip(flipper, a, b, true, nullptr)) continue;

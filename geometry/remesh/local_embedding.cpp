@@ -1,5 +1,6 @@
 #include "geometry/remesh/local_embedding.h"
 
+#include "geometry/cancellation.h"
 #include "geometry/error.h"
 #include "geometry/remesh/face_adjacency.h"
 
@@ -177,6 +178,7 @@ void checkLocalEmbedding(const std::vector<Eigen::Vector3d>& positions, const st
   std::vector<Incidence> around;
   std::vector<std::int32_t> group;
   for (std::size_t v = 0; v < nv; ++v) {
+    throwIfCancelled();  // seconds on a mesh of millions of tets
     around.clear();
     for (std::int64_t i = first[v]; i < first[v + 1]; ++i) {
       const std::int32_t t = star[std::size_t(i)];

@@ -1,5 +1,6 @@
 #include "geometry/remesh/mesh_edges.h"
 
+#include "geometry/cancellation.h"
 #include "geometry/remesh/parallel_ranges.h"
 
 #include <algorithm>
@@ -20,6 +21,7 @@ void collectEdges(const RemeshComplex& complex,
     std::vector<std::int32_t> star, ring;
     for (std::int64_t c = cb; c < ce; ++c)
       for (std::int32_t a = std::int32_t(n * c / kChunks); a < std::int32_t(n * (c + 1) / kChunks); ++a) {
+        throwIfCancelled();
         if (a == dummy || !complex.vertexAlive(a)) continue;
         walker.incidentTets(complex, a, star);
         complex.starVertices(star, a, ring, a);

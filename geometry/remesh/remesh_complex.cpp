@@ -1,5 +1,6 @@
 #include "geometry/remesh/remesh_complex.h"
 
+#include "geometry/cancellation.h"
 #include "geometry/error.h"
 #include "geometry/remesh/local_embedding.h"
 #include "geometry/remesh/tet_shape.h"
@@ -106,6 +107,7 @@ RemeshComplex::RemeshComplex(const TetMesh& mesh, const std::string& source) {
   std::vector<std::int32_t> star;
   std::vector<std::pair<std::int32_t, std::int32_t>> edgeTets;  // (other end point, tet)
   for (std::int32_t v = 0; v < std::int32_t(positions_.size()); ++v) {
+    throwIfCancelled();  // seconds on a mesh of millions of tets
     if (v == dummy_ || vertexTet_[std::size_t(v)] < 0) continue;
     incidentTets(v, star);
     if (std::int32_t(star.size()) != incidence[std::size_t(v)])

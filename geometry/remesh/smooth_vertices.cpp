@@ -1,5 +1,6 @@
 #include "geometry/remesh/smooth_vertices.h"
 
+#include "geometry/cancellation.h"
 #include "geometry/remesh/element_classification.h"
 #include "geometry/remesh/parallel_ranges.h"
 #include "geometry/remesh/tet_shape.h"
@@ -447,6 +448,7 @@ SmoothCounts smoothVertices(RemeshComplex& complex, const InterfaceSurfaces* sur
   parallelRanges(nv, threads, [&](std::int64_t b, std::int64_t e) {
     VertexNeighborhood nb;
     for (std::int32_t v = std::int32_t(b); v < std::int32_t(e); ++v) {
+      throwIfCancelled();
       if (v == dummy || !complex.vertexAlive(v)) continue;
       vt.of(v, nb.tets);
       classifyNeighborhood(complex, v, nb);
@@ -469,6 +471,7 @@ SmoothCounts smoothVertices(RemeshComplex& complex, const InterfaceSurfaces* sur
     parallelRanges(std::int64_t(level.size()), threads, [&](std::int64_t b, std::int64_t e) {
       VertexNeighborhood nb;
       for (std::int64_t i = b; i < e; ++i) {
+        throwIfCancelled();
         vt.of(level[std::size_t(i)], nb.tets);
         classifyNeighborhood(complex, level[std::size_t(i)], nb);
         moves[std::size_t(i)] = smoother.target(nb, targets[std::size_t(i)]);

@@ -1,5 +1,6 @@
 #include "geometry/remesh/split_long_edges.h"
 
+#include "geometry/cancellation.h"
 #include "geometry/error.h"
 #include "geometry/remesh/mesh_edges.h"
 
@@ -80,6 +81,7 @@ std::size_t splitLongEdges(RemeshComplex& complex, const EdgeLengthBounds& bound
   EdgeRing contactRing;
   const std::int32_t dummy = complex.dummyVertex();
   while (next < edges.size() || !queue.empty()) {
+    throwIfCancelled();  // a split of the whole complex runs for seconds
     WeightedEdge e;
     if (queue.empty() || (next < edges.size() && longer(edges[next], queue.top()))) {
       e = edges[next++];
