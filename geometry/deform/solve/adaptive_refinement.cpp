@@ -152,8 +152,11 @@ RoundSplits splitMarkedTets(TetMesh& mesh, std::vector<std::uint8_t> placed, std
       const std::size_t first = mesh.tetCount();
       bisection.bisect(e);
       for (std::size_t i = 0; i < around.size(); ++i) {
-        std::int8_t& d = due[std::size_t(around[i])];
-        if (d > 0) --d;
+        // Both halves of a split tet owe what it still owed (read before
+        // the push, which may move `due`).
+        std::int8_t& parent = due[std::size_t(around[i])];
+        if (parent > 0) --parent;
+        const std::int8_t d = parent;
         due.push_back(d);
         if (d > 0) queue.push_back(std::int32_t(first + i));
       }
