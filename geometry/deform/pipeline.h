@@ -85,9 +85,6 @@ struct PipelineOptions {
   // applied by the frame's fraction. Without it each part's bones take the
   // rigid fit to where the cage puts them.
   std::vector<PoseTransform> partMotions;
-  // A joint pose that presses bones through each other: the fault
-  // (skeleton::bonesThroughEachOther); the run refuses it unless forced.
-  std::optional<std::string> bonesThroughEachOther;
   // Automatic cage; its separations (groups are LabelGroup values) also cut
   // the transfer mesh.
   CageOptions cage;

@@ -53,11 +53,12 @@ struct JointPoseOptions {
   double regionPaddingMm = 60.0;  // regions grow by this across the limb (the cage lies ~20 mm out, the inset wedge needs room)
   double nearMm = 40.0;           // groups this near the moving parts are separated from them (twice the cage's default dilation)
   JointZone jointZone = JointZone::Parent;
-  // A pose whose bones overlap (bone_overlap.h) by more than this percent of
-  // the smaller part's bone voxels is physically wrong
-  // (PipelineOptions::bonesThroughEachOther).
-  double maxBoneOverlapPercent = 2.0;
 };
+
+// A pose whose bones overlap (bone_overlap.h) by more than this percent of
+// the smaller part's bone voxels is physically wrong (bonesThroughEachOther
+// below): the deform run's default bound, and the viewer's.
+inline constexpr double kMaxBoneOverlapPercent = 2.0;
 
 // The skeleton's joints with the pose's overrides applied (a "center"
 // replaces the estimated centre; an "axis" the left-right axis, made

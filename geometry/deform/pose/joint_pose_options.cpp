@@ -20,8 +20,6 @@ PipelineOptions skeletalPoseOptions(const Pose& pose, const std::string& poseSou
       poseOptions(compileJointPose(pose, skeleton, poseSource, jointPoseOptions(pose.jointOptions, options)), poseSource, organs);
   if (!pose.joints.empty()) {
     o.partMotions = partTransforms(pose, skeleton, poseSource);
-    o.bonesThroughEachOther =
-        bonesThroughEachOther(skeleton, posedJoints(skeleton, pose.joints, poseSource), pose.joints, options.maxBoneOverlapPercent);
   }
   o.bodyParts = skeleton.parts.parts;
   o.groupsFromParts = pose.jointOptions.groups.value_or("parts") == "parts";

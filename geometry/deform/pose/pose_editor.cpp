@@ -421,7 +421,7 @@ bool PoseEditor::update() {
   if (changed && bones_)
     figures_.bonesThroughEachOther =
         skeleton::bonesThroughEachOther(*bones_, skeleton::posedJoints(*skeleton_, state_.pose.joints, setupSource_), state_.pose.joints,
-                                        skeleton::JointPoseOptions{}.maxBoneOverlapPercent);
+                                        skeleton::kMaxBoneOverlapPercent);
   figures_.deformMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return changed;
 }

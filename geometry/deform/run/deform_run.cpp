@@ -161,7 +161,9 @@ void refuseOrForce(const DeformGridRequest& o, DeformationReport& report, const 
 // The pipeline's options on the working grid: a pose with joints (or
 // selections by body part, or a user's parts grid) compiled against the
 // skeleton, the cage options and the extra separations.
-PipelineOptions deformPipelineOptions(const DeformGridRequest& o, const LabelGrid& working, int factor, const PreparedState* prepared) {
+PipelineOptions deformPipelineOptions(const DeformGridRequest& o, const LabelGrid& working, int factor, const PreparedState* prepared,
+                                      std::optional<std::string>* bonesFault) {
+  if (bonesFault) bonesFault->reset();
   const skeleton::Skeleton* stored = prepared && prepared->skeleton ? &*prepared->skeleton : nullptr;
   std::optional<LabelGrid> userParts;
   if (!o.parts.empty() && !stored) {
@@ -177,13 +179,21 @@ PipelineOptions deformPipelineOptions(const DeformGridRequest& o, const LabelGri
   // tissue around the bone follows it.
   skeleton::JointPoseOptions joints;
   if (o.rigidBones) joints.jointZone = skeleton::JointZone::Child;
-  joints.maxBoneOverlapPercent = o.maxBoneOverlapPercent;
   // The prepared skeleton (built from the same grid, organ table and parts
   // grid: PreparedState::check) stands in for the one built here.
   const bool skeletal = !o.pose.joints.empty() || usesBodyParts(o.pose) || !o.parts.empty();
-  PipelineOptions options = stored && skeletal ? skeleton::skeletalPoseOptions(o.pose, o.poseSource, *stored, o.organs, joints)
-                                               : skeleton::skeletalPoseOptions(o.pose, o.poseSource, working, o.organs,
-                                                                               {o.input, o.organsSource, o.parts}, std::move(userParts), joints);
+  std::optional<skeleton::Skeleton> built;
+  if (skeletal && !stored) {
+    requireOrganTable(o.organs.has_value(), OrganTableNeed::Bones, o.poseSource);
+    built = skeleton::buildSkeleton(working, *o.organs, {o.input, o.organsSource, o.parts}, std::move(userParts));
+  }
+  const skeleton::Skeleton* sk = stored ? stored : built ? &*built : nullptr;
+  PipelineOptions options = sk && skeletal ? skeleton::skeletalPoseOptions(o.pose, o.poseSource, *sk, o.organs, joints)
+                                           : skeleton::skeletalPoseOptions(o.pose, o.poseSource, working, o.organs,
+                                                                           {o.input, o.organsSource, o.parts}, std::nullopt, joints);
+  if (bonesFault && sk && !o.pose.joints.empty())
+    *bonesFault = skeleton::bonesThroughEachOther(*sk, skeleton::posedJoints(*sk, o.pose.joints, o.poseSource), o.pose.joints,
+                                                  o.maxBoneOverlapPercent);
   // Any pose on a grid whose organ table names bones: the body parts too, for
   // the collision count and the bone measures (the label groups of a pose
   // without joints stay those of the organ names).
@@ -268,14 +278,15 @@ PosedMesh poseByCage(const DeformGridRequest& o, const Source& source, RasterEng
                      const std::shared_ptr<PreparedState>& prepared) {
   PosedMesh out;
   StageTimer skeletonTimer("skeleton");
-  PipelineOptions options = deformPipelineOptions(o, source.workingGrid(), source.factor, prepared.get());
+  std::optional<std::string> bonesFault;
+  PipelineOptions options = deformPipelineOptions(o, source.workingGrid(), source.factor, prepared.get(), &bonesFault);
   options.prepared = prepared;
   // The posed grid comes from the transfer mesh alone: the envelope (its
   // build, and the Green coordinates of its vertices in the embedding) is
   // for the interactive display, and leaving it out changes no output byte.
   options.envelope = false;
   if (options.bodyParts) report.stages.push_back(skeletonTimer.stop());
-  if (options.bonesThroughEachOther) refuseOrForce(o, report, *options.bonesThroughEachOther);
+  if (bonesFault) refuseOrForce(o, report, *bonesFault);
   const bool separated = !options.cage.separations.empty();
   auto pipeline = std::make_unique<DeformationPipeline>(source.workingGrid(), options);
   if (pipeline->stats().foregroundOutsideCage > 0 && !separated)

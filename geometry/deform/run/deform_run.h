@@ -87,7 +87,7 @@ struct DeformGridRequest {
   // "forced" in the report.
   double maxBodyChangePercent = 2.0;
   double maxBoneChangePercent = 10.0;
-  double maxBoneOverlapPercent = skeleton::JointPoseOptions{}.maxBoneOverlapPercent;
+  double maxBoneOverlapPercent = skeleton::kMaxBoneOverlapPercent;
   bool force = false;
   std::int64_t maxTets = RefinementOptions{}.maxTets;
   int refineIterations = RefinementOptions{}.maxIterations;
@@ -123,8 +123,13 @@ DeformationReport deformGrid(const DeformGridRequest& request, RasterEngines& en
 // (the source block-downsampled by `factor`): the pose compiled against the
 // skeleton (prepared->skeleton when it holds one, else built), the body
 // parts of a grid whose organ table names bones, the cage options and the
-// extra separations. prepare_run.h prepares with the same options.
+// extra separations. prepare_run.h prepares with the same options. With
+// `bonesFault`, a joint pose's bones pressed through each other are checked
+// against the skeleton the options were compiled with
+// (skeleton::bonesThroughEachOther, request.maxBoneOverlapPercent): the
+// fault, or nullopt.
 PipelineOptions deformPipelineOptions(const DeformGridRequest& request, const LabelGrid& working, int factor,
-                                      const PreparedState* prepared = nullptr);
+                                      const PreparedState* prepared = nullptr,
+                                      std::optional<std::string>* bonesFault = nullptr);
 
 }  // namespace vox

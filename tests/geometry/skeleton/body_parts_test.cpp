@@ -152,7 +152,7 @@ TEST(Joints, SkeletonFigureJointsWhereTheyWereBuilt) {
 // Each joint turned alone through its range, every 10 degrees of each of
 // its degrees of freedom from the range's start, and its end: the largest overlap of its own two parts' bones
 // (bone_overlap.h; a share of the smaller part's bones, %), which a pose
-// refuses above 2 % (JointPoseOptions::maxBoneOverlapPercent). Where the
+// refuses above 2 % (kMaxBoneOverlapPercent). Where the
 // trunk itself is in the way the shoulders' abduction is left out: past 160
 // degrees (the scapula stays with the trunk, and the humerus meets the
 // acromion) and below 0 (the hanging arm pressed through the ribs, which

@@ -240,11 +240,6 @@ TEST(JointPose, BonesThroughEachOther) {
   EXPECT_NE(crossed->find(" and the left_"), std::string::npos) << *crossed;
   EXPECT_NE(crossed->find("more than 2 %) with right_hip as posed"), std::string::npos) << *crossed;  // not the shoulder
   EXPECT_FALSE(fault(R"({"joints": {"right_hip": {"abduction": -30}}})", 100.0));
-  // Through the pipeline's options: the fault is carried, not thrown.
-  const PipelineOptions options =
-      skeletalPoseOptions(parsePose(R"({"joints": {"right_hip": {"abduction": -30}}})", "p.json"), "p.json", s, synthOrganTable(SynthKind::SkeletonFigure));
-  ASSERT_TRUE(options.bonesThroughEachOther);
-  EXPECT_EQ(*options.bonesThroughEachOther, *fault(R"({"joints": {"right_hip": {"abduction": -30}}})"));
 }
 
 TEST(JointPose, AdultMaleBonesClearInTheBundledPosesNotWithCrossedLegs) {

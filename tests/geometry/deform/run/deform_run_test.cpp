@@ -12,6 +12,8 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <optional>
+#include <string>
 
 namespace vox {
 namespace {
@@ -36,6 +38,29 @@ TEST(DeformGrid, BuildsNoEnvelope) {
   EXPECT_GT(report.tmTets, 0u);
   EXPECT_EQ(report.envelopeVertices, 0u);
   EXPECT_TRUE(std::none_of(report.stages.begin(), report.stages.end(), [](const StageTime& t) { return t.name == "envelope"; }));
+}
+
+// The deform run checks a joint pose's bones against the skeleton it compiles
+// the pose with; the pipeline's options themselves (shared by render, prepare
+// and the viewer) carry no such check.
+TEST(DeformGrid, ChecksTheBonesOfAJointPoseWhereItCompilesIt) {
+  DeformGridRequest request;
+  const LabelGrid grid = synthesize(SynthKind::SkeletonFigure, 128);
+  request.organs = synthOrganTable(SynthKind::SkeletonFigure);
+  request.poseSource = "crossed.json";
+  request.pose = parsePose(R"({"joints": {"right_hip": {"abduction": -30}}})", request.poseSource);
+  std::optional<std::string> fault;
+  deformPipelineOptions(request, grid, 1, nullptr, &fault);
+  ASSERT_TRUE(fault);
+  EXPECT_EQ(fault->rfind("the bones of the right_", 0), 0u) << *fault;
+  EXPECT_NE(fault->find("with right_hip as posed"), std::string::npos) << *fault;
+  request.maxBoneOverlapPercent = 100.0;
+  deformPipelineOptions(request, grid, 1, nullptr, &fault);
+  EXPECT_FALSE(fault);
+  request.maxBoneOverlapPercent = skeleton::kMaxBoneOverlapPercent;
+  request.pose = parsePose(R"({"joints": {"right_hip": {"abduction": 20}}})", request.poseSource);
+  deformPipelineOptions(request, grid, 1, nullptr, &fault);
+  EXPECT_FALSE(fault);
 }
 
 }  // namespace
