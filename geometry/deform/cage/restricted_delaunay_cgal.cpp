@@ -10,6 +10,8 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Labeled_mesh_domain_3.h>
 #include <CGAL/Mesh_complex_3_in_triangulation_3.h>
+#include <CGAL/Mesh_3/Slivers_exuder.h>
+#include <CGAL/Mesh_3/min_dihedral_angle.h>
 #include <CGAL/Mesh_criteria_3.h>
 #include <CGAL/Mesh_triangulation_3.h>
 #include <CGAL/make_mesh_3.h>
@@ -143,6 +145,21 @@ CGAL::parameters::internal::Mesh_3_options stopWhenCancelled() {
   return CGAL::parameters::mesh_3_options(CGAL::parameters::pointer_to_stop_atomic_boolean = &cancellationRequested());
 }
 
+// The exudation (CGAL's Slivers_exuder as refine_mesh_3 runs it, with no
+// time limit and the given sliver bound), polling the cancellation flag
+// after each cell it works on: refine_mesh_3's stop flag covers only the
+// refinement, and the exudation of a body takes seconds.
+struct StopWhenCancelled {
+  void after_cell_pumped(std::size_t) const { throwIfCancelled(); }
+};
+
+void exude(C3t3& c3t3, double sliverBound) {
+  using SliverCriterion = CGAL::Mesh_3::Min_dihedral_angle_criterion<Triangulation>;
+  CGAL::Mesh_3::Slivers_exuder<C3t3, SliverCriterion, StopWhenCancelled> exuder(c3t3, SliverCriterion(sliverBound, c3t3.triangulation()));
+  exuder.set_time_limit(0.0);
+  exuder(StopWhenCancelled{});
+}
+
 }  // namespace
 
 TriMesh restrictedDelaunaySurface(const SampledDomain& sampled, const SurfaceCriteria& criteria) {
@@ -214,12 +231,10 @@ TetMesh restrictedDelaunayVolume(const SampledDomain& sampled, const VolumeCrite
   // which would make the result depend on the machine's speed: no limit,
   // but only tets with a dihedral angle under 10 degrees are worked on
   // (exuding everything as far as possible triples the time on a body).
-  const auto exude = criteria.exude
-                         ? CGAL::parameters::exude(CGAL::parameters::time_limit = 0.0, CGAL::parameters::sliver_bound = 10.0)
-                         : CGAL::parameters::no_exude();
-  CGAL::refine_mesh_3(c3t3, domain, meshCriteria, CGAL::parameters::no_perturb(), exude, CGAL::parameters::no_reset_c3t3(),
-                      stopWhenCancelled());
+  CGAL::refine_mesh_3(c3t3, domain, meshCriteria, CGAL::parameters::no_perturb(), CGAL::parameters::no_exude(),
+                      CGAL::parameters::no_reset_c3t3(), stopWhenCancelled());
   throwIfCancelled();
+  if (criteria.exude) exude(c3t3, 10.0);
 
   TetMesh mesh;
   std::unordered_map<VertexHandle, int> index;
