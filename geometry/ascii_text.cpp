@@ -28,4 +28,10 @@ std::string formatNumber(const char* format, double value) {
   return text;
 }
 
+std::string joinedWords(std::span<const std::string> words) {
+  std::string out;
+  for (std::size_t i = 0; i < words.size(); ++i) out += (i == 0 ? "" : i + 1 == words.size() ? " and " : ", ") + words[i];
+  return out;
+}
+
 }  // namespace vox

@@ -2,6 +2,7 @@
 // ASCII case folding and file-name suffix tests, shared by the format
 // dispatchers, header parsers and name lookups; numbers as printf writes them.
 
+#include <span>
 #include <string>
 #include <string_view>
 
@@ -15,5 +16,7 @@ bool endsWithIgnoringCase(std::string_view s, std::string_view suffix);
 std::string lowerExtension(std::string_view path);
 // One number through a printf conversion for a double ("%g", "%.4g").
 std::string formatNumber(const char* format, double value);
+// Words as a sentence lists them: "a", "a and b", "a, b and c".
+std::string joinedWords(std::span<const std::string> words);
 
 }  // namespace vox

@@ -1,5 +1,7 @@
 #include "geometry/skeleton/joints.h"
 
+#include "geometry/ascii_text.h"
+
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <Eigen/QR>
@@ -273,9 +275,7 @@ std::string clearedOver(const JointKind& kind) {
   std::vector<std::string> dofs;
   for (int d = 0; d < kDofCount; ++d)
     if (kind.dofNames[std::size_t(d)] && kind.range[std::size_t(d)][0] < kind.range[std::size_t(d)][1]) dofs.push_back(kind.dofNames[std::size_t(d)]);
-  std::string out = ", cleared over ";
-  for (std::size_t i = 0; i < dofs.size(); ++i) out += (i == 0 ? "" : i + 1 == dofs.size() ? " and " : ", ") + dofs[i];
-  return out;
+  return ", cleared over " + joinedWords(dofs);
 }
 
 // The joint's centre moved across its flexion axis to where the child's bone

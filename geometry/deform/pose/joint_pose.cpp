@@ -1,5 +1,6 @@
 #include "geometry/deform/pose/joint_pose.h"
 
+#include "geometry/ascii_text.h"
 #include "geometry/distance_transform.h"
 #include "geometry/error.h"
 
@@ -217,8 +218,7 @@ std::optional<std::string> bonesThroughEachOther(const BoneOverlapIndex& bones, 
   Part common = o.second;
   for (; common != Part::None && std::find(above.begin(), above.end(), common) == above.end(); common = parentPart(common)) name(common);
   for (Part p = o.first; p != common && p != Part::None; p = parentPart(p)) name(p);
-  std::string joinedNames;
-  for (std::size_t i = 0; i < names.size(); ++i) joinedNames += (i == 0 ? "" : i + 1 == names.size() ? " and " : ", ") + names[i];
+  const std::string joinedNames = joinedWords(names);
   char figures[160];
   std::snprintf(figures, sizeof figures, "%zu voxels, %.1f cm3: %.1f %% of the %s's bones, more than %g %%", o.voxels, o.volumeMm3 / 1000.0,
                 100.0 * o.fractionOfSmaller, partName(o.smaller), maxPercent);
