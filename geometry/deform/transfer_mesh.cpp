@@ -23,13 +23,16 @@ namespace {
 // foreground's voxel centres exceeds the offset; otherwise the group whose
 // trilinear weights over the 8 surrounding voxel centres sum highest (ties
 // to the smaller group), so group interfaces pass between voxel centres.
+// The mesher asks this at every bisection step of its surface points, so
+// both fields are read through one cell lookup on their shared geometry;
+// the distance is interpolated exactly as ScalarGrid::sample does (same
+// weights, same order), so the domain is the sampled field's to the bit.
 class TransferMeshDomain {
 public:
   TransferMeshDomain(const ScalarGrid& distance, const LabelGrid& nearestGroup, double offsetMm)
       : distance_(distance), groups_(nearestGroup), offset_(offsetMm) {}
 
   int operator()(const Eigen::Vector3d& p) const {
-    if (double(distance_.sample(p)) > offset_) return 0;
     const GridGeometry& g = groups_.geometry();
     const Eigen::Vector3d c = g.continuousIndex(p);
     std::int64_t i0[3];
@@ -39,21 +42,31 @@ public:
       i0[a] = std::min<std::int64_t>(std::int64_t(std::floor(x)), g.dims[a] - 2);
       f[a] = x - double(i0[a]);
     }
-    Label labels[8];
+    const std::int64_t base = g.index(i0[0], i0[1], i0[2]);
+    const std::int64_t offsets[8] = {0, 1, g.dims[0], g.dims[0] + 1, g.sliceVoxels(), g.sliceVoxels() + 1,
+                                     g.sliceVoxels() + g.dims[0], g.sliceVoxels() + g.dims[0] + 1};
     double weights[8];
-    int n = 0;
+    double d = 0.0;
     for (int corner = 0; corner < 8; ++corner) {
       const int dx = corner & 1, dy = (corner >> 1) & 1, dz = corner >> 2;
-      const double w = (dx ? f[0] : 1 - f[0]) * (dy ? f[1] : 1 - f[1]) * (dz ? f[2] : 1 - f[2]);
-      const Label l = groups_.at(i0[0] + dx, i0[1] + dy, i0[2] + dz);
+      weights[corner] = (dx ? f[0] : 1 - f[0]) * (dy ? f[1] : 1 - f[1]) * (dz ? f[2] : 1 - f[2]);
+      d += weights[corner] * double(distance_.values[std::size_t(base + offsets[corner])]);
+    }
+    if (double(float(d)) > offset_) return 0;
+    const Label* groups = groups_.data() + base;
+    Label labels[8];
+    double sums[8];
+    int n = 0;
+    for (int corner = 0; corner < 8; ++corner) {
+      const Label l = groups[offsets[corner]];
       int slot = 0;
       while (slot < n && labels[slot] != l) ++slot;
-      if (slot == n) labels[n] = l, weights[n++] = 0.0;
-      weights[slot] += w;
+      if (slot == n) labels[n] = l, sums[n++] = 0.0;
+      sums[slot] += weights[corner];
     }
     int best = 0;
     for (int s = 1; s < n; ++s)
-      if (weights[s] > weights[best] || (weights[s] == weights[best] && labels[s] < labels[best])) best = s;
+      if (sums[s] > sums[best] || (sums[s] == sums[best] && labels[s] < labels[best])) best = s;
     return int(labels[best]);
   }
 
@@ -151,7 +164,7 @@ TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, con
   LabelGrid atCentres(padded, 0);
   SampledDomain domain;
   domain.labels = &atCentres;
-  domain.labelAt = [&label](const Eigen::Vector3d& p) { return label(p); };
+  domain.labelAt = label;
   VolumeCriteria criteria;
   criteria.facetAngleDeg = options.facetAngleDeg;
   criteria.facetDistanceMm = options.facetDistanceVoxels * g.spacing.minCoeff();

@@ -15,8 +15,11 @@
 #include <CGAL/make_mesh_3.h>
 #include <CGAL/refine_mesh_3.h>
 
+#include <algorithm>
 #include <array>
+#include <functional>
 #include <numeric>
+#include <optional>
 #include <unordered_map>
 #include <unordered_set>
 #include <vector>
@@ -185,12 +188,22 @@ TriMesh restrictedDelaunaySurface(const SampledDomain& sampled, const SurfaceCri
 namespace {
 
 // Mesh_3 sizing field read from a ScalarGrid (model of MeshDomainField_3).
+// A constant grid (the thesis' initial F) answers its value without the
+// interpolation: trilinear weights sum to 1 within a few double ulps, so the
+// sampled float is that value exactly.
 struct GridSizingField {
   using FT = Kernel::FT;
   using Point_3 = Point;
   using Index = Domain::Index;
+  explicit GridSizingField(const ScalarGrid* g) : grid(g) {
+    if (!g->values.empty() && std::adjacent_find(g->values.begin(), g->values.end(), std::not_equal_to<>()) == g->values.end())
+      constant = g->values.front();
+  }
+  FT operator()(const Point_3& p, int, const Index&) const {
+    return constant ? FT(*constant) : FT(grid->sample(toEigen(p)));
+  }
   const ScalarGrid* grid;
-  FT operator()(const Point_3& p, int, const Index&) const { return FT(grid->sample(toEigen(p))); }
+  std::optional<float> constant;
 };
 
 }  // namespace
@@ -199,7 +212,7 @@ TetMesh restrictedDelaunayVolume(const SampledDomain& sampled, const VolumeCrite
   if (!criteria.sizing) throw RuntimeFailure("restricted Delaunay meshing: no sizing field");
   reportProgress("volume meshing", 0.0);
   const Domain domain = makeDomain(sampled, false);
-  const GridSizingField sizing{criteria.sizing};
+  const GridSizingField sizing(criteria.sizing);
   const Criteria meshCriteria(CGAL::parameters::facet_angle = criteria.facetAngleDeg,
                               CGAL::parameters::facet_size = sizing,
                               CGAL::parameters::facet_distance = criteria.facetDistanceMm,
