@@ -9,7 +9,9 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 
 namespace vox {
 
@@ -23,14 +25,51 @@ namespace {
 // foreground's voxel centres exceeds the offset; otherwise the group whose
 // trilinear weights over the 8 surrounding voxel centres sum highest (ties
 // to the smaller group), so group interfaces pass between voxel centres.
-// The mesher asks this at every bisection step of its surface points, so
-// both fields are read through one cell lookup on their shared geometry;
-// the distance is interpolated exactly as ScalarGrid::sample does (same
+// The distance is interpolated exactly as ScalarGrid::sample does (same
 // weights, same order), so the domain is the sampled field's to the bit.
+//
+// The mesher asks this at every bisection step of its surface points, at
+// scattered places of a grid larger than the caches, so each query pays for
+// the cache lines of its 8 corners in two fields. A table of the cells
+// (the cube between 8 voxel centres, named by its lowest corner) answers
+// most queries from one line: a cell whose corner distances all lie a
+// relative 1e-6 beyond the offset is outside wherever sampled (the
+// interpolation and its rounding to float move the value by far less), one
+// whose corners all lie that far within it and share a group is that group;
+// only the other cells are interpolated.
 class TransferMeshDomain {
 public:
   TransferMeshDomain(const ScalarGrid& distance, const LabelGrid& nearestGroup, double offsetMm)
       : distance_(distance), groups_(nearestGroup), offset_(offsetMm) {}
+
+  // (Re)builds the table of cells from the distance field as it is now.
+  void classifyCells() {
+    const GridGeometry& g = groups_.geometry();
+    cells_.assign(std::size_t(g.voxelCount()), kMixed);
+    const Label* groups = groups_.data();
+    if (std::find(groups, groups + g.voxelCount(), kMixed) != groups + g.voxelCount()) return;  // a group named like the marker
+    const double outside = offset_ * (1.0 + 1e-6), inside = offset_ * (1.0 - 1e-6);
+    const std::array<std::int64_t, 8> offsets = cornerOffsets(g);
+    parallelRanges(g.dims[2] - 1, workerThreads(0), [&](std::int64_t k0, std::int64_t k1) {
+      for (std::int64_t k = k0; k < k1; ++k) {
+        throwIfCancelled();
+        for (std::int64_t j = 0; j + 1 < g.dims[1]; ++j)
+          for (std::int64_t i = 0; i + 1 < g.dims[0]; ++i) {
+            const std::int64_t base = g.index(i, j, k);
+            double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+            bool oneGroup = true;
+            for (const std::int64_t o : offsets) {
+              const double d = distance_.values[std::size_t(base + o)];
+              lo = std::min(lo, d);
+              hi = std::max(hi, d);
+              oneGroup = oneGroup && groups[base + o] == groups[base];
+            }
+            if (lo > outside) cells_[std::size_t(base)] = 0;
+            else if (hi < inside && oneGroup) cells_[std::size_t(base)] = groups[base];
+          }
+      }
+    }, 8);
+  }
 
   int operator()(const Eigen::Vector3d& p) const {
     const GridGeometry& g = groups_.geometry();
@@ -43,8 +82,9 @@ public:
       f[a] = x - double(i0[a]);
     }
     const std::int64_t base = g.index(i0[0], i0[1], i0[2]);
-    const std::int64_t offsets[8] = {0, 1, g.dims[0], g.dims[0] + 1, g.sliceVoxels(), g.sliceVoxels() + 1,
-                                     g.sliceVoxels() + g.dims[0], g.sliceVoxels() + g.dims[0] + 1};
+    const Label cell = cells_[std::size_t(base)];
+    if (cell != kMixed) return int(cell);
+    const std::array<std::int64_t, 8> offsets = cornerOffsets(g);
     double weights[8];
     double d = 0.0;
     for (int corner = 0; corner < 8; ++corner) {
@@ -71,9 +111,18 @@ public:
   }
 
 private:
+  static constexpr Label kMixed = std::numeric_limits<Label>::max();
+
+  // Linear offsets of a cell's corners from its lowest one, x fastest.
+  static std::array<std::int64_t, 8> cornerOffsets(const GridGeometry& g) {
+    const std::int64_t y = g.dims[0], z = g.sliceVoxels();
+    return {0, 1, y, y + 1, z, z + 1, z + y, z + y + 1};
+  }
+
   const ScalarGrid& distance_;
   const LabelGrid& groups_;
   double offset_;
+  std::vector<Label> cells_;
 };
 
 // Marks covered[v] for the voxels of z in [k0, k1) whose centres lie in a
@@ -156,7 +205,7 @@ TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, con
   DistanceTransform dt = euclideanDistanceTransform(padded, foreground, true);
   LabelGrid nearestGroup(padded, 0);
   for (std::size_t v = 0; v < foreground.size(); ++v) nearestGroup.labels()[v] = labels.labels()[std::size_t(dt.nearest[v])];
-  const TransferMeshDomain domainLabel(dt.distance, nearestGroup, offset);
+  TransferMeshDomain domainLabel(dt.distance, nearestGroup, offset);
   const auto label = [&](const Eigen::Vector3d& p) {
     const int l = domainLabel(p);
     return l > 0 && relabel ? relabel(p, l) : l;
@@ -173,6 +222,7 @@ TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, con
 
   const double radius = 4.0 * g.spacing.maxCoeff();
   for (int pass = 0;; ++pass) {
+    domainLabel.classifyCells();
     parallelRanges(padded.dims[2], workerThreads(0), [&](std::int64_t k0, std::int64_t k1) {
       for (std::int64_t k = k0; k < k1; ++k) {
         throwIfCancelled();
