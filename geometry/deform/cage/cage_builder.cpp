@@ -3,6 +3,7 @@
 #include "geometry/distance_transform.h"
 #include "geometry/deform/cage/restricted_delaunay.h"
 #include "geometry/error.h"
+#include "geometry/parallel.h"
 #include "geometry/progress.h"
 
 #include <algorithm>
@@ -38,6 +39,17 @@ std::int64_t markInterface(const LabelGrid& labels, Label from, const ScalarGrid
   return count;
 }
 
+// Distance to the seeds of each mask, the transforms run at once on the
+// parallel loop (each is sequential, so the values are the same on any
+// thread count).
+std::vector<ScalarGrid> distancesTo(const GridGeometry& geometry, const std::vector<std::vector<std::uint8_t>>& masks) {
+  std::vector<ScalarGrid> to(masks.size());
+  parallelFor(std::int64_t(masks.size()), 0, [&](std::int64_t i) {
+    to[std::size_t(i)] = euclideanDistanceTransform(geometry, masks[std::size_t(i)]).distance;
+  });
+  return to;
+}
+
 }  // namespace
 
 CageResult buildCage(const LabelGrid& groups, const CageOptions& options) {
@@ -54,15 +66,20 @@ CageResult buildCage(const LabelGrid& groups, const CageOptions& options) {
 
   // Limb separation, first step: erode both sides of each interface.
   std::vector<std::uint8_t> eroded(core.size(), 0);
-  for (const LimbSeparation& s : options.separations) {
-    const std::vector<std::uint8_t> a = maskOf(labels, s.groupA), b = maskOf(labels, s.groupB);
-    for (const auto& [mask, group] : {std::pair{&a, s.groupA}, std::pair{&b, s.groupB}})
-      if (std::find(mask->begin(), mask->end(), 1) == mask->end())
-        throw InputError("grid", "limb separation: label group " + std::to_string(group) + " has no voxels");
-    const ScalarGrid toA = euclideanDistanceTransform(padded, a).distance;
-    const ScalarGrid toB = euclideanDistanceTransform(padded, b).distance;
-    result.report.erodedVoxels += markInterface(labels, s.groupA, toB, options.erosionMm, s.region, eroded);
-    result.report.erodedVoxels += markInterface(labels, s.groupB, toA, options.erosionMm, s.region, eroded);
+  {
+    std::vector<std::vector<std::uint8_t>> masks;  // groupA, groupB of each separation
+    for (const LimbSeparation& s : options.separations)
+      for (const Label group : {s.groupA, s.groupB}) {
+        masks.push_back(maskOf(labels, group));
+        if (std::find(masks.back().begin(), masks.back().end(), 1) == masks.back().end())
+          throw InputError("grid", "limb separation: label group " + std::to_string(group) + " has no voxels");
+      }
+    const std::vector<ScalarGrid> to = distancesTo(padded, masks);
+    for (std::size_t i = 0; i < options.separations.size(); ++i) {
+      const LimbSeparation& s = options.separations[i];
+      result.report.erodedVoxels += markInterface(labels, s.groupA, to[2 * i + 1], options.erosionMm, s.region, eroded);
+      result.report.erodedVoxels += markInterface(labels, s.groupB, to[2 * i], options.erosionMm, s.region, eroded);
+    }
   }
   for (std::size_t v = 0; v < core.size(); ++v) core[v] &= std::uint8_t(!eroded[v]);
   if (std::find(core.begin(), core.end(), 1) == core.end())
@@ -74,27 +91,42 @@ CageResult buildCage(const LabelGrid& groups, const CageOptions& options) {
   // separationSlope times its distance to the other group's kept voxels.
   // With a slope under 1/2 two such balls from opposite groups never meet,
   // so the dilated groups stay apart.
+  // The distances to each kept group and to the whole core are independent:
+  // they are computed at once on the parallel loop.
   ScalarGrid radius(padded, float(options.dilationMm));
-  for (const LimbSeparation& s : options.separations) {
-    std::vector<std::uint8_t> a = maskOf(labels, s.groupA), b = maskOf(labels, s.groupB);
-    for (std::size_t v = 0; v < core.size(); ++v) a[v] &= core[v], b[v] &= core[v];
-    for (const auto& [self, other] : {std::pair{&a, &b}, std::pair{&b, &a}}) {
-      const ScalarGrid toOther = euclideanDistanceTransform(padded, *other).distance;
+  std::vector<std::vector<std::uint8_t>> kept;  // groupA, groupB of each separation, kept voxels
+  for (const LimbSeparation& s : options.separations)
+    for (const Label group : {s.groupA, s.groupB}) {
+      kept.push_back(maskOf(labels, group));
+      for (std::size_t v = 0; v < core.size(); ++v) kept.back()[v] &= core[v];
+    }
+  DistanceTransform toCore;
+  std::vector<ScalarGrid> toKept(kept.size());
+  parallelFor(std::int64_t(kept.size()) + 1, 0, [&](std::int64_t task) {
+    if (task == std::int64_t(kept.size())) toCore = euclideanDistanceTransform(padded, core, !options.separations.empty());
+    else toKept[std::size_t(task)] = euclideanDistanceTransform(padded, kept[std::size_t(task)]).distance;
+  });
+  for (std::size_t i = 0; i < options.separations.size(); ++i) {
+    const LimbSeparation& s = options.separations[i];
+    for (const auto& [self, other] : {std::pair{2 * i, 2 * i + 1}, std::pair{2 * i + 1, 2 * i}}) {
+      const std::vector<std::uint8_t>& mask = kept[self];
+      const ScalarGrid& toOther = toKept[other];
       for (std::int64_t k = 0; k < padded.dims[2]; ++k)
         for (std::int64_t j = 0; j < padded.dims[1]; ++j)
           for (std::int64_t i = 0; i < padded.dims[0]; ++i) {
             const std::int64_t v = padded.index(i, j, k);
-            if (!(*self)[v] || (s.region && !s.region->contains(padded.voxelCenter(i, j, k)))) continue;
+            if (!mask[v] || (s.region && !s.region->contains(padded.voxelCenter(i, j, k)))) continue;
             radius.values[v] = std::min(radius.values[v], float(options.separationSlope * double(toOther.values[v])));
           }
     }
   }
+  kept.clear();
+  toKept.clear();
   reportProgress("cage", 0.2);
 
   // Cage field, negative inside: the union of the balls, approximated
   // through each voxel's nearest kept voxel (distance to it minus its
   // radius; exact where the radius is constant).
-  const DistanceTransform toCore = euclideanDistanceTransform(padded, core, !options.separations.empty());
   ScalarGrid field = toCore.distance;
   for (std::size_t v = 0; v < field.values.size(); ++v)
     field.values[v] -= toCore.nearest.empty() ? float(options.dilationMm) : radius.values[std::size_t(toCore.nearest[v])];

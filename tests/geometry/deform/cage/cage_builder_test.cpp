@@ -4,6 +4,7 @@
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/organ_table.h"
+#include "geometry/parallel.h"
 #include "geometry/synth.h"
 #include "tests/support/test_environment.h"
 
@@ -89,6 +90,26 @@ TEST(CageBuilder, IsDeterministic) {
   const CageResult b = buildCage(groups, stickOptions());
   EXPECT_EQ(a.cage.positions, b.cage.positions);
   EXPECT_EQ(a.cage.triangles, b.cage.triangles);
+}
+
+// The distance transforms of the separations run at once on the parallel
+// loop: two separations give the same cage on one thread and on three.
+TEST(CageBuilder, InsetCageIsTheSameOnAnyThreadCount) {
+  const LabelGrid groups = stickGroups();
+  CageOptions o = stickOptions();
+  const Eigen::AlignedBox3d region(Eigen::Vector3d(-1e3, -1e3, -1e3), Eigen::Vector3d(1e3, 1e3, 130.0));
+  o.separations.push_back({Label(LabelGroup::RightArm), Label(LabelGroup::Trunk), region});
+  o.separations.push_back({Label(LabelGroup::LeftArm), Label(LabelGroup::Trunk), std::nullopt});
+  const auto onThreads = [&](int threads) {
+    const ScopedWorkerThreads scope(threads);
+    return buildCage(groups, o);
+  };
+  const CageResult one = onThreads(1), three = onThreads(3);
+  EXPECT_GT(one.report.erodedVoxels, 0);
+  EXPECT_EQ(one.report.erodedVoxels, three.report.erodedVoxels);
+  EXPECT_EQ(one.report.foregroundOutside, three.report.foregroundOutside);
+  EXPECT_EQ(one.cage.positions, three.cage.positions);
+  EXPECT_EQ(one.cage.triangles, three.cage.triangles);
 }
 
 TEST(CageBuilder, BadRequests) {
