@@ -35,8 +35,9 @@ namespace {
 // most queries from one line: a cell whose corner distances all lie a
 // relative 1e-6 beyond the offset is outside wherever sampled (the
 // interpolation and its rounding to float move the value by far less), one
-// whose corners all lie that far within it and share a group is that group;
-// only the other cells are interpolated.
+// whose corners all lie that far within it and share a group (under 255,
+// the byte's marker of the rest) is that group; only the other cells are
+// interpolated.
 class TransferMeshDomain {
 public:
   TransferMeshDomain(const ScalarGrid& distance, const LabelGrid& nearestGroup, double offsetMm)
@@ -47,7 +48,6 @@ public:
     const GridGeometry& g = groups_.geometry();
     cells_.assign(std::size_t(g.voxelCount()), kMixed);
     const Label* groups = groups_.data();
-    if (std::find(groups, groups + g.voxelCount(), kMixed) != groups + g.voxelCount()) return;  // a group named like the marker
     const double outside = offset_ * (1.0 + 1e-6), inside = offset_ * (1.0 - 1e-6);
     const std::array<std::int64_t, 8> offsets = cornerOffsets(g);
     parallelRanges(g.dims[2] - 1, workerThreads(0), [&](std::int64_t k0, std::int64_t k1) {
@@ -65,7 +65,7 @@ public:
               oneGroup = oneGroup && groups[base + o] == groups[base];
             }
             if (lo > outside) cells_[std::size_t(base)] = 0;
-            else if (hi < inside && oneGroup) cells_[std::size_t(base)] = groups[base];
+            else if (hi < inside && oneGroup && groups[base] < kMixed) cells_[std::size_t(base)] = std::uint8_t(groups[base]);
           }
       }
     }, 8);
@@ -82,7 +82,7 @@ public:
       f[a] = x - double(i0[a]);
     }
     const std::int64_t base = g.index(i0[0], i0[1], i0[2]);
-    const Label cell = cells_[std::size_t(base)];
+    const std::uint8_t cell = cells_[std::size_t(base)];
     if (cell != kMixed) return int(cell);
     const std::array<std::int64_t, 8> offsets = cornerOffsets(g);
     double weights[8];
@@ -111,7 +111,7 @@ public:
   }
 
 private:
-  static constexpr Label kMixed = std::numeric_limits<Label>::max();
+  static constexpr std::uint8_t kMixed = 255;
 
   // Linear offsets of a cell's corners from its lowest one, x fastest.
   static std::array<std::int64_t, 8> cornerOffsets(const GridGeometry& g) {
@@ -122,7 +122,7 @@ private:
   const ScalarGrid& distance_;
   const LabelGrid& groups_;
   double offset_;
-  std::vector<Label> cells_;
+  std::vector<std::uint8_t> cells_;
 };
 
 // Marks covered[v] for the voxels of z in [k0, k1) whose centres lie in a

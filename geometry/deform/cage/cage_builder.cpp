@@ -20,34 +20,48 @@ std::vector<std::uint8_t> maskOf(const LabelGrid& labels, Label value) {
   return mask;
 }
 
-// Marks the voxels of group `from` within `depth` mm (centre to centre) of
-// the other group, given as the distance to it, inside `region`: one side
-// of a limb interface (thesis 4.2.1). Returns how many were newly marked.
-std::int64_t markInterface(const LabelGrid& labels, Label from, const ScalarGrid& distanceToOther, double depth,
-                           const std::optional<Eigen::AlignedBox3d>& region, std::vector<std::uint8_t>& eroded) {
+// The voxels of group `from` within `depth` mm (centre to centre) of group
+// `other`, inside `region`: one side of a limb interface (thesis 4.2.1),
+// as linear indices in grid order. The distance transform runs on the box
+// around those voxels grown by `depth` and a voxel, which holds every voxel
+// of `other` within reach of them, so the distances that decide are those
+// of the whole grid.
+std::vector<std::int64_t> interfaceVoxels(const LabelGrid& labels, Label from, Label other, double depth,
+                                          const std::optional<Eigen::AlignedBox3d>& region) {
   const GridGeometry& g = labels.geometry();
-  std::int64_t count = 0;
+  const auto side = [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+    return labels.at(i, j, k) == from && (!region || region->contains(g.voxelCenter(i, j, k)));
+  };
+  Index3 lo{g.dims[0], g.dims[1], g.dims[2]}, hi{-1, -1, -1};
   for (std::int64_t k = 0; k < g.dims[2]; ++k)
     for (std::int64_t j = 0; j < g.dims[1]; ++j)
-      for (std::int64_t i = 0; i < g.dims[0]; ++i) {
-        const std::int64_t v = g.index(i, j, k);
-        if (labels.labels()[v] != from || eroded[v] || distanceToOther.values[v] > depth) continue;
-        if (region && !region->contains(g.voxelCenter(i, j, k))) continue;
-        eroded[v] = 1;
-        ++count;
-      }
-  return count;
-}
-
-// Distance to the seeds of each mask, the transforms run at once on the
-// parallel loop (each is sequential, so the values are the same on any
-// thread count).
-std::vector<ScalarGrid> distancesTo(const GridGeometry& geometry, const std::vector<std::vector<std::uint8_t>>& masks) {
-  std::vector<ScalarGrid> to(masks.size());
-  parallelFor(std::int64_t(masks.size()), 0, [&](std::int64_t i) {
-    to[std::size_t(i)] = euclideanDistanceTransform(geometry, masks[std::size_t(i)]).distance;
-  });
-  return to;
+      for (std::int64_t i = 0; i < g.dims[0]; ++i)
+        if (side(i, j, k)) {
+          const Index3 c{i, j, k};
+          for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], c[a]), hi[a] = std::max(hi[a], c[a]);
+        }
+  if (hi[0] < 0) return {};
+  const Index3 reach = padForDistance(g, depth, 1);
+  GridGeometry box = g;
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = std::max<std::int64_t>(0, lo[a] - reach[a]);
+    hi[a] = std::min(g.dims[a] - 1, hi[a] + reach[a]);
+    box.dims[a] = hi[a] - lo[a] + 1;
+  }
+  box.origin = g.voxelCenter(lo[0], lo[1], lo[2]);
+  std::vector<std::uint8_t> seeds(std::size_t(box.voxelCount()));
+  for (std::int64_t k = 0; k < box.dims[2]; ++k)
+    for (std::int64_t j = 0; j < box.dims[1]; ++j)
+      for (std::int64_t i = 0; i < box.dims[0]; ++i)
+        seeds[std::size_t(box.index(i, j, k))] = labels.at(lo[0] + i, lo[1] + j, lo[2] + k) == other;
+  const ScalarGrid toOther = euclideanDistanceTransform(box, seeds).distance;
+  std::vector<std::int64_t> within;
+  for (std::int64_t k = 0; k < box.dims[2]; ++k)
+    for (std::int64_t j = 0; j < box.dims[1]; ++j)
+      for (std::int64_t i = 0; i < box.dims[0]; ++i)
+        if (side(lo[0] + i, lo[1] + j, lo[2] + k) && !(toOther.at(i, j, k) > depth))
+          within.push_back(g.index(lo[0] + i, lo[1] + j, lo[2] + k));
+  return within;
 }
 
 }  // namespace
@@ -64,22 +78,27 @@ CageResult buildCage(const LabelGrid& groups, const CageOptions& options) {
   std::transform(labels.labels().begin(), labels.labels().end(), core.begin(), [](Label l) { return std::uint8_t(l != 0); });
   if (std::find(core.begin(), core.end(), 1) == core.end()) throw InputError("grid", "has no foreground voxels to build a cage around");
 
-  // Limb separation, first step: erode both sides of each interface.
+  // Limb separation, first step: erode both sides of each interface (the
+  // sides of all separations at once on the parallel loop).
   std::vector<std::uint8_t> eroded(core.size(), 0);
   {
-    std::vector<std::vector<std::uint8_t>> masks;  // groupA, groupB of each separation
     for (const LimbSeparation& s : options.separations)
-      for (const Label group : {s.groupA, s.groupB}) {
-        masks.push_back(maskOf(labels, group));
-        if (std::find(masks.back().begin(), masks.back().end(), 1) == masks.back().end())
+      for (const Label group : {s.groupA, s.groupB})
+        if (std::find(labels.labels().begin(), labels.labels().end(), group) == labels.labels().end())
           throw InputError("grid", "limb separation: label group " + std::to_string(group) + " has no voxels");
-      }
-    const std::vector<ScalarGrid> to = distancesTo(padded, masks);
-    for (std::size_t i = 0; i < options.separations.size(); ++i) {
-      const LimbSeparation& s = options.separations[i];
-      result.report.erodedVoxels += markInterface(labels, s.groupA, to[2 * i + 1], options.erosionMm, s.region, eroded);
-      result.report.erodedVoxels += markInterface(labels, s.groupB, to[2 * i], options.erosionMm, s.region, eroded);
-    }
+    std::vector<std::vector<std::int64_t>> sides(2 * options.separations.size());
+    parallelFor(std::int64_t(sides.size()), 0, [&](std::int64_t task) {
+      const LimbSeparation& s = options.separations[std::size_t(task / 2)];
+      const bool fromA = task % 2 == 0;
+      sides[std::size_t(task)] =
+          interfaceVoxels(labels, fromA ? s.groupA : s.groupB, fromA ? s.groupB : s.groupA, options.erosionMm, s.region);
+    });
+    for (const std::vector<std::int64_t>& side : sides)
+      for (const std::int64_t v : side)
+        if (!eroded[std::size_t(v)]) {
+          eroded[std::size_t(v)] = 1;
+          ++result.report.erodedVoxels;
+        }
   }
   for (std::size_t v = 0; v < core.size(); ++v) core[v] &= std::uint8_t(!eroded[v]);
   if (std::find(core.begin(), core.end(), 1) == core.end())
