@@ -14,38 +14,29 @@ namespace vox {
 
 namespace {
 
-std::vector<std::uint8_t> maskOf(const LabelGrid& labels, Label value) {
-  std::vector<std::uint8_t> mask(labels.labels().size());
-  std::transform(labels.labels().begin(), labels.labels().end(), mask.begin(), [value](Label l) { return std::uint8_t(l == value); });
-  return mask;
-}
-
-// The voxels of group `from` within `depth` mm (centre to centre) of group
-// `other`, inside `region`: one side of a limb interface (thesis 4.2.1),
-// as linear indices in grid order. The distance transform runs on the box
-// around those voxels grown by `depth` and a voxel, which holds every voxel
-// of `other` within reach of them, so the distances that decide are those
-// of the whole grid.
-std::vector<std::int64_t> interfaceVoxels(const LabelGrid& labels, Label from, Label other, double depth,
-                                          const std::optional<Eigen::AlignedBox3d>& region) {
-  const GridGeometry& g = labels.geometry();
-  const auto side = [&](std::int64_t i, std::int64_t j, std::int64_t k) {
-    return labels.at(i, j, k) == from && (!region || region->contains(g.voxelCenter(i, j, k)));
-  };
+// Distances from the voxels where at(v) holds to the nearest voxel where
+// seed(v) holds, as (linear index, mm) in grid order. The transform runs on
+// the box around the `at` voxels grown by `reachMm` and a voxel, which holds
+// every seed closer than `reachMm` to them: the distances under `reachMm`
+// are the whole grid's, the others at least `reachMm` (the whole grid when
+// the reach is negative or not finite).
+template <class At, class Seed>
+std::vector<std::pair<std::int64_t, float>> distancesWithin(const GridGeometry& g, const At& at, const Seed& seed, double reachMm) {
   Index3 lo{g.dims[0], g.dims[1], g.dims[2]}, hi{-1, -1, -1};
   for (std::int64_t k = 0; k < g.dims[2]; ++k)
     for (std::int64_t j = 0; j < g.dims[1]; ++j)
       for (std::int64_t i = 0; i < g.dims[0]; ++i)
-        if (side(i, j, k)) {
+        if (at(g.index(i, j, k), i, j, k)) {
           const Index3 c{i, j, k};
           for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], c[a]), hi[a] = std::max(hi[a], c[a]);
         }
   if (hi[0] < 0) return {};
-  const Index3 reach = padForDistance(g, depth, 1);
   GridGeometry box = g;
   for (int a = 0; a < 3; ++a) {
-    lo[a] = std::max<std::int64_t>(0, lo[a] - reach[a]);
-    hi[a] = std::min(g.dims[a] - 1, hi[a] + reach[a]);
+    const double steps = std::ceil(reachMm / g.spacing[a]) + 1.0;
+    const std::int64_t reach = reachMm >= 0.0 && steps < double(g.dims[a]) ? std::int64_t(steps) : g.dims[a];
+    lo[a] = std::max<std::int64_t>(0, lo[a] - reach);
+    hi[a] = std::min(g.dims[a] - 1, hi[a] + reach);
     box.dims[a] = hi[a] - lo[a] + 1;
   }
   box.origin = g.voxelCenter(lo[0], lo[1], lo[2]);
@@ -53,15 +44,22 @@ std::vector<std::int64_t> interfaceVoxels(const LabelGrid& labels, Label from, L
   for (std::int64_t k = 0; k < box.dims[2]; ++k)
     for (std::int64_t j = 0; j < box.dims[1]; ++j)
       for (std::int64_t i = 0; i < box.dims[0]; ++i)
-        seeds[std::size_t(box.index(i, j, k))] = labels.at(lo[0] + i, lo[1] + j, lo[2] + k) == other;
-  const ScalarGrid toOther = euclideanDistanceTransform(box, seeds).distance;
-  std::vector<std::int64_t> within;
+        seeds[std::size_t(box.index(i, j, k))] = std::uint8_t(seed(g.index(lo[0] + i, lo[1] + j, lo[2] + k)));
+  const ScalarGrid distance = euclideanDistanceTransform(box, seeds).distance;
+  std::vector<std::pair<std::int64_t, float>> out;
   for (std::int64_t k = 0; k < box.dims[2]; ++k)
     for (std::int64_t j = 0; j < box.dims[1]; ++j)
-      for (std::int64_t i = 0; i < box.dims[0]; ++i)
-        if (side(lo[0] + i, lo[1] + j, lo[2] + k) && !(toOther.at(i, j, k) > depth))
-          within.push_back(g.index(lo[0] + i, lo[1] + j, lo[2] + k));
-  return within;
+      for (std::int64_t i = 0; i < box.dims[0]; ++i) {
+        const std::int64_t v = g.index(lo[0] + i, lo[1] + j, lo[2] + k);
+        if (at(v, lo[0] + i, lo[1] + j, lo[2] + k)) out.emplace_back(v, distance.at(i, j, k));
+      }
+  return out;
+}
+
+// Whether voxel (i, j, k) of g lies in the separation's region.
+bool inRegion(const GridGeometry& g, const std::optional<Eigen::AlignedBox3d>& region, std::int64_t i, std::int64_t j,
+              std::int64_t k) {
+  return !region || region->contains(g.voxelCenter(i, j, k));
 }
 
 }  // namespace
@@ -86,16 +84,20 @@ CageResult buildCage(const LabelGrid& groups, const CageOptions& options) {
       for (const Label group : {s.groupA, s.groupB})
         if (std::find(labels.labels().begin(), labels.labels().end(), group) == labels.labels().end())
           throw InputError("grid", "limb separation: label group " + std::to_string(group) + " has no voxels");
-    std::vector<std::vector<std::int64_t>> sides(2 * options.separations.size());
+    // Each side: the voxels of one group within erosionMm (centre to
+    // centre) of the other, inside the region (thesis 4.2.1).
+    std::vector<std::vector<std::pair<std::int64_t, float>>> sides(2 * options.separations.size());
     parallelFor(std::int64_t(sides.size()), 0, [&](std::int64_t task) {
       const LimbSeparation& s = options.separations[std::size_t(task / 2)];
-      const bool fromA = task % 2 == 0;
-      sides[std::size_t(task)] =
-          interfaceVoxels(labels, fromA ? s.groupA : s.groupB, fromA ? s.groupB : s.groupA, options.erosionMm, s.region);
+      const Label from = task % 2 == 0 ? s.groupA : s.groupB, other = task % 2 == 0 ? s.groupB : s.groupA;
+      const Label* l = labels.data();
+      sides[std::size_t(task)] = distancesWithin(
+          padded, [&](std::int64_t v, std::int64_t i, std::int64_t j, std::int64_t k) { return l[v] == from && inRegion(padded, s.region, i, j, k); },
+          [&](std::int64_t v) { return l[v] == other; }, options.erosionMm);
     });
-    for (const std::vector<std::int64_t>& side : sides)
-      for (const std::int64_t v : side)
-        if (!eroded[std::size_t(v)]) {
+    for (const auto& side : sides)
+      for (const auto& [v, d] : side)
+        if (!(d > options.erosionMm) && !eroded[std::size_t(v)]) {
           eroded[std::size_t(v)] = 1;
           ++result.report.erodedVoxels;
         }
@@ -110,37 +112,30 @@ CageResult buildCage(const LabelGrid& groups, const CageOptions& options) {
   // separationSlope times its distance to the other group's kept voxels.
   // With a slope under 1/2 two such balls from opposite groups never meet,
   // so the dilated groups stay apart.
-  // The distances to each kept group and to the whole core are independent:
-  // they are computed at once on the parallel loop.
+  // The distances to the other group (within the reach where the slope
+  // bounds the radius) and to the whole core are independent: they are
+  // computed at once on the parallel loop.
   ScalarGrid radius(padded, float(options.dilationMm));
-  std::vector<std::vector<std::uint8_t>> kept;  // groupA, groupB of each separation, kept voxels
-  for (const LimbSeparation& s : options.separations)
-    for (const Label group : {s.groupA, s.groupB}) {
-      kept.push_back(maskOf(labels, group));
-      for (std::size_t v = 0; v < core.size(); ++v) kept.back()[v] &= core[v];
-    }
+  const double slopeReach = options.dilationMm / options.separationSlope;
   DistanceTransform toCore;
-  std::vector<ScalarGrid> toKept(kept.size());
-  parallelFor(std::int64_t(kept.size()) + 1, 0, [&](std::int64_t task) {
-    if (task == std::int64_t(kept.size())) toCore = euclideanDistanceTransform(padded, core, !options.separations.empty());
-    else toKept[std::size_t(task)] = euclideanDistanceTransform(padded, kept[std::size_t(task)]).distance;
-  });
-  for (std::size_t i = 0; i < options.separations.size(); ++i) {
-    const LimbSeparation& s = options.separations[i];
-    for (const auto& [self, other] : {std::pair{2 * i, 2 * i + 1}, std::pair{2 * i + 1, 2 * i}}) {
-      const std::vector<std::uint8_t>& mask = kept[self];
-      const ScalarGrid& toOther = toKept[other];
-      for (std::int64_t k = 0; k < padded.dims[2]; ++k)
-        for (std::int64_t j = 0; j < padded.dims[1]; ++j)
-          for (std::int64_t i = 0; i < padded.dims[0]; ++i) {
-            const std::int64_t v = padded.index(i, j, k);
-            if (!mask[v] || (s.region && !s.region->contains(padded.voxelCenter(i, j, k)))) continue;
-            radius.values[v] = std::min(radius.values[v], float(options.separationSlope * double(toOther.values[v])));
-          }
+  std::vector<std::vector<std::pair<std::int64_t, float>>> toOther(2 * options.separations.size());
+  parallelFor(std::int64_t(toOther.size()) + 1, 0, [&](std::int64_t task) {
+    if (task == std::int64_t(toOther.size())) {
+      toCore = euclideanDistanceTransform(padded, core, !options.separations.empty());
+      return;
     }
-  }
-  kept.clear();
-  toKept.clear();
+    const LimbSeparation& s = options.separations[std::size_t(task / 2)];
+    const Label self = task % 2 == 0 ? s.groupA : s.groupB, other = task % 2 == 0 ? s.groupB : s.groupA;
+    const Label* l = labels.data();
+    toOther[std::size_t(task)] = distancesWithin(
+        padded,
+        [&](std::int64_t v, std::int64_t i, std::int64_t j, std::int64_t k) { return l[v] == self && core[std::size_t(v)] && inRegion(padded, s.region, i, j, k); },
+        [&](std::int64_t v) { return l[v] == other && core[std::size_t(v)]; }, slopeReach);
+  });
+  for (const auto& side : toOther)
+    for (const auto& [v, d] : side)
+      radius.values[std::size_t(v)] = std::min(radius.values[std::size_t(v)], float(options.separationSlope * double(d)));
+  toOther.clear();
   reportProgress("cage", 0.2);
 
   // Cage field, negative inside: the union of the balls, approximated
