@@ -78,7 +78,7 @@ public:
     double f[3];
     for (int a = 0; a < 3; ++a) {
       const double x = std::clamp(c[a], 0.0, double(g.dims[a] - 1));
-      i0[a] = std::min<std::int64_t>(std::int64_t(std::floor(x)), g.dims[a] - 2);
+      i0[a] = std::min<std::int64_t>(std::int64_t(x), g.dims[a] - 2);  // x >= 0: truncation is the floor
       f[a] = x - double(i0[a]);
     }
     const std::int64_t base = g.index(i0[0], i0[1], i0[2]);
@@ -204,7 +204,9 @@ TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, con
   // extended into the background so the offset boundary has labels.
   DistanceTransform dt = euclideanDistanceTransform(padded, foreground, true);
   LabelGrid nearestGroup(padded, 0);
-  for (std::size_t v = 0; v < foreground.size(); ++v) nearestGroup.labels()[v] = labels.labels()[std::size_t(dt.nearest[v])];
+  parallelRanges(std::int64_t(foreground.size()), workerThreads(0), [&](std::int64_t v0, std::int64_t v1) {
+    for (std::int64_t v = v0; v < v1; ++v) nearestGroup.labels()[std::size_t(v)] = labels.labels()[std::size_t(dt.nearest[std::size_t(v)])];
+  }, std::int64_t(1) << 16);
   TransferMeshDomain domainLabel(dt.distance, nearestGroup, offset);
   const auto label = [&](const Eigen::Vector3d& p) {
     const int l = domainLabel(p);
