@@ -74,7 +74,7 @@ void seedEveryPiece(C3t3& c3t3, const Domain& domain, const LabelGrid& labels, b
   };
   static constexpr int kSteps[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
   std::vector<std::uint8_t> visited(std::size_t(g.voxelCount()), 0);
-  std::vector<std::int64_t> stack;
+  std::vector<Index3> stack;  // voxels by (i, j, k): no divisions per voxel
   std::vector<std::pair<std::int64_t, std::int64_t>> crossings;  // (inside voxel, outside neighbour)
   std::unordered_set<std::uint64_t> usedCubes;
   const auto cubeKey = [&](const Eigen::Vector3d& p) {
@@ -89,12 +89,12 @@ void seedEveryPiece(C3t3& c3t3, const Domain& domain, const LabelGrid& labels, b
       double extent = -std::numeric_limits<double>::infinity();
     };
     std::array<Extreme, 6> extremes;
-    stack.assign(1, seed);
+    stack.assign(1, g.ijk(seed));
     visited[seed] = 1;
     while (!stack.empty()) {
-      const std::int64_t v = stack.back();
+      const Index3 c = stack.back();
       stack.pop_back();
-      const Index3 c = g.ijk(v);
+      const std::int64_t v = g.index(c[0], c[1], c[2]);
       for (int d = 0; d < 6; ++d) {
         const std::int64_t i = c[0] + kSteps[d][0], j = c[1] + kSteps[d][1], k = c[2] + kSteps[d][2];
         if (!g.contains(i, j, k)) continue;  // border voxels are outside by contract
@@ -102,7 +102,7 @@ void seedEveryPiece(C3t3& c3t3, const Domain& domain, const LabelGrid& labels, b
         if (pieceLabel(n) == label) {
           if (!visited[n]) {
             visited[n] = 1;
-            stack.push_back(n);
+            stack.push_back({i, j, k});
           }
           continue;
         }
