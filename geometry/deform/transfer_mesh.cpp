@@ -32,12 +32,12 @@ namespace {
 // scattered places of a grid larger than the caches, so each query pays for
 // the cache lines of its 8 corners in two fields. A table of the cells
 // (the cube between 8 voxel centres, named by its lowest corner) answers
-// most queries from one line: a cell whose corner distances all lie a
-// relative 1e-6 beyond the offset is outside wherever sampled (the
-// interpolation and its rounding to float move the value by far less), one
-// whose corners all lie that far within it and share a group (under 255,
-// the byte's marker of the rest) is that group; only the other cells are
-// interpolated.
+// most queries from one line: a cell whose corner distances all lie beyond
+// the offset by 1e-6 of the largest magnitude among them and the offset is
+// outside wherever sampled (the interpolation and its rounding to float
+// move the value by far less), one whose corners all lie that far within it
+// and share a group (under 255, the byte's marker of the rest) is that
+// group; only the other cells are interpolated.
 class TransferMeshDomain {
 public:
   TransferMeshDomain(const ScalarGrid& distance, const LabelGrid& nearestGroup, double offsetMm)
@@ -48,7 +48,6 @@ public:
     const GridGeometry& g = groups_.geometry();
     cells_.assign(std::size_t(g.voxelCount()), kMixed);
     const Label* groups = groups_.data();
-    const double outside = offset_ * (1.0 + 1e-6), inside = offset_ * (1.0 - 1e-6);
     const std::array<std::int64_t, 8> offsets = cornerOffsets(g);
     parallelRanges(g.dims[2] - 1, workerThreads(0), [&](std::int64_t k0, std::int64_t k1) {
       for (std::int64_t k = k0; k < k1; ++k) {
@@ -64,8 +63,9 @@ public:
               hi = std::max(hi, d);
               oneGroup = oneGroup && groups[base + o] == groups[base];
             }
-            if (lo > outside) cells_[std::size_t(base)] = 0;
-            else if (hi < inside && oneGroup && groups[base] < kMixed) cells_[std::size_t(base)] = std::uint8_t(groups[base]);
+            const double margin = 1e-6 * std::max({std::abs(lo), std::abs(hi), std::abs(offset_)});
+            if (lo > offset_ + margin) cells_[std::size_t(base)] = 0;
+            else if (hi < offset_ - margin && oneGroup && groups[base] < kMixed) cells_[std::size_t(base)] = std::uint8_t(groups[base]);
           }
       }
     }, 8);
