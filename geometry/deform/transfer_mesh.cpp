@@ -9,7 +9,9 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 
 namespace vox {
 
@@ -23,44 +25,104 @@ namespace {
 // foreground's voxel centres exceeds the offset; otherwise the group whose
 // trilinear weights over the 8 surrounding voxel centres sum highest (ties
 // to the smaller group), so group interfaces pass between voxel centres.
+// The distance is interpolated exactly as ScalarGrid::sample does (same
+// weights, same order), so the domain is the sampled field's to the bit.
+//
+// The mesher asks this at every bisection step of its surface points, at
+// scattered places of a grid larger than the caches, so each query pays for
+// the cache lines of its 8 corners in two fields. A table of the cells
+// (the cube between 8 voxel centres, named by its lowest corner) answers
+// most queries from one line: a cell whose corner distances all lie beyond
+// the offset by 1e-6 of the largest magnitude among them and the offset is
+// outside wherever sampled (the interpolation and its rounding to float
+// move the value by far less), one whose corners all lie that far within it
+// and share a group (under 255, the byte's marker of the rest) is that
+// group; only the other cells are interpolated.
 class TransferMeshDomain {
 public:
   TransferMeshDomain(const ScalarGrid& distance, const LabelGrid& nearestGroup, double offsetMm)
       : distance_(distance), groups_(nearestGroup), offset_(offsetMm) {}
 
+  // (Re)builds the table of cells from the distance field as it is now.
+  void classifyCells() {
+    const GridGeometry& g = groups_.geometry();
+    cells_.assign(std::size_t(g.voxelCount()), kMixed);
+    const Label* groups = groups_.data();
+    const std::array<std::int64_t, 8> offsets = cornerOffsets(g);
+    parallelRanges(g.dims[2] - 1, workerThreads(0), [&](std::int64_t k0, std::int64_t k1) {
+      for (std::int64_t k = k0; k < k1; ++k) {
+        throwIfCancelled();
+        for (std::int64_t j = 0; j + 1 < g.dims[1]; ++j)
+          for (std::int64_t i = 0; i + 1 < g.dims[0]; ++i) {
+            const std::int64_t base = g.index(i, j, k);
+            double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+            bool oneGroup = true;
+            for (const std::int64_t o : offsets) {
+              const double d = distance_.values[std::size_t(base + o)];
+              lo = std::min(lo, d);
+              hi = std::max(hi, d);
+              oneGroup = oneGroup && groups[base + o] == groups[base];
+            }
+            const double margin = 1e-6 * std::max({std::abs(lo), std::abs(hi), std::abs(offset_)});
+            if (lo > offset_ + margin) cells_[std::size_t(base)] = 0;
+            else if (hi < offset_ - margin && oneGroup && groups[base] < kMixed) cells_[std::size_t(base)] = std::uint8_t(groups[base]);
+          }
+      }
+    }, 8);
+  }
+
   int operator()(const Eigen::Vector3d& p) const {
-    if (double(distance_.sample(p)) > offset_) return 0;
     const GridGeometry& g = groups_.geometry();
     const Eigen::Vector3d c = g.continuousIndex(p);
     std::int64_t i0[3];
     double f[3];
     for (int a = 0; a < 3; ++a) {
       const double x = std::clamp(c[a], 0.0, double(g.dims[a] - 1));
-      i0[a] = std::min<std::int64_t>(std::int64_t(std::floor(x)), g.dims[a] - 2);
+      i0[a] = std::min<std::int64_t>(std::int64_t(x), g.dims[a] - 2);  // x >= 0: truncation is the floor
       f[a] = x - double(i0[a]);
     }
-    Label labels[8];
+    const std::int64_t base = g.index(i0[0], i0[1], i0[2]);
+    const std::uint8_t cell = cells_[std::size_t(base)];
+    if (cell != kMixed) return int(cell);
+    const std::array<std::int64_t, 8> offsets = cornerOffsets(g);
     double weights[8];
-    int n = 0;
+    double d = 0.0;
     for (int corner = 0; corner < 8; ++corner) {
       const int dx = corner & 1, dy = (corner >> 1) & 1, dz = corner >> 2;
-      const double w = (dx ? f[0] : 1 - f[0]) * (dy ? f[1] : 1 - f[1]) * (dz ? f[2] : 1 - f[2]);
-      const Label l = groups_.at(i0[0] + dx, i0[1] + dy, i0[2] + dz);
+      weights[corner] = (dx ? f[0] : 1 - f[0]) * (dy ? f[1] : 1 - f[1]) * (dz ? f[2] : 1 - f[2]);
+      d += weights[corner] * double(distance_.values[std::size_t(base + offsets[corner])]);
+    }
+    if (double(float(d)) > offset_) return 0;
+    const Label* groups = groups_.data() + base;
+    Label labels[8];
+    double sums[8];
+    int n = 0;
+    for (int corner = 0; corner < 8; ++corner) {
+      const Label l = groups[offsets[corner]];
       int slot = 0;
       while (slot < n && labels[slot] != l) ++slot;
-      if (slot == n) labels[n] = l, weights[n++] = 0.0;
-      weights[slot] += w;
+      if (slot == n) labels[n] = l, sums[n++] = 0.0;
+      sums[slot] += weights[corner];
     }
     int best = 0;
     for (int s = 1; s < n; ++s)
-      if (weights[s] > weights[best] || (weights[s] == weights[best] && labels[s] < labels[best])) best = s;
+      if (sums[s] > sums[best] || (sums[s] == sums[best] && labels[s] < labels[best])) best = s;
     return int(labels[best]);
   }
 
 private:
+  static constexpr std::uint8_t kMixed = 255;
+
+  // Linear offsets of a cell's corners from its lowest one, x fastest.
+  static std::array<std::int64_t, 8> cornerOffsets(const GridGeometry& g) {
+    const std::int64_t y = g.dims[0], z = g.sliceVoxels();
+    return {0, 1, y, y + 1, z, z + 1, z + y, z + y + 1};
+  }
+
   const ScalarGrid& distance_;
   const LabelGrid& groups_;
   double offset_;
+  std::vector<std::uint8_t> cells_;
 };
 
 // Marks covered[v] for the voxels of z in [k0, k1) whose centres lie in a
@@ -142,8 +204,10 @@ TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, con
   // extended into the background so the offset boundary has labels.
   DistanceTransform dt = euclideanDistanceTransform(padded, foreground, true);
   LabelGrid nearestGroup(padded, 0);
-  for (std::size_t v = 0; v < foreground.size(); ++v) nearestGroup.labels()[v] = labels.labels()[std::size_t(dt.nearest[v])];
-  const TransferMeshDomain domainLabel(dt.distance, nearestGroup, offset);
+  parallelRanges(std::int64_t(foreground.size()), workerThreads(0), [&](std::int64_t v0, std::int64_t v1) {
+    for (std::int64_t v = v0; v < v1; ++v) nearestGroup.labels()[std::size_t(v)] = labels.labels()[std::size_t(dt.nearest[std::size_t(v)])];
+  }, std::int64_t(1) << 16);
+  TransferMeshDomain domainLabel(dt.distance, nearestGroup, offset);
   const auto label = [&](const Eigen::Vector3d& p) {
     const int l = domainLabel(p);
     return l > 0 && relabel ? relabel(p, l) : l;
@@ -151,7 +215,7 @@ TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, con
   LabelGrid atCentres(padded, 0);
   SampledDomain domain;
   domain.labels = &atCentres;
-  domain.labelAt = [&label](const Eigen::Vector3d& p) { return label(p); };
+  domain.labelAt = label;
   VolumeCriteria criteria;
   criteria.facetAngleDeg = options.facetAngleDeg;
   criteria.facetDistanceMm = options.facetDistanceVoxels * g.spacing.minCoeff();
@@ -160,6 +224,7 @@ TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, con
 
   const double radius = 4.0 * g.spacing.maxCoeff();
   for (int pass = 0;; ++pass) {
+    domainLabel.classifyCells();
     parallelRanges(padded.dims[2], workerThreads(0), [&](std::int64_t k0, std::int64_t k1) {
       for (std::int64_t k = k0; k < k1; ++k) {
         throwIfCancelled();

@@ -7,12 +7,12 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cctype>
 #include <cmath>
 #include <functional>
 #include <limits>
-#include <queue>
 
 namespace vox::skeleton {
 
@@ -102,9 +102,46 @@ bool isSkin(const std::string& organName) {
   return first == "skin";
 }
 
+// Min-queue of 64-bit keys that never receive a key below the last one
+// taken while they hold any (Dijkstra's keys grow): a radix heap (Ahuja,
+// Mehlhorn, Orlin, Tarjan). Bucket b holds the keys whose highest bit
+// differing from the last key taken is bit b - 1 (bucket 0: equal to it);
+// taking the minimum empties the lowest non-empty bucket into lower ones, so
+// each key moves at most 64 times and mostly stays in cache, where a binary
+// heap of millions of entries misses at every level. It takes the keys in
+// the same order as any min-queue.
+class RadixHeap {
+public:
+  bool empty() const { return size_ == 0; }
+  void push(std::uint64_t key) {
+    buckets_[bucketOf(key)].push_back(key);
+    ++size_;
+  }
+  std::uint64_t pop() {
+    if (buckets_[0].empty()) {
+      std::size_t b = 1;
+      while (buckets_[b].empty()) ++b;
+      last_ = *std::min_element(buckets_[b].begin(), buckets_[b].end());
+      for (const std::uint64_t key : buckets_[b]) buckets_[bucketOf(key)].push_back(key);
+      buckets_[b].clear();
+    }
+    const std::uint64_t key = buckets_[0].back();
+    buckets_[0].pop_back();
+    if (--size_ == 0) last_ = 0;  // an empty queue takes any key again
+    return key;
+  }
+
+private:
+  std::size_t bucketOf(std::uint64_t key) const { return key == last_ ? 0 : std::size_t(std::bit_width(key ^ last_)); }
+  std::array<std::vector<std::uint64_t>, 65> buckets_;
+  std::uint64_t last_ = 0;
+  std::size_t size_ = 0;
+};
+
 // Multi-source Dijkstra on the voxel lattice. Entries pack the distance's
 // float bits (non-negative floats order as their bit patterns) above the
-// voxel index, so the heap holds 8 bytes per entry.
+// voxel index, so the queue holds 8 bytes per entry; a path only grows, so
+// its keys grow too.
 class GeodesicFront {
 public:
   GeodesicFront(const GridGeometry& g, std::vector<float>& distance, std::vector<std::uint8_t>& owner)
@@ -119,8 +156,7 @@ public:
   std::int64_t run(const Passes& passes, const Enters& enters) {
     std::int64_t settled = 0;
     while (!heap_.empty()) {
-      const std::uint64_t top = heap_.top();
-      heap_.pop();
+      const std::uint64_t top = heap_.pop();
       const std::int64_t v = std::int64_t(top & 0xffffffffu);
       const float d = std::bit_cast<float>(std::uint32_t(top >> 32));
       if (d > distance_[std::size_t(v)]) continue;
@@ -151,7 +187,7 @@ private:
   Neighbourhood n_;
   std::vector<float>& distance_;
   std::vector<std::uint8_t>& owner_;
-  std::priority_queue<std::uint64_t, std::vector<std::uint64_t>, std::greater<>> heap_;
+  RadixHeap heap_;
 };
 
 void countParts(BodyParts& out) {

@@ -219,6 +219,16 @@ void ballCentre(Joint& joint, const GridGeometry& g, const BoneVoxels& bone, con
 
 // Bone points of the parts `parts` (e.g. the trunk's) as one cloud.
 // A bone's voxels as a bitmap over their bounding box (constant-time lookup).
+// std::llround (halves away from zero) without the library call: the hinge
+// search rounds every child point at every trial centre and turn. The
+// fraction x - trunc(x) is exact below 2^52.
+std::int64_t roundHalfAway(double x) {
+  if (!(std::abs(x) < 4503599627370496.0)) return std::llround(x);
+  const auto t = std::int64_t(x);
+  const double rest = x - double(t);
+  return rest >= 0.5 ? t + 1 : rest <= -0.5 ? t - 1 : t;
+}
+
 class VoxelBitmap {
 public:
   VoxelBitmap(const GridGeometry& g, const std::vector<std::int64_t>& voxels) : g_(g) {
@@ -242,7 +252,7 @@ public:
   // Whether the voxel nearest the grid-frame point p is set.
   bool at(const Eigen::Vector3d& p) const {
     const Eigen::Vector3d c = g_.continuousIndex(p);
-    const std::int64_t i = std::llround(c[0]), j = std::llround(c[1]), k = std::llround(c[2]);
+    const std::int64_t i = roundHalfAway(c[0]), j = roundHalfAway(c[1]), k = roundHalfAway(c[2]);
     if (bits_.empty() || i < lo_[0] || j < lo_[1] || k < lo_[2] || i > hi_[0] || j > hi_[1] || k > hi_[2]) return false;
     return bits_[offset(i, j, k)];
   }

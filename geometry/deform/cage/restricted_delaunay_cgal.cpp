@@ -17,8 +17,11 @@
 #include <CGAL/make_mesh_3.h>
 #include <CGAL/refine_mesh_3.h>
 
+#include <algorithm>
 #include <array>
+#include <functional>
 #include <numeric>
+#include <optional>
 #include <unordered_map>
 #include <unordered_set>
 #include <vector>
@@ -73,7 +76,7 @@ void seedEveryPiece(C3t3& c3t3, const Domain& domain, const LabelGrid& labels, b
   };
   static constexpr int kSteps[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
   std::vector<std::uint8_t> visited(std::size_t(g.voxelCount()), 0);
-  std::vector<std::int64_t> stack;
+  std::vector<Index3> stack;  // voxels by (i, j, k): no divisions per voxel
   std::vector<std::pair<std::int64_t, std::int64_t>> crossings;  // (inside voxel, outside neighbour)
   std::unordered_set<std::uint64_t> usedCubes;
   const auto cubeKey = [&](const Eigen::Vector3d& p) {
@@ -88,12 +91,12 @@ void seedEveryPiece(C3t3& c3t3, const Domain& domain, const LabelGrid& labels, b
       double extent = -std::numeric_limits<double>::infinity();
     };
     std::array<Extreme, 6> extremes;
-    stack.assign(1, seed);
+    stack.assign(1, g.ijk(seed));
     visited[seed] = 1;
     while (!stack.empty()) {
-      const std::int64_t v = stack.back();
+      const Index3 c = stack.back();
       stack.pop_back();
-      const Index3 c = g.ijk(v);
+      const std::int64_t v = g.index(c[0], c[1], c[2]);
       for (int d = 0; d < 6; ++d) {
         const std::int64_t i = c[0] + kSteps[d][0], j = c[1] + kSteps[d][1], k = c[2] + kSteps[d][2];
         if (!g.contains(i, j, k)) continue;  // border voxels are outside by contract
@@ -101,7 +104,7 @@ void seedEveryPiece(C3t3& c3t3, const Domain& domain, const LabelGrid& labels, b
         if (pieceLabel(n) == label) {
           if (!visited[n]) {
             visited[n] = 1;
-            stack.push_back(n);
+            stack.push_back({i, j, k});
           }
           continue;
         }
@@ -202,12 +205,22 @@ TriMesh restrictedDelaunaySurface(const SampledDomain& sampled, const SurfaceCri
 namespace {
 
 // Mesh_3 sizing field read from a ScalarGrid (model of MeshDomainField_3).
+// A constant grid (the thesis' initial F) answers its value without the
+// interpolation: trilinear weights sum to 1 within a few double ulps, so the
+// sampled float is that value exactly.
 struct GridSizingField {
   using FT = Kernel::FT;
   using Point_3 = Point;
   using Index = Domain::Index;
+  explicit GridSizingField(const ScalarGrid* g) : grid(g) {
+    if (!g->values.empty() && std::adjacent_find(g->values.begin(), g->values.end(), std::not_equal_to<>()) == g->values.end())
+      constant = g->values.front();
+  }
+  FT operator()(const Point_3& p, int, const Index&) const {
+    return constant ? FT(*constant) : FT(grid->sample(toEigen(p)));
+  }
   const ScalarGrid* grid;
-  FT operator()(const Point_3& p, int, const Index&) const { return FT(grid->sample(toEigen(p))); }
+  std::optional<float> constant;
 };
 
 }  // namespace
@@ -216,7 +229,7 @@ TetMesh restrictedDelaunayVolume(const SampledDomain& sampled, const VolumeCrite
   if (!criteria.sizing) throw RuntimeFailure("restricted Delaunay meshing: no sizing field");
   reportProgress("volume meshing", 0.0);
   const Domain domain = makeDomain(sampled, false);
-  const GridSizingField sizing{criteria.sizing};
+  const GridSizingField sizing(criteria.sizing);
   const Criteria meshCriteria(CGAL::parameters::facet_angle = criteria.facetAngleDeg,
                               CGAL::parameters::facet_size = sizing,
                               CGAL::parameters::facet_distance = criteria.facetDistanceMm,

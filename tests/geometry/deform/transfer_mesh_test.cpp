@@ -1,6 +1,7 @@
 #include "geometry/deform/transfer_mesh.h"
 
 #include "geometry/skeleton/label_groups.h"
+#include "geometry/distance_transform.h"
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/label_stats.h"
@@ -55,6 +56,25 @@ TEST(TransferMesh, SphereVolumeCoverageAndDeterminism) {
   EXPECT_EQ(again.positions, tm.positions);
   EXPECT_EQ(again.tets, tm.tets);
   EXPECT_EQ(again.labels, tm.labels);
+}
+
+// A constant sizing field is read without interpolation: the mesh is the
+// one a field of that value interpolated everywhere gives, to the bit (the
+// second field differs in one corner voxel, far outside the domain, so it is
+// not constant and is sampled).
+TEST(TransferMesh, ConstantSizingFieldMeshesAsTheInterpolatedOne) {
+  LabelGrid grid = synthesize(SynthKind::NestedSpheres, 24);
+  grid.geometry().spacing = {1.5, 1.5, 4.0};
+  const LabelGrid b = binaryGroupGrid(grid);
+  const GridGeometry wide = padGeometry(grid.geometry(), {12, 12, 12});
+  const ScalarGrid constant = defaultSizingField(wide, 0.07);
+  ScalarGrid sampled = constant;
+  sampled.at(0, 0, 0) = 2.0f * constant.values.front();
+  const TetMesh a = buildTransferMesh(b, constant), c = buildTransferMesh(b, sampled);
+  ASSERT_GT(a.tetCount(), 100u);
+  EXPECT_EQ(a.positions, c.positions);
+  EXPECT_EQ(a.tets, c.tets);
+  EXPECT_EQ(a.labels, c.labels);
 }
 
 TEST(TransferMesh, SizingFieldControlsResolution) {

@@ -1,9 +1,11 @@
 #include "geometry/deform/cage/cage_builder.h"
 
 #include "geometry/skeleton/label_groups.h"
+#include "geometry/distance_transform.h"
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/organ_table.h"
+#include "geometry/parallel.h"
 #include "geometry/synth.h"
 #include "tests/support/test_environment.h"
 
@@ -89,6 +91,51 @@ TEST(CageBuilder, IsDeterministic) {
   const CageResult b = buildCage(groups, stickOptions());
   EXPECT_EQ(a.cage.positions, b.cage.positions);
   EXPECT_EQ(a.cage.triangles, b.cage.triangles);
+}
+
+// The eroded voxels are those within the erosion depth of the other group
+// by the distance transform of the whole grid (the builder transforms only
+// the box around each side).
+TEST(CageBuilder, ErosionIsTheWholeGridDistanceTransforms) {
+  const LabelGrid groups = stickGroups();
+  CageOptions o = stickOptions();
+  const Eigen::AlignedBox3d region(Eigen::Vector3d(-1e3, -1e3, -1e3), Eigen::Vector3d(1e3, 1e3, 130.0));
+  o.separations.push_back({Label(LabelGroup::RightArm), Label(LabelGroup::Trunk), region});
+  const Label arm = Label(LabelGroup::RightArm), trunk = Label(LabelGroup::Trunk);
+  const GridGeometry& g = groups.geometry();
+  std::vector<std::uint8_t> armSeeds(groups.labels().size()), trunkSeeds(groups.labels().size());
+  for (std::size_t v = 0; v < armSeeds.size(); ++v) armSeeds[v] = groups.labels()[v] == arm, trunkSeeds[v] = groups.labels()[v] == trunk;
+  const ScalarGrid toArm = euclideanDistanceTransform(g, armSeeds).distance, toTrunk = euclideanDistanceTransform(g, trunkSeeds).distance;
+  std::int64_t expected = 0;
+  for (std::int64_t k = 0; k < g.dims[2]; ++k)
+    for (std::int64_t j = 0; j < g.dims[1]; ++j)
+      for (std::int64_t i = 0; i < g.dims[0]; ++i) {
+        if (!region.contains(g.voxelCenter(i, j, k))) continue;
+        const Label l = groups.at(i, j, k);
+        expected += (l == arm && toTrunk.at(i, j, k) <= o.erosionMm) || (l == trunk && toArm.at(i, j, k) <= o.erosionMm);
+      }
+  EXPECT_GT(expected, 100);
+  EXPECT_EQ(buildCage(groups, o).report.erodedVoxels, expected);
+}
+
+// The distance transforms of the separations run at once on the parallel
+// loop: two separations give the same cage on one thread and on three.
+TEST(CageBuilder, InsetCageIsTheSameOnAnyThreadCount) {
+  const LabelGrid groups = stickGroups();
+  CageOptions o = stickOptions();
+  const Eigen::AlignedBox3d region(Eigen::Vector3d(-1e3, -1e3, -1e3), Eigen::Vector3d(1e3, 1e3, 130.0));
+  o.separations.push_back({Label(LabelGroup::RightArm), Label(LabelGroup::Trunk), region});
+  o.separations.push_back({Label(LabelGroup::LeftArm), Label(LabelGroup::Trunk), std::nullopt});
+  const auto onThreads = [&](int threads) {
+    const ScopedWorkerThreads scope(threads);
+    return buildCage(groups, o);
+  };
+  const CageResult one = onThreads(1), three = onThreads(3);
+  EXPECT_GT(one.report.erodedVoxels, 0);
+  EXPECT_EQ(one.report.erodedVoxels, three.report.erodedVoxels);
+  EXPECT_EQ(one.report.foregroundOutside, three.report.foregroundOutside);
+  EXPECT_EQ(one.cage.positions, three.cage.positions);
+  EXPECT_EQ(one.cage.triangles, three.cage.triangles);
 }
 
 TEST(CageBuilder, BadRequests) {
