@@ -145,10 +145,10 @@ void ArticulatedPoser::nearestParts() {
   }
 }
 
-void ArticulatedPoser::predict(InjectiveSolver& solver, std::span<const Eigen::Isometry3d> motions, double from, double to) {
+void ArticulatedPoser::predict(InjectiveSolver& solver, std::span<const Eigen::Isometry3d> from, std::span<const Eigen::Isometry3d> to) {
   PartTransforms step;
   for (int p = 0; p <= kSegmentCount; ++p)
-    step[std::size_t(p)] = partMotionAt(motions, skeleton::Part(p), to) * partMotionAt(motions, skeleton::Part(p), from).inverse();
+    step[std::size_t(p)] = partMotionAt(to, skeleton::Part(p), 1.0) * partMotionAt(from, skeleton::Part(p), 1.0).inverse();
   const std::vector<Eigen::Vector3d>& current = solver.positions();
   std::vector<Eigen::Vector3d> predicted(current.size());
   for (std::size_t i = 0; i < current.size(); ++i) predicted[i] = blended(i, step, current[i]);
@@ -202,8 +202,8 @@ Eigen::Vector3d ArticulatedPoser::blended(std::size_t i, const PartTransforms& t
   return w >= 1.0 ? a : Eigen::Vector3d(w * a + (1.0 - w) * (transforms[std::size_t(nearPart_[i][1])] * p));
 }
 
-void ArticulatedPoser::targets(const InjectiveSolver& solver, std::span<const Eigen::Isometry3d> motions, double fraction) {
-  placeRigidVertices(mesh_, motions, fraction, positions_);
+void ArticulatedPoser::targets(const InjectiveSolver& solver, std::span<const Eigen::Isometry3d> motions) {
+  placeRigidVertices(mesh_, motions, 1.0, positions_);
   for (std::size_t c = 0; c < constrained_.size(); ++c) constrainedTargets_[c] = positions_[std::size_t(solved_[std::size_t(constrained_[c])])];
   // Sliding targets in their bodies' frames: each vertex taken into its
   // body's rest frame by where the owner's bone is now (the rigid motion
@@ -225,7 +225,7 @@ void ArticulatedPoser::targets(const InjectiveSolver& solver, std::span<const Ei
   for (const std::int32_t i : sliding_) {
     const auto v = std::size_t(solved_[std::size_t(i)]);
     const auto b = std::size_t(mesh_.vertexBody[v]);
-    positions_[v] = partMotionAt(motions, mesh_.bodies[b].owner, fraction) * mesh_.bodies[b].project(now[b].inverse() * current[std::size_t(i)]);
+    positions_[v] = partMotionAt(motions, mesh_.bodies[b].owner, 1.0) * mesh_.bodies[b].project(now[b].inverse() * current[std::size_t(i)]);
   }
   for (std::size_t s = 0; s < sliding_.size(); ++s) slidingTargets_[s] = positions_[std::size_t(solved_[std::size_t(sliding_[s])])];
 }
@@ -236,7 +236,17 @@ void ArticulatedPoser::gather(const InjectiveSolver& solver) {
 }
 
 ArticulatedPoseReport ArticulatedPoser::pose(std::span<const Eigen::Isometry3d> motions) {
+  const std::vector<Eigen::Isometry3d> given(motions.begin(), motions.end());
+  return pose([&given](double fraction) {
+    std::vector<Eigen::Isometry3d> out(given.size());
+    for (std::size_t p = 0; p < given.size(); ++p) out[p] = partMotionAt(given, skeleton::Part(p), fraction);
+    return out;
+  });
+}
+
+ArticulatedPoseReport ArticulatedPoser::pose(const MotionPath& path) {
   const auto start = std::chrono::steady_clock::now();
+  const std::vector<Eigen::Isometry3d> motions = path(1.0);
   ArticulatedPoseReport report;
   report.solvedVertices = solved_.size();
   report.solvedTets = solvedTets_;
@@ -249,10 +259,12 @@ ArticulatedPoseReport ArticulatedPoser::pose(std::span<const Eigen::Isometry3d> 
     // so that one squeezed tet slows the bones near it, not every bone.
     approach_.resetToRest();
     const int steps = std::max(1, options_.steps);
+    std::vector<Eigen::Isometry3d> previous = path(0.0);
     for (int s = 1; s <= steps; ++s) {
-      const double fraction = double(s) / double(steps);
-      predict(approach_, motions, double(s - 1) / double(steps), fraction);
-      targets(approach_, motions, fraction);
+      const std::vector<Eigen::Isometry3d> step = s == steps ? motions : path(double(s) / double(steps));
+      predict(approach_, previous, step);
+      targets(approach_, step);
+      previous = step;
       std::vector<Eigen::Vector3d> soft = slidingTargets_;
       soft.insert(soft.end(), constrainedTargets_.begin(), constrainedTargets_.end());
       const InjectiveStepReport r = approach_.solveStep({}, soft);
@@ -264,7 +276,7 @@ ArticulatedPoseReport ArticulatedPoser::pose(std::span<const Eigen::Isometry3d> 
     // At the full pose the bones stiffen (their weight times 10, 100,
     // 1000): they close on their motions as far as the tissue lets them.
     {
-      targets(approach_, motions, 1.0);
+      targets(approach_, motions);
       std::vector<Eigen::Vector3d> soft = slidingTargets_;
       soft.insert(soft.end(), constrainedTargets_.begin(), constrainedTargets_.end());
       std::vector<double> scale(soft.size(), 1.0);
@@ -281,7 +293,7 @@ ArticulatedPoseReport ArticulatedPoser::pose(std::span<const Eigen::Isometry3d> 
     // The bones onto their motions exactly: put there when no tet inverts,
     // else chased from where the approach left them (hard constraints); then
     // the tissue relaxes around them.
-    targets(approach_, motions, 1.0);
+    targets(approach_, motions);
     std::vector<Eigen::Vector3d> placed = corrected(approach_.positions(), motions);
     for (std::size_t c = 0; c < constrained_.size(); ++c) placed[std::size_t(constrained_[c])] = constrainedTargets_[c];
     const std::vector<double> volumes = solver_.relativeVolumes(placed);
@@ -303,6 +315,16 @@ ArticulatedPoseReport ArticulatedPoser::pose(std::span<const Eigen::Isometry3d> 
     if (mesh_.role[v] == VertexRole::Sliding) report.maxSlidingGapMm = std::max(report.maxSlidingGapMm, (projected[v] - positions_[v]).norm());
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;
+}
+
+ArticulatedPoser::MotionPath jointMotionPath(const skeleton::Skeleton& skeleton, const std::vector<skeleton::Joint>& joints,
+                                             const std::vector<PoseJoint>& angles, const ArticulatedMesh& mesh) {
+  return [&skeleton, joints, angles, &mesh](double fraction) {
+    std::vector<PoseJoint> scaled = angles;
+    for (PoseJoint& j : scaled)
+      for (double& d : j.degrees) d *= fraction;
+    return segmentMotions(skeleton::partMotions(joints, scaled), skeleton, mesh);
+  };
 }
 
 }  // namespace vox

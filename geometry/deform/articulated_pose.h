@@ -23,10 +23,12 @@
 // with one part is moved rigidly and left out of the solve.
 
 #include "geometry/deform/articulated_mesh.h"
+#include "geometry/deform/pose/joint_pose.h"
 #include "geometry/deform/solve/injective_solve.h"
 
 #include <Eigen/Geometry>
 #include <array>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -66,18 +68,32 @@ class ArticulatedPoser {
 public:
   explicit ArticulatedPoser(const ArticulatedMesh& mesh, const ArticulatedPoseOptions& options = {});
 
-  // The pose from rest in options.steps steps: motions per part (index =
-  // skeleton::Part; identity where absent).
+  // Per segment (index = skeleton::Part, then the scapulae; identity where
+  // absent) the rigid motion of the pose at `fraction` of the way from rest
+  // (0) to it (1).
+  using MotionPath = std::function<std::vector<Eigen::Isometry3d>(double fraction)>;
+
+  // The pose from rest in options.steps steps along `path`: the step's
+  // bones where the path puts them at its fraction. A joint pose's path is
+  // the forward kinematics of the joint angles scaled by the fraction
+  // (jointMotionPath), so every step is a pose of the skeleton: the forearm
+  // turns with the upper arm and about the elbow at every step.
+  ArticulatedPoseReport pose(const MotionPath& path);
+  // The same along each motion's own screw (screwInterpolate): right for a
+  // single turned joint, not for a chain (a forearm turned 235 degrees by
+  // shoulder and elbow together takes the short way round, 125 degrees the
+  // other way).
   ArticulatedPoseReport pose(std::span<const Eigen::Isometry3d> motions);
 
   // Every vertex of the mesh, posed.
   const std::vector<Eigen::Vector3d>& positions() const { return positions_; }
 
 private:
-  void targets(const InjectiveSolver& solver, std::span<const Eigen::Isometry3d> motions, double fraction);
-  // Moves the solve's positions towards the blended step motion from
-  // `from` to `to` of the pose, as far as no tet inverts.
-  void predict(InjectiveSolver& solver, std::span<const Eigen::Isometry3d> motions, double from, double to);
+  // The bones' and sliding vertices' targets with the segments at `motions`.
+  void targets(const InjectiveSolver& solver, std::span<const Eigen::Isometry3d> motions);
+  // Moves the solve's positions towards the blended step motion that takes
+  // the segments from `from` to `to`, as far as no tet inverts.
+  void predict(InjectiveSolver& solver, std::span<const Eigen::Isometry3d> from, std::span<const Eigen::Isometry3d> to);
   using PartTransforms = std::array<Eigen::Isometry3d, kSegmentCount + 1>;
   // Solve vertex i's point p moved by its nearest parts' transforms,
   // blended by nearWeight_.
@@ -104,5 +120,11 @@ private:
   std::vector<std::array<skeleton::Part, 2>> nearPart_;
   std::vector<double> nearWeight_;  // weight of the nearest; 1 - it of the second
 };
+
+// A joint pose's path: at each fraction the forward kinematics of every
+// joint's angles times the fraction (skeleton::partMotions of `joints`, the
+// skeleton's joints as posed), the segments of `mesh` by segmentMotions.
+ArticulatedPoser::MotionPath jointMotionPath(const skeleton::Skeleton& skeleton, const std::vector<skeleton::Joint>& joints,
+                                             const std::vector<PoseJoint>& angles, const ArticulatedMesh& mesh);
 
 }  // namespace vox

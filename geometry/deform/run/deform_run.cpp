@@ -345,7 +345,7 @@ PosedMesh poseArticulated(const DeformGridRequest& o, const Source& source, Defo
   report.stages.push_back(meshTimer.stop());
   StageTimer poseTimer("articulated pose");
   ArticulatedPoser poser(mesh);
-  const ArticulatedPoseReport r = poser.pose(motions);
+  const ArticulatedPoseReport r = poser.pose(jointMotionPath(sk, joints, o.pose.joints, mesh));
   report.stages.push_back(poseTimer.stop());
   DeformationReport::Articulated a;
   a.vertices = mesh.mesh.vertexCount();

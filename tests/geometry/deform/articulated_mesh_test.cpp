@@ -209,6 +209,27 @@ PoseJoint jointAngles(JointId id, double flexion, double abduction = 0.0) {
   return j;
 }
 
+// The steps of a joint pose follow the joints: at every fraction the
+// forearm hangs from the elbow where the upper arm put it. Each part's own
+// screw from rest to the pose does not: the forearm, turned 220 degrees by
+// shoulder and elbow together, takes the short way round.
+TEST(ArticulatedPose, AJointPathKeepsTheChainTogetherAtEveryStep) {
+  const Figure& f = figure();
+  const std::vector<PoseJoint> angles = {jointAngles(JointId::RightShoulder, 100.0), jointAngles(JointId::RightElbow, 120.0)};
+  const std::vector<skeleton::Joint> joints = skeleton::posedJoints(f.skeleton, angles, "pose");
+  const ArticulatedPoser::MotionPath path = jointMotionPath(f.skeleton, joints, angles, f.mesh);
+  const skeleton::PartMotions full = figureMotions(f.skeleton, angles);
+  const Eigen::Vector3d elbow = f.skeleton.joint(JointId::RightElbow)->centre;
+  const auto upper = std::size_t(Part::RightUpperArm), fore = std::size_t(Part::RightForearm);
+  for (const double fraction : {0.25, 0.5, 0.75, 1.0}) {
+    const std::vector<Eigen::Isometry3d> m = path(fraction);
+    EXPECT_LT((m[upper] * elbow - m[fore] * elbow).norm(), 1e-6) << fraction;
+  }
+  for (std::size_t p = 0; p < full.size(); ++p) EXPECT_TRUE(path(1.0)[p].isApprox(full[p], 1e-12)) << p;
+  const std::vector<Eigen::Isometry3d> given(full.begin(), full.end());
+  EXPECT_GT((partMotionAt(given, Part::RightUpperArm, 0.5) * elbow - partMotionAt(given, Part::RightForearm, 0.5) * elbow).norm(), 10.0);
+}
+
 // A stride (one hip flexed, the other extended, that knee bent): the bones
 // move with their parts exactly, and no tet inverts on the way.
 TEST(ArticulatedPose, AStrideKeepsBonesRigidAndEveryTetPositive) {
