@@ -1,6 +1,7 @@
 #include "geometry/distance_transform.h"
 
 #include "geometry/cancellation.h"
+#include "geometry/parallel.h"
 
 #include <cmath>
 #include <limits>
@@ -106,22 +107,26 @@ DistanceTransform euclideanDistanceTransform(const GridGeometry& geometry, const
   for (int axis = 0; axis < 3; ++axis) {
     const std::int64_t len = dims[axis];
     const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
-    LinePass pass(len);
-    for (std::int64_t u = 0; u < dims[a2]; ++u) {
-      throwIfCancelled();
-      for (std::int64_t t = 0; t < dims[a1]; ++t) {
-        const std::int64_t base = t * stride[a1] + u * stride[a2];
-        for (std::int64_t p = 0; p < len; ++p) {
-          pass.f[p] = sq[base + p * stride[axis]];
-          if (withNearest) pass.featureIn[p] = nearest[base + p * stride[axis]];
-        }
-        pass.run(len, geometry.spacing[axis], withNearest);
-        for (std::int64_t p = 0; p < len; ++p) {
-          sq[base + p * stride[axis]] = pass.out[p];
-          if (withNearest) nearest[base + p * stride[axis]] = pass.featureOut[p];
+    // The lines of a pass are independent: planes of them on the parallel
+    // loop, each line computed as on one thread.
+    parallelRanges(dims[a2], workerThreads(0), [&](std::int64_t begin, std::int64_t end) {
+      LinePass pass(len);
+      for (std::int64_t u = begin; u < end; ++u) {
+        throwIfCancelled();
+        for (std::int64_t t = 0; t < dims[a1]; ++t) {
+          const std::int64_t base = t * stride[a1] + u * stride[a2];
+          for (std::int64_t p = 0; p < len; ++p) {
+            pass.f[p] = sq[base + p * stride[axis]];
+            if (withNearest) pass.featureIn[p] = nearest[base + p * stride[axis]];
+          }
+          pass.run(len, geometry.spacing[axis], withNearest);
+          for (std::int64_t p = 0; p < len; ++p) {
+            sq[base + p * stride[axis]] = pass.out[p];
+            if (withNearest) nearest[base + p * stride[axis]] = pass.featureOut[p];
+          }
         }
       }
-    }
+    }, 1);
   }
 
   DistanceTransform result;

@@ -1,5 +1,7 @@
 #include "geometry/distance_transform.h"
 
+#include "geometry/parallel.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -40,6 +42,23 @@ TEST(DistanceTransform, MatchesBruteForceOnAnisotropicGrid) {
     const Index3 b = g.ijk(n);
     EXPECT_NEAR((g.voxelCenter(a[0], a[1], a[2]) - g.voxelCenter(b[0], b[1], b[2])).norm(), best, 1e-4 * (1.0 + best));
   }
+}
+
+// The passes' lines run on the parallel loop: the same distances and
+// nearest seeds, bit for bit, on one thread and on several.
+TEST(DistanceTransform, TheSameOnAnyThreadCount) {
+  GridGeometry g = anisotropicGeometry();
+  g.dims = {41, 37, 29};
+  std::mt19937 rng(11);
+  std::vector<std::uint8_t> seeds(std::size_t(g.voxelCount()), 0);
+  for (auto& s : seeds) s = rng() % 97 == 0;
+  const auto run = [&](int threads) {
+    ScopedWorkerThreads scope(threads);
+    return euclideanDistanceTransform(g, seeds, true);
+  };
+  const DistanceTransform one = run(1), many = run(5);
+  EXPECT_EQ(one.distance.values, many.distance.values);
+  EXPECT_EQ(one.nearest, many.nearest);
 }
 
 TEST(DistanceTransform, NoSeedsGivesInfinity) {
