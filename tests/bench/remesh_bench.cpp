@@ -26,8 +26,10 @@
 //   VOX_REMESH_VOXELS=2 build/release/bench/remesh_bench --benchmark_filter=MMAdRemesh/2   # l = 2 voxels
 //   VOX_REMESH_SYNTH=junctions:48 VOX_REMESH_L=2.5 build/release/bench/remesh_bench
 //   VOX_REMESH_CROP=60,20,100,96,64,40 build/release/bench/remesh_bench  # a box of voxels
+//   VOX_REMESH_PEER_OUTPUT=out.mesh ... --benchmark_filter=BM_PeerOutput  # measure another
+//     remesher's output (MMG3D's: tests/bench/mmg3d_peer.sh) against the case's reference
 //
-// Counters: tets (domain), min/max dihedral, tets under 15 and 5 degrees,
+// Counters: tets (domain), min/max dihedral, tets under 15, 10 and 5 degrees,
 // topology differences against the reference (0 = every label, 1-junction
 // and 0-junction kept), largest per-label volume change, process CPU
 // seconds, peak RSS of the process so far (MB; run one benchmark per
@@ -54,6 +56,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -192,7 +195,15 @@ bool reportOutput(benchmark::State& state, const Case& c, const TetMesh& out, do
   const remesh::MeshTopology topology = remesh::computeMeshTopology(out);
   const auto differences = remesh::compareTopology(c.topology, topology);
   double minVolume = std::numeric_limits<double>::infinity();
-  for (const Tet& t : out.tets) minVolume = std::min(minVolume, signedVolume(out.positions, t));
+  std::size_t under10 = 0;
+  for (std::size_t t = 0; t < out.tetCount(); ++t) {
+    const Tet& q = out.tets[t];
+    minVolume = std::min(minVolume, signedVolume(out.positions, q));
+    if (out.labels[t] <= 0) continue;
+    const auto angles = dihedralAngles(out.positions[std::size_t(q[0])], out.positions[std::size_t(q[1])],
+                                       out.positions[std::size_t(q[2])], out.positions[std::size_t(q[3])]);
+    under10 += *std::min_element(angles.begin(), angles.end()) < 10.0;
+  }
   double worstVolume = 0.0;
   for (const auto& [label, v] : c.initialQuality.volumePerLabel) {
     auto it = q.volumePerLabel.find(label);
@@ -203,6 +214,7 @@ bool reportOutput(benchmark::State& state, const Case& c, const TetMesh& out, do
   state.counters["min_dihedral"] = q.minDihedral;
   state.counters["max_dihedral"] = q.maxDihedral;
   state.counters["under_15"] = double(q.under15);
+  state.counters["under_10"] = double(under10);
   state.counters["under_5"] = double(q.under5);
   state.counters["inverted"] = double(q.inverted);
   state.counters["min_volume"] = minVolume;
@@ -234,6 +246,26 @@ void BM_MMAdRemesh(benchmark::State& state) {
     std::fprintf(stderr, "M-MAd (%d threads): %.1f s wall\n", options.threads,
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count());
     if (!reportOutput(state, c, out, cpu)) state.SkipWithError("topology changed or a tet is not positive");
+    state.ResumeTiming();
+  }
+}
+
+// The output of a remesher run outside this process (MMG3D's mmg3d_O3; its
+// time is measured by the script that ran it), read from
+// VOX_REMESH_PEER_OUTPUT and measured by the same code, topology against the
+// case's reference. Without the variable, only the case is made (and its
+// Mesh_3 file written, with VOX_REMESH_MESH3_FILE).
+void BM_PeerOutput(benchmark::State& state) {
+  const Case& c = benchCase();
+  const char* path = std::getenv("VOX_REMESH_PEER_OUTPUT");
+  for (auto _ : state) {
+    if (!path) {
+      state.SkipWithError("no VOX_REMESH_PEER_OUTPUT to measure");
+      break;
+    }
+    const TetMesh out = readTetMesh(path);
+    state.PauseTiming();
+    reportOutput(state, c, out, 0.0);
     state.ResumeTiming();
   }
 }
@@ -287,6 +319,7 @@ void BM_CgalRemesh(benchmark::State& state) {
 
 BENCHMARK(BM_MMAdRemesh)->Arg(2)->Arg(1)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
 BENCHMARK(BM_CgalRemesh)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
+BENCHMARK(BM_PeerOutput)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
 
 }  // namespace
 

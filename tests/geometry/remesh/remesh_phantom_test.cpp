@@ -113,6 +113,31 @@ TEST(RemeshPhantom, SteinerPointsLiftTheSliversOfAdultMaleCrop) {
   EXPECT_GT(a.quality.minDihedral, 12.0);
 }
 
+TEST(RemeshPhantom, NavigatesAdultMaleCropToCoarserAndFinerTargets) {
+  // Navigation (thesis 2.4): the head crop meshed at l = 8 mm, then that
+  // mesh, without the grid (its domain tets, as a file holds them; the
+  // interfaces from its own facets), remeshed to 4 and 16 mm. The labels and
+  // junctions are the grid's at every step, and the mesh follows the new l:
+  // more than twice the tets at 4 mm, fewer at 16 mm (where the crop's 30
+  // labels, a few voxels across, hold most edges near 8 mm, as meshing the
+  // grid at 16 mm does).
+  const LabelGrid grid = cropAdultMale(128, 54, 186, 32, 28, 10);
+  const MeshTopology input = computeGridTopology(grid);
+  RemeshOptions options;
+  options.targetLength = 8.0;
+  const TetMesh at8 = remeshTetMesh(tetrahedralizeVoxelsAdaptive(grid, adaptiveOptionsForTarget(grid.geometry(), 8.0)),
+                                    options);
+  expectTopologyAndPositiveTets(input, at8);
+  for (const double l : {4.0, 16.0}) {
+    SCOPED_TRACE("l = " + std::to_string(l));
+    options.targetLength = l;
+    const TetMesh output = remeshTetMesh(at8, options);
+    expectTopologyAndPositiveTets(input, output);
+    if (l < 8.0) EXPECT_GT(output.tetCount(), 2 * at8.tetCount());
+    else EXPECT_LT(output.tetCount(), at8.tetCount());
+  }
+}
+
 TEST(RemeshPhantom, AdultMaleTorsoKeepsEveryLabelAndJunction) {
   // A slab through the chest and upper abdomen, the full default schedule
   // (5 rounds and 3 flip-smooth cycles): lungs, heart, liver, stomach,
