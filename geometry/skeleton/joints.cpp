@@ -217,8 +217,6 @@ void ballCentre(Joint& joint, const GridGeometry& g, const BoneVoxels& bone, con
   }
 }
 
-// Bone points of the parts `parts` (e.g. the trunk's) as one cloud.
-// A bone's voxels as a bitmap over their bounding box (constant-time lookup).
 // std::llround (halves away from zero) without the library call: the hinge
 // search rounds every child point at every trial centre and turn. The
 // fraction x - trunc(x) is exact below 2^52.
@@ -229,6 +227,7 @@ std::int64_t roundHalfAway(double x) {
   return rest >= 0.5 ? t + 1 : rest <= -0.5 ? t - 1 : t;
 }
 
+// A bone's voxels as a bitmap over their bounding box (constant-time lookup).
 class VoxelBitmap {
 public:
   VoxelBitmap(const GridGeometry& g, const std::vector<std::int64_t>& voxels) : g_(g) {

@@ -187,11 +187,13 @@ PipelineOptions deformPipelineOptions(const DeformGridRequest& o, const LabelGri
     requireOrganTable(o.organs.has_value(), OrganTableNeed::Bones, o.poseSource);
     built = skeleton::buildSkeleton(working, *o.organs, {o.input, o.organsSource, o.parts}, std::move(userParts));
   }
+  // A skeletal pose has its skeleton here (stored or built); any other pose
+  // compiles without one.
   const skeleton::Skeleton* sk = stored ? stored : built ? &*built : nullptr;
-  PipelineOptions options = sk && skeletal ? skeleton::skeletalPoseOptions(o.pose, o.poseSource, *sk, o.organs, joints)
-                                           : skeleton::skeletalPoseOptions(o.pose, o.poseSource, working, o.organs,
-                                                                           {o.input, o.organsSource, o.parts}, std::nullopt, joints);
-  if (bonesFault && sk && !o.pose.joints.empty())
+  PipelineOptions options = skeletal ? skeleton::skeletalPoseOptions(o.pose, o.poseSource, *sk, o.organs, joints)
+                                     : skeleton::skeletalPoseOptions(o.pose, o.poseSource, working, o.organs,
+                                                                     {o.input, o.organsSource, o.parts}, std::nullopt, joints);
+  if (bonesFault && !o.pose.joints.empty())
     *bonesFault = skeleton::bonesThroughEachOther(*sk, skeleton::posedJoints(*sk, o.pose.joints, o.poseSource), o.pose.joints,
                                                   o.maxBoneOverlapPercent);
   // Any pose on a grid whose organ table names bones: the body parts too, for
