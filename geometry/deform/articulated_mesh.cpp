@@ -408,6 +408,10 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
   const double clear2 = options.jointClearanceMm * options.jointClearanceMm;
   const LabelGrid& parts = skeleton.parts.parts;
   const bool scapula = options.movingScapulae;
+  const double shell = options.yieldingShellVoxels * g.spacing.maxCoeff();
+  const auto yields = [&](JointId joint) {
+    return std::find(options.yieldingShellJoints.begin(), options.yieldingShellJoints.end(), joint) != options.yieldingShellJoints.end();
+  };
   const std::vector<skeleton::Bone> boneOf = skeleton::boneOfLabels(organs, grid.maxLabel());
   const auto wholePart = [&](Part part) {
     return std::find(options.rigidWholeParts.begin(), options.rigidWholeParts.end(), part) != options.rigidWholeParts.end();
@@ -435,6 +439,12 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
             if (right || left) part = Part(dr <= dl ? kRightScapula : kLeftScapula);
           }
         }
+        if (part != Part::None && shell > 0.0)
+          for (const ArticularBody& b : out.bodies) {
+            if (b.shape != ArticularShape::Sphere || (part != b.owner && part != b.other) || !yields(b.joint)) continue;
+            const double d = (p - b.centre).norm();
+            if (d > b.radius && d < b.radius + shell) part = Part::None;
+          }
         bool resolved = part != Part::None && part != Part::Trunk && part != Part::Pelvis;
         if (part == Part::Trunk || part == Part::Pelvis)
           for (const skeleton::Joint& joint : skeleton.joints) resolved = resolved || (p - joint.centre).squaredNorm() < reach2;

@@ -110,6 +110,14 @@ struct ArticulatedMeshOptions {
   double bodyMarginVoxels = 0.5;   // a body stops this far (finest spacing) short of the other part's bone
   double minBodyRadiusVoxels = 2.0;  // a smaller body is not built (the joint is not cut)
   double attachmentHalfAngleDeg = 50.0;
+  // At these ball joints the bone of the two parts within
+  // yieldingShellVoxels (the grid's coarsest spacing) outside the body's
+  // sphere is soft tissue, not rigid: the staircases of the head's and the
+  // socket's surfaces cross as the joint turns, and a rigid shell there has
+  // nowhere to go. The shoulders by default (docs/POSES.md, "A yielding
+  // shell at the shoulders": the hips and the hinges measured worse with it).
+  std::vector<skeleton::JointId> yieldingShellJoints = {skeleton::JointId::RightShoulder, skeleton::JointId::LeftShoulder};
+  double yieldingShellVoxels = 1.0;
   // Limb cuts start this many joint radii (the humeral or femoral head's)
   // down the limb from its shoulder or hip (<= 0: no limb cuts).
   double limbCutMarginRadii = 1.5;

@@ -235,6 +235,17 @@ void ArticulatedPoser::gather(const InjectiveSolver& solver) {
   for (std::size_t i = 0; i < solved_.size(); ++i) positions_[std::size_t(solved_[i])] = current[i];
 }
 
+std::vector<double> ArticulatedPoser::boneLag(const InjectiveSolver& solver) const {
+  std::vector<double> lag(kSegmentCount + 1, 0.0);
+  const std::vector<Eigen::Vector3d>& current = solver.positions();
+  for (std::size_t c = 0; c < constrained_.size(); ++c) {
+    const auto i = std::size_t(constrained_[c]);
+    double& l = lag[std::size_t(mesh_.vertexPart[std::size_t(solved_[i])])];
+    l = std::max(l, (current[i] - constrainedTargets_[c]).norm());
+  }
+  return lag;
+}
+
 ArticulatedPoseReport ArticulatedPoser::pose(std::span<const Eigen::Isometry3d> motions) {
   const std::vector<Eigen::Isometry3d> given(motions.begin(), motions.end());
   return pose([&given](double fraction) {
@@ -271,6 +282,8 @@ ArticulatedPoseReport ArticulatedPoser::pose(const MotionPath& path) {
       report.iterations += r.iterations;
       report.minRelativeVolume = std::min(report.minRelativeVolume, r.minRelativeVolume);
       report.stepMinRelativeVolume.push_back(r.minRelativeVolume);
+      const std::vector<double> lag = boneLag(approach_);
+      report.stepBoneLagMm.push_back(*std::max_element(lag.begin(), lag.end()));
       ++report.steps;
     }
     // At the full pose the bones stiffen (their weight times 10, 100,
@@ -294,6 +307,7 @@ ArticulatedPoseReport ArticulatedPoser::pose(const MotionPath& path) {
     // else chased from where the approach left them (hard constraints); then
     // the tissue relaxes around them.
     targets(approach_, motions);
+    report.segmentLagMm = boneLag(approach_);
     std::vector<Eigen::Vector3d> placed = corrected(approach_.positions(), motions);
     for (std::size_t c = 0; c < constrained_.size(); ++c) placed[std::size_t(constrained_[c])] = constrainedTargets_[c];
     const std::vector<double> volumes = solver_.relativeVolumes(placed);

@@ -58,6 +58,13 @@ struct ArticulatedPoseReport {
   std::size_t bridgingTets = 0;
   double minRelativeVolume = 1.0;         // smallest det J over every step's iterates
   std::vector<double> stepMinRelativeVolume;  // per step
+  // Per step of the approach: the largest distance (mm) of a bone vertex
+  // from where its part's motion puts it at that step (the bones' lag).
+  std::vector<double> stepBoneLagMm;
+  // Per segment (index = skeleton::Part, then the scapulae): the largest
+  // distance (mm) of its bone vertices from their places at the full pose
+  // after the stiffened approach, before the last step puts them there.
+  std::vector<double> segmentLagMm;
   std::size_t invertedTets = 0;           // in the final positions (all tets)
   bool reachedTargets = false;            // the bones reached their motions
   double maxSlidingGapMm = 0.0;           // largest distance of a sliding vertex from its body's surface
@@ -104,6 +111,9 @@ private:
   std::vector<Eigen::Vector3d> corrected(const std::vector<Eigen::Vector3d>& current, std::span<const Eigen::Isometry3d> motions) const;
   void nearestParts();
   void gather(const InjectiveSolver& solver);
+  // Per segment: the largest distance of its bone vertices in `solver`'s
+  // positions from constrainedTargets_.
+  std::vector<double> boneLag(const InjectiveSolver& solver) const;
 
   const ArticulatedMesh& mesh_;
   ArticulatedPoseOptions options_;

@@ -90,6 +90,37 @@ TEST(ArticulatedMesh, BonesAndBodiesAreResolvedAndTheirVerticesRigid) {
 // Each scapula is its own segment; past 30 degrees of elevation it turns
 // upward by 0.4 of the further elevation, in the arm's plane, about its
 // acromion, and the arm keeps the orientation its joints give.
+// The bone of both parts in a shell just outside each shoulder's sphere is
+// soft tissue (the yielding shell, on by default): bone tets leave it.
+TEST(ArticulatedMesh, TheShouldersYieldingShellHoldsNoBoneTet) {
+  const Figure& f = figure();
+  ArticulatedMeshOptions options;
+  options.yieldingShellVoxels = 0.0;
+  const ArticulatedMesh rigid = buildArticulatedMesh(f.grid, f.organs, f.skeleton, options);
+  const double shell = f.grid.geometry().spacing.maxCoeff();
+  const auto boneTetsInShell = [&](const ArticulatedMesh& mesh) {
+    std::size_t n = 0;
+    for (const ArticularBody& b : mesh.bodies) {
+      if (b.joint != JointId::RightShoulder && b.joint != JointId::LeftShoulder) continue;
+      for (std::size_t t = 0; t < mesh.mesh.tetCount(); ++t) {
+        const std::int32_t tag = mesh.mesh.labels[t];
+        if (tag != kBoneTag + std::int32_t(b.owner) && tag != kBoneTag + std::int32_t(b.other)) continue;
+        Eigen::Vector3d c = Eigen::Vector3d::Zero();
+        for (const std::int32_t v : mesh.mesh.tets[t]) c += 0.25 * mesh.mesh.positions[std::size_t(v)];
+        const double d = (c - b.centre).norm();
+        n += d > b.radius + 0.25 * shell && d < b.radius + 0.75 * shell;
+      }
+    }
+    return n;
+  };
+  // The mesh resolves the shell to about a tet (the shell is one voxel
+  // thick, the tets three): a few bone tets of its boundary reach into it.
+  const std::size_t without = boneTetsInShell(rigid), with = boneTetsInShell(f.mesh);
+  EXPECT_GT(without, 10u);
+  EXPECT_LT(10 * with, without);
+  EXPECT_NO_THROW(rigid.mesh.validate("articulated mesh"));
+}
+
 TEST(ArticulatedMesh, TheScapulaFollowsItsShouldersRhythm) {
   const Figure& f = figure();
   EXPECT_EQ(f.mesh.rigidVertices[std::size_t(kRightScapula)], 0u);  // not by default

@@ -1,0 +1,163 @@
+// The articulated transfer mesh posed by a joint pose (not in ctest): the
+// figures of the hard postures in docs/BENCHMARKS.md ("The hard postures on
+// the articulated transfer mesh"). What `deform --articulated` runs before
+// the rasterization, with what the run's report leaves out: per step the
+// smallest det J and the bones' lag, per segment the lag after the
+// approach, and the inverted tets by nearest joint.
+//
+//   build/release/bench/articulated_pose_bench assets/icrp110_am.nii.gz
+//       assets/icrp110_am_organs.dat assets/poses/hard/am_phone_call_joints.json [options]
+//   build/release/bench/articulated_pose_bench --figure POSE [options]   # the synthetic figure (96)
+//
+// Options: --steps N (pose steps, default the poser's), --bone-weight W,
+// --max-iterations N (SLIM iterations per step), --volume-weight L (lambda),
+// --direct-limit N (unknowns up to which CHOLMOD factorizes every
+// iteration), --scapulae (moving
+// scapulae), --yielding-shell V (the yielding shell's thickness in voxels;
+// 0: none), --yielding-hips (the hips' shell too).
+// Prints a table, then one JSON line (prefix "json ") for scripts.
+
+#include "geometry/deform/articulated_mesh.h"
+#include "geometry/deform/articulated_pose.h"
+#include "geometry/deform/pose/pose.h"
+#include "geometry/error.h"
+#include "geometry/io/grid_io.h"
+#include "geometry/organ_table.h"
+#include "geometry/skeleton/skeleton.h"
+#include "geometry/synth.h"
+
+#include <nlohmann/json.hpp>
+
+#include <array>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <map>
+#include <string>
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+int usage() {
+  std::fprintf(stderr,
+               "usage: articulated_pose_bench GRID ORGANS POSE [--steps N] [--bone-weight W] [--max-iterations N] "
+               "[--volume-weight L] [--direct-limit N] [--scapulae] [--yielding-shell V] [--yielding-hips]\n"
+               "       articulated_pose_bench --figure POSE [options]\n");
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace vox;
+  std::vector<std::string> positional;
+  ArticulatedPoseOptions poseOptions;
+  ArticulatedMeshOptions meshOptions;
+  bool figure = false;
+  for (int a = 1; a < argc; ++a) {
+    const std::string arg = argv[a];
+    const auto value = [&]() -> std::string {
+      if (a + 1 >= argc) std::exit(usage());
+      return argv[++a];
+    };
+    if (arg == "--figure") figure = true;
+    else if (arg == "--steps") poseOptions.steps = std::stoi(value());
+    else if (arg == "--bone-weight") poseOptions.boneWeight = std::stod(value());
+    else if (arg == "--max-iterations") poseOptions.solve.maxIterations = std::stoi(value());
+    else if (arg == "--volume-weight") poseOptions.solve.volumeWeight = std::stod(value());
+    else if (arg == "--direct-limit") poseOptions.solve.directSolveLimit = std::stoll(value());
+    else if (arg == "--yielding-hips") {
+      meshOptions.yieldingShellJoints.push_back(skeleton::JointId::RightHip);
+      meshOptions.yieldingShellJoints.push_back(skeleton::JointId::LeftHip);
+    }
+    else if (arg == "--scapulae") meshOptions.movingScapulae = true;
+    else if (arg == "--yielding-shell") meshOptions.yieldingShellVoxels = std::stod(value());
+    else if (arg.starts_with("--")) return usage();
+    else positional.push_back(arg);
+  }
+  if (positional.size() != (figure ? 1u : 3u)) return usage();
+  try {
+    const auto t0 = Clock::now();
+    const LabelGrid grid = figure ? synthesize(SynthKind::SkeletonFigure, 96) : readGrid(positional[0]);
+    const OrganTable organs = figure ? synthOrganTable(SynthKind::SkeletonFigure) : OrganTable::read(positional[1]);
+    const std::string posePath = positional.back();
+    const Pose pose = readPose(posePath);
+    if (pose.joints.empty()) throw InputError(posePath, "the pose has no \"joints\"");
+    const skeleton::Skeleton sk = skeleton::buildSkeleton(
+        grid, organs, figure ? skeleton::SkeletonSources{"figure", "figure organs", "figure parts"} : skeleton::SkeletonSources{});
+    const std::vector<skeleton::Joint> joints = skeleton::posedJoints(sk, pose.joints, posePath);
+    const double skeletonSeconds = secondsSince(t0);
+
+    const auto t1 = Clock::now();
+    const ArticulatedMesh mesh = buildArticulatedMesh(grid, organs, sk, meshOptions);
+    const double meshSeconds = secondsSince(t1);
+    std::printf("mesh: %zu vertices, %zu tets, %zu bodies, built in %.1f s (skeleton %.1f s)\n", mesh.mesh.vertexCount(),
+                mesh.mesh.tetCount(), mesh.bodies.size(), meshSeconds, skeletonSeconds);
+
+    ArticulatedPoser poser(mesh, poseOptions);
+    const ArticulatedPoseReport r = poser.pose(jointMotionPath(sk, joints, pose.joints, mesh));
+    std::printf("pose: %d steps, %d iterations, %.1f s; solved %zu vertices, %zu tets\n", r.steps, r.iterations, r.seconds,
+                r.solvedVertices, r.solvedTets);
+    std::printf("step  min det J  bones' lag (mm)\n");
+    for (std::size_t s = 0; s < r.stepMinRelativeVolume.size(); ++s)
+      std::printf("%4zu  %9.4f  %s\n", s + 1, r.stepMinRelativeVolume[s],
+                  s < r.stepBoneLagMm.size() ? std::to_string(r.stepBoneLagMm[s]).c_str() : "(last step: hard)");
+    std::printf("lag after the approach (mm):");
+    nlohmann::json lag = nlohmann::json::object();
+    for (std::size_t p = 0; p < r.segmentLagMm.size(); ++p)
+      if (r.segmentLagMm[p] > 0.05) {
+        std::printf(" %s %.1f", segmentName(int(p)), r.segmentLagMm[p]);
+        lag[segmentName(int(p))] = r.segmentLagMm[p];
+      }
+    std::printf("\n");
+
+    // Inverted tets in the final positions, by the joint nearest their rest centroid.
+    const std::vector<Eigen::Vector3d>& posed = poser.positions();
+    // Where, in the nearest joint's frame (rest): in front of the joint's
+    // centre or behind it, and within 30 mm of it or farther.
+    std::map<std::string, std::size_t> byJoint;
+    std::map<std::string, std::array<std::size_t, 4>> where;  // front near, front far, back near, back far
+    for (const Tet& t : mesh.mesh.tets) {
+      if (signedVolume(posed, t) > 0.0 || sk.joints.empty()) continue;
+      Eigen::Vector3d c = Eigen::Vector3d::Zero();
+      for (const std::int32_t v : t) c += 0.25 * mesh.mesh.positions[std::size_t(v)];
+      std::size_t best = 0;
+      for (std::size_t j = 1; j < sk.joints.size(); ++j)
+        if ((sk.joints[j].centre - c).squaredNorm() < (sk.joints[best].centre - c).squaredNorm()) best = j;
+      const skeleton::Joint& joint = sk.joints[best];
+      const Eigen::Vector3d d = c - joint.centre;
+      ++byJoint[joint.kind().name];
+      ++where[joint.kind().name][(d.dot(joint.anterior) >= 0.0 ? 0 : 2) + (d.norm() >= 30.0 ? 1 : 0)];
+    }
+    std::printf("inverted tets: %zu (bones reached their motions: %s)\n", r.invertedTets, r.reachedTargets ? "yes" : "no");
+    for (const auto& [name, n] : byJoint) {
+      const auto& w = where[name];
+      std::printf("  %-16s %6zu: in front %zu within 30 mm, %zu beyond; behind %zu within 30 mm, %zu beyond\n", name.c_str(), n,
+                  w[0], w[1], w[2], w[3]);
+    }
+
+    nlohmann::json out = {{"pose", posePath},
+                          {"tets", mesh.mesh.tetCount()},
+                          {"mesh_seconds", meshSeconds},
+                          {"pose_seconds", r.seconds},
+                          {"steps", r.steps},
+                          {"iterations", r.iterations},
+                          {"inverted_tets", r.invertedTets},
+                          {"inverted_by_joint", byJoint},
+                          {"reached_targets", r.reachedTargets},
+                          {"min_relative_volume", r.minRelativeVolume},
+                          {"step_min_relative_volume", r.stepMinRelativeVolume},
+                          {"step_bone_lag_mm", r.stepBoneLagMm},
+                          {"segment_lag_mm", lag},
+                          {"max_sliding_gap_mm", r.maxSlidingGapMm}};
+    std::cout << "json " << out.dump() << std::endl;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "articulated_pose_bench: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
