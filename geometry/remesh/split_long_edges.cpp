@@ -117,13 +117,13 @@ std::size_t splitLongEdges(RemeshComplex& complex, const EdgeLengthBounds& bound
                            ") is still there after its split: its tets form more than one cycle (corrupt complex)");
     // The halves and the new edges at m may still be too long. A new edge
     // (m, w) is at most sqrt(3/4) |ab| long when (a, w) and (b, w) are at
-    // most |ab|, which they are when every edge above e_max longer than
-    // (a, b) has been split before it. Only an edge that could not be split
-    // (a contact, see splitChangesAContact) breaks that; splitting the
-    // triangles at such an edge would never end when it is near 2 e_max
-    // long or longer (each split adds a vertex nearer a fixed point, and the
-    // contact's end points gain tets without bound), so a new edge longer
-    // than that beside an edge above e_max is left to the next round.
+    // most |ab|; an edge above e_max longer than (a, b) has been split
+    // before it, unless it could not be split (a contact, see
+    // splitChangesAContact). Splitting the triangles at such an edge would
+    // never end when it is near 2 e_max long or longer (each split adds a
+    // vertex nearer a fixed point, and the contact's end points gain tets
+    // without bound), so a new edge longer than that beside an edge above
+    // e_max is left to the next round. Elsewhere nothing changes.
     complex.incidentTets(m, star);
     complex.starVertices(star, m, around);
     const Eigen::Vector3d pm = complex.position(m);
