@@ -60,6 +60,19 @@ bool splitChangesAContact(const RemeshComplex& complex, const EdgeRing& ring) {
   return std::adjacent_find(pinches.begin(), pinches.end()) != pinches.end();
 }
 
+namespace {
+
+// 3/4, and a margin for the rounding of a mid-point.
+constexpr double kNewEdgeBound = 0.75 * (1.0 + 1e-9);
+
+bool aboveEmax(const RemeshComplex& complex, const EdgeLengthBounds& bounds, std::int32_t x, std::int32_t y) {
+  const Eigen::Vector3d& px = complex.position(x);
+  const Eigen::Vector3d& py = complex.position(y);
+  return bounds.aboveEmax(px, py, (px - py).squaredNorm());
+}
+
+}  // namespace
+
 std::size_t splitLongEdges(RemeshComplex& complex, const EdgeLengthBounds& bounds, int threads) {
   // Longest first: the initial candidates sorted once (ties by vertex ids),
   // the edges of new vertices that are still too long in a heap.
@@ -77,9 +90,8 @@ std::size_t splitLongEdges(RemeshComplex& complex, const EdgeLengthBounds& bound
   auto later = [&](const WeightedEdge& x, const WeightedEdge& y) { return longer(y, x); };
   std::priority_queue<WeightedEdge, std::vector<WeightedEdge>, decltype(later)> queue(later);
   std::size_t next = 0, splits = 0;
-  std::vector<std::int32_t> star;
+  std::vector<std::int32_t> star, around;
   EdgeRing contactRing;
-  const std::int32_t dummy = complex.dummyVertex();
   while (next < edges.size() || !queue.empty()) {
     throwIfCancelled();  // a split of the whole complex runs for seconds
     WeightedEdge e;
@@ -103,15 +115,27 @@ std::size_t splitLongEdges(RemeshComplex& complex, const EdgeLengthBounds& bound
     if (complex.findEdgeTet(e.a, e.b) >= 0)
       throw RuntimeFailure("remesh: edge (" + std::to_string(e.a) + ", " + std::to_string(e.b) +
                            ") is still there after its split: its tets form more than one cycle (corrupt complex)");
-    // The halves and the new edges at m may still be too long.
+    // The halves and the new edges at m may still be too long. A new edge
+    // (m, w) is at most sqrt(3/4) |ab| long when (a, w) and (b, w) are at
+    // most |ab|; an edge above e_max longer than (a, b) has been split
+    // before it, unless it could not be split (a contact, see
+    // splitChangesAContact). Splitting the triangles at such an edge would
+    // never end when it is near 2 e_max long or longer (each split adds a
+    // vertex nearer a fixed point, and the contact's end points gain tets
+    // without bound), so a new edge longer than that beside an edge above
+    // e_max is left to the next round. Elsewhere nothing changes.
     complex.incidentTets(m, star);
+    complex.starVertices(star, m, around);
     const Eigen::Vector3d pm = complex.position(m);
-    for (std::int32_t q : star)
-      for (std::int32_t w : complex.tet(q)) {
-        if (w == m || w == dummy) continue;
-        const double l2 = (complex.position(w) - pm).squaredNorm();
-        if (bounds.aboveEmax(complex.position(w), pm, l2)) queue.push({std::min(m, w), std::max(m, w), l2});
-      }
+    for (std::int32_t w : around) {
+      const Eigen::Vector3d& pw = complex.position(w);
+      const double l2 = (pw - pm).squaredNorm();
+      if (!bounds.aboveEmax(pw, pm, l2)) continue;
+      if (l2 > kNewEdgeBound * e.length2 &&
+          (aboveEmax(complex, bounds, e.a, w) || aboveEmax(complex, bounds, e.b, w)))
+        continue;
+      queue.push({std::min(m, w), std::max(m, w), l2});
+    }
   }
   return splits;
 }

@@ -1,3 +1,4 @@
+#include "geometry/cancellation.h"
 #include "geometry/error.h"
 #include "geometry/remesh/collapse_short_edges.h"
 #include "geometry/remesh/mesh_topology.h"
@@ -13,6 +14,9 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
+#include <chrono>
+#include <thread>
 
 namespace vox::remesh {
 namespace {
@@ -183,6 +187,43 @@ TEST(SplitLongEdges, KeepsComplexValidAndTopology) {
   EXPECT_GT(complex.liveTetCount(), before);
   EXPECT_EQ(complex.checkConsistency(true), "");
   EXPECT_EQ(test::joinLines(compareTopology(computeGridTopology(grid), computeMeshTopology(complex.toTetMesh()))), "");
+}
+
+// Two tets touching along one edge 10 long, split towards l = 3 (e_max 4).
+// The contact edge may not be split, and every triangle at it keeps an edge
+// above e_max (its two other edges add up to more than 2 e_max): splitting
+// those triangles' edges again and again would add vertices without end,
+// each nearer a fixed point, and the contact's end points would gain tets
+// without bound (what stalled the whole AM taken from 8 mm to 4 mm).
+TEST(SplitLongEdges, EndBesideAContactEdgeTooLongToSplit) {
+  TetMesh mesh;
+  mesh.positions = {{0, 0, 0}, {0, 0, 10}, {8, 1, 5}, {1, 8, 5}, {-8, -1, 5}, {-1, -8, 5}};
+  mesh.tets = {{0, 1, 2, 3}, {0, 1, 4, 5}};
+  mesh.labels = {1, 2};
+  RemeshComplex complex(mesh);
+  ASSERT_TRUE(complex.isPinned(0) && complex.isPinned(1));
+  // Splits that never end run until cancelled.
+  std::atomic<bool> done = false;
+  std::thread watchdog([&] {
+    for (int i = 0; i < 300 && !done; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    if (!done) cancellationRequested() = true;
+  });
+  std::size_t splits = 0;
+  try {
+    splits = splitLongEdges(complex, EdgeLengthBounds::forTarget(3.0), 1);
+  } catch (const OperationCancelled&) {
+    ADD_FAILURE() << "the splits did not end within 30 s (" << complex.liveVertexCount() << " vertices)";
+  }
+  done = true;
+  watchdog.join();
+  cancellationRequested() = false;
+  // 80 splits: the tets' other edges, and the new ones that are shorter.
+  EXPECT_GT(splits, 0u);
+  EXPECT_LT(splits, 200u);
+  EXPECT_EQ(complex.checkConsistency(true), "");
+  EXPECT_GE(complex.findEdgeTet(0, 1), 0) << "the contact edge was split";
+  const TetMesh out = complex.toTetMesh();
+  EXPECT_EQ(test::joinLines(compareTopology(computeMeshTopology(mesh), computeMeshTopology(out))), "");
 }
 
 TEST(CollapseShortEdges, KeepsComplexValidAndTopology) {
