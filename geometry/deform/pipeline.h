@@ -20,7 +20,10 @@
 //  - sizing field F: a constant fraction of G's diagonal;
 //  - transfer mesh under F: from B, or, with separations, from S reduced to
 //    the separated groups (every other group merged into one) and cut
-//    between each separated pair inside its region;
+//    between each separated pair inside its region. It does not depend on
+//    the cage: it is built on a thread of its own meanwhile (CGAL's mesher
+//    holds one core; the cage's parallel loops take the others), with the
+//    same bytes as one built after it;
 //  - the frame deformer's precomputation (Green coordinates, ARAP and
 //    propagation factorizations) once the pose gives the handles. With
 //    separations, the TM vertices on a cut, and those of a separated group
@@ -130,7 +133,10 @@ struct PipelineStats {
   std::int64_t uncoveredVoxels = 0;        // working-grid foreground voxels in no TM tet
   std::vector<CutReport> cuts;             // one per separation, of the current TM
   // Pre-processing, then the latest "embedding" (setPose), "deformation"
-  // (deform) and "refinement" (refine).
+  // (deform) and "refinement" (refine). The transfer mesh is built on a
+  // thread of its own while the cage and the envelope are built: those
+  // stages overlap in time, and the CPU seconds of each (the process's)
+  // count the other's work during the overlap.
   std::vector<StageTime> stages;
 };
 
@@ -199,8 +205,6 @@ public:
   const PipelineStats& stats() const { return stats_; }
 
 private:
-  // The pre-processing's TM (from options_.prepared where it has it).
-  void buildTransferMesh();
   void precomputeFrame(bool withEnvelope);
   // One frame of the deformer at `fraction` of the pose (handles and rigid
   // bone motions).

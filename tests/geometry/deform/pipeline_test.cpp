@@ -11,6 +11,9 @@
 #include "geometry/deform/solve/deformation_metrics.h"
 #include "geometry/raster/rasterize.h"
 #include "geometry/io/grid_io.h"
+#include "geometry/cancellation.h"
+#include "geometry/error.h"
+#include "geometry/progress.h"
 #include "geometry/parallel.h"
 #include "geometry/raster/field_interpolation.h"
 #include "geometry/synth.h"
@@ -228,6 +231,38 @@ TEST(DeformationPipeline, TheSameBytesOnOneTwoAndSevenThreads) {
     EXPECT_EQ(one.inside, many.inside) << threads;
     EXPECT_EQ(one.refinement.stopReason, many.refinement.stopReason) << threads;
   }
+}
+
+// The transfer mesh is built on a thread of its own while the cage is
+// built: a cancellation while the mesher runs, and a pose that selects
+// nothing on the cage, stop the pipeline (the thread stopped and joined),
+// and the next pipeline builds as before.
+TEST(DeformationPipeline, CancellationAndAFailingPoseStopTheTransferMeshBuiltBesideTheCage) {
+  const LabelGrid grid = synthesize(SynthKind::StickFigure, 64);
+  PipelineOptions options;
+  options.envelope = false;
+  options.sizingFraction = kFineSizing;
+  setProgressSink([](std::string_view stage, double fraction) {
+    if (stage == "transfer mesh" && fraction > 0.0 && fraction < 1.0) cancellationRequested() = true;
+  });
+  EXPECT_THROW(DeformationPipeline(grid, options), OperationCancelled);
+  setProgressSink({});
+  cancellationRequested() = false;
+
+  PoseSelection nowhere;
+  nowhere.name = "nowhere";
+  nowhere.boxMin = grid.geometry().boxMax() + Eigen::Vector3d::Constant(1e3);
+  nowhere.boxMax = nowhere.boxMin + Eigen::Vector3d::Constant(10.0);
+  nowhere.fixed = true;
+  Pose pose;
+  pose.selections = {nowhere};
+  PipelineOptions failing = options;
+  failing.pose = pose;
+  EXPECT_THROW(DeformationPipeline(grid, failing), InputError);
+
+  const DeformationPipeline built(grid, options);
+  EXPECT_GT(built.transferMesh().tetCount(), 0u);
+  EXPECT_EQ(built.stats().stages.back().name, "transfer mesh");
 }
 
 TEST(DeformationPipeline, RefinementEmbedsItsMidpointsAsTheWholeEmbeddingWould) {

@@ -16,6 +16,7 @@
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/io/section_file.h"
+#include "geometry/parallel.h"
 #include "geometry/skeleton/label_groups.h"
 #include "geometry/synth.h"
 #include "tests/support/test_environment.h"
@@ -60,16 +61,18 @@ Pose jointPose(const std::string& joint, const std::string& dof, double degrees)
 
 // The figure prepared for a right-shoulder pose and for a pose without
 // separations.
+PrepareRequest prepareRequest() {
+  PrepareRequest request;
+  request.input = figure().grid;
+  request.organs = figure().organs;
+  request.organsSource = "figure.dat";
+  request.poses = {jointPose("right_shoulder", "abduction", 30), Pose{}};
+  request.poseSources = {"shoulder", "still"};
+  return request;
+}
+
 const PrepareResult& prepared() {
-  static const PrepareResult r = [] {
-    PrepareRequest request;
-    request.input = figure().grid;
-    request.organs = figure().organs;
-    request.organsSource = "figure.dat";
-    request.poses = {jointPose("right_shoulder", "abduction", 30), Pose{}};
-    request.poseSources = {"shoulder", "still"};
-    return prepareRestState(request);
-  }();
+  static const PrepareResult r = prepareRestState(prepareRequest());
   return r;
 }
 
@@ -107,6 +110,21 @@ TEST(PreparedState, HoldsTheSkeletonAndOneCageAndMeshPerSetOfSeparations) {
   EXPECT_EQ(s.cages[1].separations, "none");
   EXPECT_EQ(s.inputs.workingFactor, 1);
   EXPECT_FALSE(s.recording);
+}
+
+// The cage and the transfer mesh are built at once (pipeline.h): the file
+// holds the same bytes whichever finishes first, on one thread or several.
+TEST(PreparedState, TheSameBytesOnOneAndTwoThreadsAndRunAfterRun) {
+  const auto bytesOn = [](int threads) {
+    const ScopedWorkerThreads scope(threads);
+    PreparedState state = prepareRestState(prepareRequest()).state;
+    state.skeleton->seconds = 0.0;  // the time it took, the one field that differs
+    return state.bytes();
+  };
+  const std::string one = bytesOn(1);
+  EXPECT_TRUE(one == bytesOn(2));
+  EXPECT_TRUE(one == bytesOn(2));
+  EXPECT_TRUE(one == bytesOn(1));
 }
 
 TEST(PreparedState, ReadsBackBitForBit) {
