@@ -107,8 +107,13 @@ DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOp
   const std::vector<LimbSeparation>& separations = options_.cage.separations;
   const bool groupSelections = options_.pose && usesLabelGroups(*options_.pose);
   const bool withGroups = options_.organs || options_.bodyParts;
-  if (options_.bodyParts && options_.bodyParts->dims() != grid.dims())
-    throw InputError("body parts", "the body-part grid's dims differ from the grid's");
+  const auto checkBodyParts = [&] {
+    if (options_.bodyParts && options_.bodyParts->dims() != grid.dims())
+      throw InputError("body parts", "the body-part grid's dims differ from the grid's");
+  };
+  checkBodyParts();
+  if (options_.bodyPartsMeanwhile && (options_.bodyParts || !options_.organs || options_.groupsFromParts))
+    throw RuntimeFailure("DeformationPipeline: bodyPartsMeanwhile goes with an organ table, groupsFromParts false and no bodyParts");
   if (options_.pose && !options_.pose->joints.empty())
     throw InputError(options_.poseSource, "a pose with joints is compiled against the grid's skeleton first (voxmorph deform, render and view do)");
   // S from the body parts when given, else from the organ names.
@@ -173,6 +178,12 @@ DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOp
       built.time = timer.stop();
       return built;
     });
+  if (options_.bodyPartsMeanwhile) {
+    StageTimer timer("skeleton");
+    options_.bodyParts = options_.bodyPartsMeanwhile();
+    checkBodyParts();
+    stats_.stages.push_back(timer.stop());
+  }
   {
     StageTimer timer("cage");
     if (options_.userCage) {

@@ -54,6 +54,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <span>
@@ -76,6 +77,12 @@ struct PipelineOptions {
   // With bodyParts and an organ table: false takes the label groups from the
   // organ names all the same (a joint pose's "joint_options": {"groups": "organs"}).
   bool groupsFromParts = true;
+  // Instead of bodyParts, with an organ table and groupsFromParts false: the
+  // body parts computed while the transfer mesh is built (the label groups,
+  // and so the mesh, do not depend on them). Called once on the
+  // constructing thread once the mesh's thread has started, timed as the
+  // "skeleton" stage; what it returns takes the place of bodyParts.
+  std::function<std::optional<LabelGrid>()> bodyPartsMeanwhile;
   // With bodyParts and an organ table that names bones: the TM tets holding
   // each part's bone voxels move rigidly (rigid_bones.h). Off by default: on
   // the coarse TM the tets between two bones that turn against each other
