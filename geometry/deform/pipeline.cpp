@@ -172,9 +172,10 @@ DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOp
     meshThread.emplace([this, separated, &cuts] {
       StageTimer timer("transfer mesh");
       BuiltTransferMesh built;
-      built.mesh = vox::buildTransferMesh(separated ? meshGroups_ : groups_, sizing_, options_.transferMesh);
+      // The mesh's group grid has the foreground of groups_: its uncovered
+      // voxels are groups_'s.
+      built.mesh = vox::buildTransferMesh(separated ? meshGroups_ : groups_, sizing_, options_.transferMesh, {}, &built.uncoveredVoxels);
       for (const LimbSeparation& s : cuts) built.cuts.push_back(cutTransferMesh(built.mesh, s.groupA, s.groupB, s.region));
-      built.uncoveredVoxels = countUncoveredVoxels(built.mesh, groups_);
       built.time = timer.stop();
       return built;
     });

@@ -185,7 +185,7 @@ constexpr int kCoveragePasses = 3;
 }  // namespace
 
 TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, const TransferMeshOptions& options,
-                          const TransferMeshRelabel& relabel) {
+                          const TransferMeshRelabel& relabel, std::int64_t* uncoveredVoxels) {
   if (sizing.values.empty() || *std::min_element(sizing.values.begin(), sizing.values.end()) <= 0.0f)
     throw InputError("sizing field", "must be positive everywhere");
   reportProgress("transfer mesh", 0.0);
@@ -235,8 +235,9 @@ TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, con
     reportProgress("transfer mesh", 0.1);
     TetMesh mesh = restrictedDelaunayVolume(domain, criteria);
     orientPositively(mesh);
-    const std::vector<std::int64_t> uncovered = uncoveredVoxels(mesh, groups);
+    const std::vector<std::int64_t> uncovered = vox::uncoveredVoxels(mesh, groups);
     if (uncovered.empty() || pass == kCoveragePasses) {
+      if (uncoveredVoxels) *uncoveredVoxels = std::int64_t(uncovered.size());
       reportProgress("transfer mesh", 1.0);
       return mesh;
     }
