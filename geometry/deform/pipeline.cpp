@@ -167,9 +167,9 @@ DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOp
                      transferMeshOptionsKey(options_.transferMesh) + " cuts " + separationsKey(cuts),
                  separationsText(cuts, groups_.geometry())};
   const PreparedTransferMesh* storedMesh = options_.prepared ? options_.prepared->findMesh(meshQuery.key) : nullptr;
-  std::optional<TransferMeshThread> meshThread;
+  std::function<BuiltTransferMesh()> buildMesh;
   if (!storedMesh && (!options_.prepared || options_.prepared->recording))
-    meshThread.emplace([this, separated, &cuts] {
+    buildMesh = [this, separated, &cuts] {
       StageTimer timer("transfer mesh");
       BuiltTransferMesh built;
       // The mesh's group grid has the foreground of groups_: its uncovered
@@ -178,7 +178,9 @@ DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOp
       for (const LimbSeparation& s : cuts) built.cuts.push_back(cutTransferMesh(built.mesh, s.groupA, s.groupB, s.region));
       built.time = timer.stop();
       return built;
-    });
+    };
+  std::optional<TransferMeshThread> meshThread;
+  if (buildMesh && options_.concurrentTransferMesh) meshThread.emplace(buildMesh);
   if (options_.bodyPartsMeanwhile) {
     StageTimer timer("skeleton");
     options_.bodyParts = options_.bodyPartsMeanwhile();
@@ -243,8 +245,8 @@ DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOp
     stats_.uncoveredVoxels = storedMesh->uncoveredVoxels;
     stats_.stages.push_back(timer.stop());
   } else {
-    if (!meshThread) options_.prepared->refuseMesh(meshQuery);
-    BuiltTransferMesh built = meshThread->get();
+    if (!buildMesh) options_.prepared->refuseMesh(meshQuery);
+    BuiltTransferMesh built = meshThread ? meshThread->get() : buildMesh();
     transferMesh_ = std::move(built.mesh);
     stats_.cuts = std::move(built.cuts);
     stats_.uncoveredVoxels = built.uncoveredVoxels;

@@ -108,6 +108,12 @@ struct PipelineOptions {
   std::optional<TriMesh> userCage;
   bool envelope = true;
   EnvelopeOptions envelopeOptions;
+  // The transfer mesh built on a thread of its own while the body parts
+  // (bodyPartsMeanwhile), the cage and the envelope are built: the same
+  // bytes, sooner on two cores or more, but both stages' grids held at once.
+  // False: one after the other, for a run under a memory limit, whose
+  // working grid is sized by kPreprocessBytesPerVoxel.
+  bool concurrentTransferMesh = true;
   double sizingFraction = 0.05;  // initial F: this fraction of the working grid's diagonal
   TransferMeshOptions transferMesh;
   FrameDeformerOptions frame;

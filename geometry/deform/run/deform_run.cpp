@@ -215,6 +215,8 @@ PipelineOptions deformPipelineOptions(const DeformGridRequest& o, const LabelGri
     }
   }
   options.rigidBones = o.rigidBones;
+  // Under a memory limit the working grid is sized for one stage's grids at a time.
+  options.concurrentTransferMesh = o.maxMemoryMb <= 0;
   options.cage.dilationMm = o.dilationMm;
   options.cage.targetVertices = o.vertices;
   for (const LimbSeparation& s : o.extraSeparations) {

@@ -201,9 +201,10 @@ struct PipelineRun {
 
 // Envelope, cage, TM, embedding, one frame and the refinement on `threads`
 // threads.
-PipelineRun runOnThreads(const LabelGrid& grid, int threads) {
+PipelineRun runOnThreads(const LabelGrid& grid, int threads, bool concurrentTransferMesh = true) {
   const ScopedWorkerThreads scope(threads);
   PipelineOptions options;
+  options.concurrentTransferMesh = concurrentTransferMesh;
   options.sizingFraction = kFineSizing;
   options.pose = waistBend(grid.geometry());
   DeformationPipeline pipeline(grid, options);
@@ -217,12 +218,13 @@ PipelineRun runOnThreads(const LabelGrid& grid, int threads) {
   return run;
 }
 
-TEST(DeformationPipeline, TheSameBytesOnOneTwoAndSevenThreads) {
+TEST(DeformationPipeline, TheSameBytesOnOneTwoAndSevenThreadsWithTheTransferMeshBesideTheCageOrAfterIt) {
   const LabelGrid grid = synthesize(SynthKind::StickFigure, 64);
   const PipelineRun one = runOnThreads(grid, 1);
   ASSERT_EQ(one.refinement.kept, 1u) << one.refinement.stopReason;
-  for (const int threads : {2, 7}) {
-    const PipelineRun many = runOnThreads(grid, threads);
+  // The transfer mesh built beside the cage (the default) or after it.
+  for (const auto& [threads, concurrent] : {std::pair{2, true}, std::pair{7, true}, std::pair{2, false}}) {
+    const PipelineRun many = runOnThreads(grid, threads, concurrent);
     EXPECT_EQ(one.rest.positions, many.rest.positions) << threads;
     EXPECT_EQ(one.rest.tets, many.rest.tets) << threads;
     EXPECT_EQ(one.rest.labels, many.rest.labels) << threads;
