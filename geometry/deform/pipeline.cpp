@@ -32,12 +32,11 @@ namespace {
 constexpr Label kOtherGroups = Label(kLabelGroupCount + 1);
 
 // The pre-processing's transfer mesh as built: cut, its cut reports and the
-// working-grid voxels it leaves uncovered, and the stage's time.
+// working-grid voxels it leaves uncovered.
 struct BuiltTransferMesh {
   TetMesh mesh;
   std::vector<CutReport> cuts;
   std::int64_t uncoveredVoxels = 0;
-  StageTime time;
 };
 
 // The transfer mesh built on a thread of its own while the constructing
@@ -170,13 +169,11 @@ DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOp
   std::function<BuiltTransferMesh()> buildMesh;
   if (!storedMesh && (!options_.prepared || options_.prepared->recording))
     buildMesh = [this, separated, &cuts] {
-      StageTimer timer("transfer mesh");
       BuiltTransferMesh built;
       // The mesh's group grid has the foreground of groups_: its uncovered
       // voxels are groups_'s.
       built.mesh = vox::buildTransferMesh(separated ? meshGroups_ : groups_, sizing_, options_.transferMesh, {}, &built.uncoveredVoxels);
       for (const LimbSeparation& s : cuts) built.cuts.push_back(cutTransferMesh(built.mesh, s.groupA, s.groupB, s.region));
-      built.time = timer.stop();
       return built;
     };
   std::optional<TransferMeshThread> meshThread;
@@ -238,21 +235,20 @@ DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOp
   }
   if (options_.bodyParts && options_.organs && skeleton::namesBones(*options_.organs))
     boneKeys_ = boneKeyGrid(grid, *options_.organs, *options_.bodyParts);
+  StageTimer meshTimer("transfer mesh");
   if (storedMesh) {
-    StageTimer timer("transfer mesh");
     transferMesh_ = storedMesh->mesh;
     stats_.cuts = storedMesh->cutReports;
     stats_.uncoveredVoxels = storedMesh->uncoveredVoxels;
-    stats_.stages.push_back(timer.stop());
   } else {
     if (!buildMesh) options_.prepared->refuseMesh(meshQuery);
     BuiltTransferMesh built = meshThread ? meshThread->get() : buildMesh();
     transferMesh_ = std::move(built.mesh);
     stats_.cuts = std::move(built.cuts);
     stats_.uncoveredVoxels = built.uncoveredVoxels;
-    stats_.stages.push_back(std::move(built.time));
     if (options_.prepared) options_.prepared->meshes.push_back({meshQuery.key, meshQuery.cuts, transferMesh_, stats_.cuts, stats_.uncoveredVoxels});
   }
+  stats_.stages.push_back(meshTimer.stop());
   // The bone groups depend on the TM alone: once per TM, not per pose.
   rigidBones_ = boneKeys_.voxelCount() > 0 ? rigidBoneGroups(transferMesh_, boneKeys_, options_.rigidJointRings) : RigidBoneGroups{};
   if (options_.pose) setPose(*options_.pose, options_.poseSource);

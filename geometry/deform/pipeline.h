@@ -146,10 +146,12 @@ struct PipelineStats {
   std::int64_t uncoveredVoxels = 0;        // working-grid foreground voxels in no TM tet
   std::vector<CutReport> cuts;             // one per separation, of the current TM
   // Pre-processing, then the latest "embedding" (setPose), "deformation"
-  // (deform) and "refinement" (refine). The transfer mesh is built on a
-  // thread of its own while the cage and the envelope are built: those
-  // stages overlap in time, and the CPU seconds of each (the process's)
-  // count the other's work during the overlap.
+  // (deform) and "refinement" (refine). The stages follow one another on
+  // the constructing thread, so their times add up to the whole; with
+  // concurrentTransferMesh the transfer mesh is built meanwhile on its own
+  // thread, its stage is the wait for it once the body parts, cage and
+  // envelope are done, and their CPU seconds (the process's) count its work
+  // in the meantime.
   std::vector<StageTime> stages;
 };
 

@@ -25,6 +25,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <iostream>
 #include <numbers>
@@ -262,9 +263,15 @@ TEST(DeformationPipeline, CancellationAndAFailingPoseStopTheTransferMeshBuiltBes
   failing.pose = pose;
   EXPECT_THROW(DeformationPipeline(grid, failing), InputError);
 
+  // Its stages follow one another: their times add up to no more than the whole.
+  const auto start = std::chrono::steady_clock::now();
   const DeformationPipeline built(grid, options);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   EXPECT_GT(built.transferMesh().tetCount(), 0u);
   EXPECT_EQ(built.stats().stages.back().name, "transfer mesh");
+  double stages = 0.0;
+  for (const StageTime& t : built.stats().stages) stages += t.seconds;
+  EXPECT_LE(stages, wall);
 }
 
 TEST(DeformationPipeline, RefinementEmbedsItsMidpointsAsTheWholeEmbeddingWould) {
