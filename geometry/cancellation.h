@@ -19,7 +19,31 @@ public:
 // unwound (work started meanwhile stops too).
 std::atomic<bool>& cancellationRequested();
 
-// Throws OperationCancelled while cancellation is requested.
+// Throws OperationCancelled while cancellation is requested, or while the
+// flag of a ScopedCancellation on the calling thread is set.
 void throwIfCancelled();
+
+// The flag that stops the calling thread's work: a ScopedCancellation's
+// while one lives on this thread, else the process-wide one. CGAL's mesher,
+// which polls a single flag, polls this one.
+std::atomic<bool>& cancellationFlag();
+
+// A stop request for the work of one thread (a stage built on a thread of
+// its own beside another, stopped when the other fails): while it lives,
+// throwIfCancelled on the constructing thread throws once `flag` is set, as
+// well as on the process-wide request, and cancellationFlag() is `flag`.
+// Whoever owns `flag` sets it on the process-wide request too (the mesher
+// polls `flag` alone). The parallel loop carries it to its workers. Scopes
+// nest; the destructor restores the outer one.
+class ScopedCancellation {
+public:
+  explicit ScopedCancellation(std::atomic<bool>& flag);
+  ~ScopedCancellation();
+  ScopedCancellation(const ScopedCancellation&) = delete;
+  ScopedCancellation& operator=(const ScopedCancellation&) = delete;
+
+private:
+  std::atomic<bool>* outer_;
+};
 
 }  // namespace vox

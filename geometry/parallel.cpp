@@ -102,7 +102,10 @@ WorkerPool& pool() {
 void runParts(int parts, const std::function<void(int)>& part, std::atomic<bool>& failed) {
   std::exception_ptr error;
   std::mutex errorMutex;
+  // The workers stop where the caller would (a ScopedCancellation's flag).
+  std::atomic<bool>& stop = cancellationFlag();
   const std::function<void(int)> guarded = [&](int k) {
+    const ScopedCancellation scope(stop);
     try {
       part(k);
     } catch (...) {

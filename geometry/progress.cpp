@@ -9,6 +9,7 @@ namespace vox {
 namespace {
 std::mutex gMutex;
 ProgressSink gSink;
+thread_local std::atomic<bool>* tStop = nullptr;  // a ScopedCancellation's flag (null: none)
 }  // namespace
 
 void setProgressSink(ProgressSink sink) {
@@ -22,8 +23,15 @@ std::atomic<bool>& cancellationRequested() {
 }
 
 void throwIfCancelled() {
-  if (cancellationRequested().load(std::memory_order_relaxed)) throw OperationCancelled();
+  if (cancellationRequested().load(std::memory_order_relaxed) || (tStop && tStop->load(std::memory_order_relaxed)))
+    throw OperationCancelled();
 }
+
+std::atomic<bool>& cancellationFlag() { return tStop ? *tStop : cancellationRequested(); }
+
+ScopedCancellation::ScopedCancellation(std::atomic<bool>& flag) : outer_(tStop) { tStop = &flag; }
+
+ScopedCancellation::~ScopedCancellation() { tStop = outer_; }
 
 void reportProgress(std::string_view stage, double fraction) {
   throwIfCancelled();

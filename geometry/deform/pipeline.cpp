@@ -6,6 +6,7 @@
 #include "geometry/skeleton/label_groups.h"
 #include "geometry/raster/out_of_core.h"
 #include "geometry/deform/cage/surface_checks.h"
+#include "geometry/cancellation.h"
 #include "geometry/error.h"
 #include "geometry/label_stats.h"
 #include "geometry/parallel.h"
@@ -13,7 +14,11 @@
 #include "geometry/skeleton/bones.h"
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
+#include <functional>
+#include <future>
 #include <limits>
 #include <numeric>
 #include <set>
@@ -25,6 +30,50 @@ namespace {
 // Label of the groups that no separation names, in the TM's group grid: one
 // material, so the mesher does not resolve interfaces nobody cuts.
 constexpr Label kOtherGroups = Label(kLabelGroupCount + 1);
+
+// The pre-processing's transfer mesh as built: cut, its cut reports and the
+// working-grid voxels it leaves uncovered.
+struct BuiltTransferMesh {
+  TetMesh mesh;
+  std::vector<CutReport> cuts;
+  std::int64_t uncoveredVoxels = 0;
+};
+
+// The transfer mesh built on a thread of its own while the constructing
+// thread builds the cage and the envelope: it depends on the label groups
+// and F alone, and CGAL's mesher refines it on one core, so the cage's
+// parallel loops have the other cores meanwhile. The thread counts its
+// loops' threads as the constructing thread does (the same bytes either
+// way), and stops when the pipeline fails (the destructor) or the process
+// is cancelled while the pipeline waits for it.
+class TransferMeshThread {
+public:
+  explicit TransferMeshThread(std::function<BuiltTransferMesh()> build) {
+    result_ = std::async(std::launch::async, [this, threads = workerThreads(0), build = std::move(build)] {
+      const ScopedWorkerThreads scope(threads);
+      const ScopedCancellation cancel(stop_);
+      return build();
+    });
+  }
+  ~TransferMeshThread() {
+    stop_ = true;
+    if (result_.valid()) result_.wait();
+  }
+  TransferMeshThread(const TransferMeshThread&) = delete;
+  TransferMeshThread& operator=(const TransferMeshThread&) = delete;
+
+  // Waits for the mesh (rethrows the thread's exception), passing the
+  // process's cancellation on to the thread's flag.
+  BuiltTransferMesh get() {
+    while (result_.wait_for(std::chrono::milliseconds(20)) != std::future_status::ready)
+      if (cancellationRequested()) stop_ = true;
+    return result_.get();
+  }
+
+private:
+  std::atomic<bool> stop_{false};
+  std::future<BuiltTransferMesh> result_;
+};
 
 }  // namespace
 
@@ -57,8 +106,13 @@ DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOp
   const std::vector<LimbSeparation>& separations = options_.cage.separations;
   const bool groupSelections = options_.pose && usesLabelGroups(*options_.pose);
   const bool withGroups = options_.organs || options_.bodyParts;
-  if (options_.bodyParts && options_.bodyParts->dims() != grid.dims())
-    throw InputError("body parts", "the body-part grid's dims differ from the grid's");
+  const auto checkBodyParts = [&] {
+    if (options_.bodyParts && options_.bodyParts->dims() != grid.dims())
+      throw InputError("body parts", "the body-part grid's dims differ from the grid's");
+  };
+  checkBodyParts();
+  if (options_.bodyPartsMeanwhile && (options_.bodyParts || !options_.organs || options_.groupsFromParts))
+    throw RuntimeFailure("DeformationPipeline: bodyPartsMeanwhile goes with an organ table, groupsFromParts false and no bodyParts");
   if (options_.pose && !options_.pose->joints.empty())
     throw InputError(options_.poseSource, "a pose with joints is compiled against the grid's skeleton first (voxmorph deform, render and view do)");
   // S from the body parts when given, else from the organ names.
@@ -97,6 +151,37 @@ DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOp
                      : options_.bodyParts && (options_.groupsFromParts || !options_.organs) ? "the label groups of the body parts"
                                                                                               : "the label groups of the organ names";
     }
+    stats_.stages.push_back(timer.stop());
+  }
+  // The transfer mesh first, on its own thread (TransferMeshThread), from
+  // options_.prepared where it holds it; refused, where it lacks it, only
+  // once the cage and envelope have been taken, so the message names the
+  // first piece missing.
+  sizing_ = defaultSizingField(groups_.geometry(), options_.sizingFraction);
+  const bool separated = !separations.empty();
+  const std::vector<LimbSeparation>& cuts = options_.cuts ? *options_.cuts : separations;
+  PreparedMeshQuery meshQuery;
+  if (options_.prepared)
+    meshQuery = {(separated ? gridDigest(meshGroups_) : groupsDigest_) + " " + groupsDigest_ + " " + gridDigest(sizing_) + " " +
+                     transferMeshOptionsKey(options_.transferMesh) + " cuts " + separationsKey(cuts),
+                 separationsText(cuts, groups_.geometry())};
+  const PreparedTransferMesh* storedMesh = options_.prepared ? options_.prepared->findMesh(meshQuery.key) : nullptr;
+  std::function<BuiltTransferMesh()> buildMesh;
+  if (!storedMesh && (!options_.prepared || options_.prepared->recording))
+    buildMesh = [this, separated, &cuts] {
+      BuiltTransferMesh built;
+      // The mesh's group grid has the foreground of groups_: its uncovered
+      // voxels are groups_'s.
+      built.mesh = vox::buildTransferMesh(separated ? meshGroups_ : groups_, sizing_, options_.transferMesh, {}, &built.uncoveredVoxels);
+      for (const LimbSeparation& s : cuts) built.cuts.push_back(cutTransferMesh(built.mesh, s.groupA, s.groupB, s.region));
+      return built;
+    };
+  std::optional<TransferMeshThread> meshThread;
+  if (buildMesh && options_.concurrentTransferMesh) meshThread.emplace(buildMesh);
+  if (options_.bodyPartsMeanwhile) {
+    StageTimer timer("skeleton");
+    options_.bodyParts = options_.bodyPartsMeanwhile();
+    checkBodyParts();
     stats_.stages.push_back(timer.stop());
   }
   {
@@ -150,38 +235,23 @@ DeformationPipeline::DeformationPipeline(const LabelGrid& grid, const PipelineOp
   }
   if (options_.bodyParts && options_.organs && skeleton::namesBones(*options_.organs))
     boneKeys_ = boneKeyGrid(grid, *options_.organs, *options_.bodyParts);
-  sizing_ = defaultSizingField(groups_.geometry(), options_.sizingFraction);
-  {
-    StageTimer timer("transfer mesh");
-    buildTransferMesh();
-    stats_.stages.push_back(timer.stop());
-  }
-  if (options_.pose) setPose(*options_.pose, options_.poseSource);
-}
-
-void DeformationPipeline::buildTransferMesh() {
-  const bool separated = !options_.cage.separations.empty();
-  const std::vector<LimbSeparation>& cuts = options_.cuts ? *options_.cuts : options_.cage.separations;
-  PreparedState* prepared = options_.prepared.get();
-  PreparedMeshQuery query;
-  if (prepared)
-    query = {(separated ? gridDigest(meshGroups_) : groupsDigest_) + " " + groupsDigest_ + " " + gridDigest(sizing_) + " " +
-                 transferMeshOptionsKey(options_.transferMesh) + " cuts " + separationsKey(cuts),
-             separationsText(cuts, groups_.geometry())};
-  if (const PreparedTransferMesh* stored = prepared ? prepared->findMesh(query.key) : nullptr) {
-    transferMesh_ = stored->mesh;
-    stats_.cuts = stored->cutReports;
-    stats_.uncoveredVoxels = stored->uncoveredVoxels;
+  StageTimer meshTimer("transfer mesh");
+  if (storedMesh) {
+    transferMesh_ = storedMesh->mesh;
+    stats_.cuts = storedMesh->cutReports;
+    stats_.uncoveredVoxels = storedMesh->uncoveredVoxels;
   } else {
-    if (prepared && !prepared->recording) prepared->refuseMesh(query);
-    transferMesh_ = vox::buildTransferMesh(separated ? meshGroups_ : groups_, sizing_, options_.transferMesh);
-    stats_.cuts.clear();
-    for (const LimbSeparation& s : cuts) stats_.cuts.push_back(cutTransferMesh(transferMesh_, s.groupA, s.groupB, s.region));
-    stats_.uncoveredVoxels = countUncoveredVoxels(transferMesh_, groups_);
-    if (prepared) prepared->meshes.push_back({query.key, query.cuts, transferMesh_, stats_.cuts, stats_.uncoveredVoxels});
+    if (!buildMesh) options_.prepared->refuseMesh(meshQuery);
+    BuiltTransferMesh built = meshThread ? meshThread->get() : buildMesh();
+    transferMesh_ = std::move(built.mesh);
+    stats_.cuts = std::move(built.cuts);
+    stats_.uncoveredVoxels = built.uncoveredVoxels;
+    if (options_.prepared) options_.prepared->meshes.push_back({meshQuery.key, meshQuery.cuts, transferMesh_, stats_.cuts, stats_.uncoveredVoxels});
   }
+  stats_.stages.push_back(meshTimer.stop());
   // The bone groups depend on the TM alone: once per TM, not per pose.
   rigidBones_ = boneKeys_.voxelCount() > 0 ? rigidBoneGroups(transferMesh_, boneKeys_, options_.rigidJointRings) : RigidBoneGroups{};
+  if (options_.pose) setPose(*options_.pose, options_.poseSource);
 }
 
 void DeformationPipeline::recordStage(StageTime time) {

@@ -20,7 +20,10 @@
 //  - sizing field F: a constant fraction of G's diagonal;
 //  - transfer mesh under F: from B, or, with separations, from S reduced to
 //    the separated groups (every other group merged into one) and cut
-//    between each separated pair inside its region;
+//    between each separated pair inside its region. It does not depend on
+//    the cage: it is built on a thread of its own meanwhile (CGAL's mesher
+//    holds one core; the cage's parallel loops take the others), with the
+//    same bytes as one built after it;
 //  - the frame deformer's precomputation (Green coordinates, ARAP and
 //    propagation factorizations) once the pose gives the handles. With
 //    separations, the TM vertices on a cut, and those of a separated group
@@ -51,6 +54,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <span>
@@ -73,6 +77,12 @@ struct PipelineOptions {
   // With bodyParts and an organ table: false takes the label groups from the
   // organ names all the same (a joint pose's "joint_options": {"groups": "organs"}).
   bool groupsFromParts = true;
+  // Instead of bodyParts, with an organ table and groupsFromParts false: the
+  // body parts computed while the transfer mesh is built (the label groups,
+  // and so the mesh, do not depend on them). Called once on the
+  // constructing thread once the mesh's thread has started, timed as the
+  // "skeleton" stage; what it returns takes the place of bodyParts.
+  std::function<std::optional<LabelGrid>()> bodyPartsMeanwhile;
   // With bodyParts and an organ table that names bones: the TM tets holding
   // each part's bone voxels move rigidly (rigid_bones.h). Off by default: on
   // the coarse TM the tets between two bones that turn against each other
@@ -98,6 +108,12 @@ struct PipelineOptions {
   std::optional<TriMesh> userCage;
   bool envelope = true;
   EnvelopeOptions envelopeOptions;
+  // The transfer mesh built on a thread of its own while the body parts
+  // (bodyPartsMeanwhile), the cage and the envelope are built: the same
+  // bytes, sooner on two cores or more, but both stages' grids held at once.
+  // False: one after the other, for a run under a memory limit, whose
+  // working grid is sized by kPreprocessBytesPerVoxel.
+  bool concurrentTransferMesh = true;
   double sizingFraction = 0.05;  // initial F: this fraction of the working grid's diagonal
   TransferMeshOptions transferMesh;
   FrameDeformerOptions frame;
@@ -130,7 +146,12 @@ struct PipelineStats {
   std::int64_t uncoveredVoxels = 0;        // working-grid foreground voxels in no TM tet
   std::vector<CutReport> cuts;             // one per separation, of the current TM
   // Pre-processing, then the latest "embedding" (setPose), "deformation"
-  // (deform) and "refinement" (refine).
+  // (deform) and "refinement" (refine). The stages follow one another on
+  // the constructing thread, so their times add up to the whole; with
+  // concurrentTransferMesh the transfer mesh is built meanwhile on its own
+  // thread, its stage is the wait for it once the body parts, cage and
+  // envelope are done, and their CPU seconds (the process's) count its work
+  // in the meantime.
   std::vector<StageTime> stages;
 };
 
@@ -199,8 +220,6 @@ public:
   const PipelineStats& stats() const { return stats_; }
 
 private:
-  // The pre-processing's TM (from options_.prepared where it has it).
-  void buildTransferMesh();
   void precomputeFrame(bool withEnvelope);
   // One frame of the deformer at `fraction` of the pose (handles and rigid
   // bone motions).

@@ -43,29 +43,42 @@ public:
   TransferMeshDomain(const ScalarGrid& distance, const LabelGrid& nearestGroup, double offsetMm)
       : distance_(distance), groups_(nearestGroup), offset_(offsetMm) {}
 
-  // (Re)builds the table of cells from the distance field as it is now.
-  void classifyCells() {
+  // (Re)builds the table's cells whose lowest corner lies in [lo, hi]
+  // (voxel indices, clamped to the cells) from the distance field as it is
+  // now; the first call builds the whole table.
+  void classifyCells(Index3 lo, Index3 hi) {
     const GridGeometry& g = groups_.geometry();
-    cells_.assign(std::size_t(g.voxelCount()), kMixed);
+    if (cells_.empty()) {
+      cells_.assign(std::size_t(g.voxelCount()), kMixed);
+      lo = {0, 0, 0};
+      hi = {g.dims[0], g.dims[1], g.dims[2]};
+    }
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::max<std::int64_t>(lo[a], 0);
+      hi[a] = std::min<std::int64_t>(hi[a], g.dims[a] - 2);
+    }
+    if (lo[0] > hi[0] || lo[1] > hi[1] || lo[2] > hi[2]) return;
     const Label* groups = groups_.data();
     const std::array<std::int64_t, 8> offsets = cornerOffsets(g);
-    parallelRanges(g.dims[2] - 1, workerThreads(0), [&](std::int64_t k0, std::int64_t k1) {
-      for (std::int64_t k = k0; k < k1; ++k) {
+    parallelRanges(hi[2] - lo[2] + 1, workerThreads(0), [&](std::int64_t k0, std::int64_t k1) {
+      for (std::int64_t k = lo[2] + k0; k < lo[2] + k1; ++k) {
         throwIfCancelled();
-        for (std::int64_t j = 0; j + 1 < g.dims[1]; ++j)
-          for (std::int64_t i = 0; i + 1 < g.dims[0]; ++i) {
+        for (std::int64_t j = lo[1]; j <= hi[1]; ++j)
+          for (std::int64_t i = lo[0]; i <= hi[0]; ++i) {
             const std::int64_t base = g.index(i, j, k);
-            double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+            double low = std::numeric_limits<double>::infinity(), high = -low;
             bool oneGroup = true;
             for (const std::int64_t o : offsets) {
               const double d = distance_.values[std::size_t(base + o)];
-              lo = std::min(lo, d);
-              hi = std::max(hi, d);
+              low = std::min(low, d);
+              high = std::max(high, d);
               oneGroup = oneGroup && groups[base + o] == groups[base];
             }
-            const double margin = 1e-6 * std::max({std::abs(lo), std::abs(hi), std::abs(offset_)});
-            if (lo > offset_ + margin) cells_[std::size_t(base)] = 0;
-            else if (hi < offset_ - margin && oneGroup && groups[base] < kMixed) cells_[std::size_t(base)] = std::uint8_t(groups[base]);
+            const double margin = 1e-6 * std::max({std::abs(low), std::abs(high), std::abs(offset_)});
+            std::uint8_t cell = kMixed;
+            if (low > offset_ + margin) cell = 0;
+            else if (high < offset_ - margin && oneGroup && groups[base] < kMixed) cell = std::uint8_t(groups[base]);
+            cells_[std::size_t(base)] = cell;
           }
       }
     }, 8);
@@ -185,7 +198,7 @@ constexpr int kCoveragePasses = 3;
 }  // namespace
 
 TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, const TransferMeshOptions& options,
-                          const TransferMeshRelabel& relabel) {
+                          const TransferMeshRelabel& relabel, std::int64_t* uncoveredVoxels) {
   if (sizing.values.empty() || *std::min_element(sizing.values.begin(), sizing.values.end()) <= 0.0f)
     throw InputError("sizing field", "must be positive everywhere");
   reportProgress("transfer mesh", 0.0);
@@ -223,20 +236,31 @@ TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, con
   criteria.sizing = &sizing;
 
   const double radius = 4.0 * g.spacing.maxCoeff();
+  // The voxels whose distance the last pass lowered (all of them at first):
+  // a cell's label reads its 8 corners, a voxel centre's the cell it falls
+  // in (its own or, rounded down, the one below), so the cells and centres
+  // within two voxels of them are labelled again, the rest keep theirs.
+  Index3 changedLo{0, 0, 0}, changedHi{padded.dims[0] - 1, padded.dims[1] - 1, padded.dims[2] - 1};
   for (int pass = 0;; ++pass) {
-    domainLabel.classifyCells();
-    parallelRanges(padded.dims[2], workerThreads(0), [&](std::int64_t k0, std::int64_t k1) {
-      for (std::int64_t k = k0; k < k1; ++k) {
+    Index3 lo, hi;
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::max<std::int64_t>(0, changedLo[a] - 2);
+      hi[a] = std::min<std::int64_t>(padded.dims[a] - 1, changedHi[a] + 2);
+    }
+    domainLabel.classifyCells(lo, hi);
+    parallelRanges(hi[2] - lo[2] + 1, workerThreads(0), [&](std::int64_t k0, std::int64_t k1) {
+      for (std::int64_t k = lo[2] + k0; k < lo[2] + k1; ++k) {
         throwIfCancelled();
-        for (std::int64_t j = 0; j < padded.dims[1]; ++j)
-          for (std::int64_t i = 0; i < padded.dims[0]; ++i) atCentres.at(i, j, k) = Label(label(padded.voxelCenter(i, j, k)));
+        for (std::int64_t j = lo[1]; j <= hi[1]; ++j)
+          for (std::int64_t i = lo[0]; i <= hi[0]; ++i) atCentres.at(i, j, k) = Label(label(padded.voxelCenter(i, j, k)));
       }
     }, 8);
     reportProgress("transfer mesh", 0.1);
     TetMesh mesh = restrictedDelaunayVolume(domain, criteria);
     orientPositively(mesh);
-    const std::vector<std::int64_t> uncovered = uncoveredVoxels(mesh, groups);
+    const std::vector<std::int64_t> uncovered = vox::uncoveredVoxels(mesh, groups);
     if (uncovered.empty() || pass == kCoveragePasses) {
+      if (uncoveredVoxels) *uncoveredVoxels = std::int64_t(uncovered.size());
       reportProgress("transfer mesh", 1.0);
       return mesh;
     }
@@ -244,11 +268,17 @@ TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, con
     // uncovered centre (the largest bump where they overlap).
     ScalarGrid bump(padded, 0.0f);
     const Index3 reach = padForDistance(padded, radius, 0);
+    changedLo = {padded.dims[0], padded.dims[1], padded.dims[2]};
+    changedHi = {-1, -1, -1};
     for (const std::int64_t u : uncovered) {
       const Index3 c = g.ijk(u);
       const Eigen::Vector3d centre = g.voxelCenter(c[0], c[1], c[2]);
       Index3 pc;
       padded.voxelAt(centre, pc);
+      for (int a = 0; a < 3; ++a) {
+        changedLo[a] = std::min(changedLo[a], std::max<std::int64_t>(0, pc[a] - reach[a]));
+        changedHi[a] = std::max(changedHi[a], std::min(padded.dims[a] - 1, pc[a] + reach[a]));
+      }
       for (std::int64_t k = std::max<std::int64_t>(0, pc[2] - reach[2]); k <= std::min(padded.dims[2] - 1, pc[2] + reach[2]); ++k)
         for (std::int64_t j = std::max<std::int64_t>(0, pc[1] - reach[1]); j <= std::min(padded.dims[1] - 1, pc[1] + reach[1]); ++j)
           for (std::int64_t i = std::max<std::int64_t>(0, pc[0] - reach[0]); i <= std::min(padded.dims[0] - 1, pc[0] + reach[0]); ++i) {

@@ -46,9 +46,12 @@ ScalarGrid defaultSizingField(const GridGeometry& geometry, double fraction = 0.
 // label the mesher resolves there (> 0): analytic interfaces, such as a
 // joint's articular sphere, that the grid's voxels would only staircase;
 // it is called from the parallel loop's threads at once.
+// `uncoveredVoxels`, when given, receives countUncoveredVoxels(mesh, groups),
+// which the coverage repair has counted already (cutTransferMesh leaves it
+// unchanged: it copies positions).
 using TransferMeshRelabel = std::function<int(const Eigen::Vector3d& p, int group)>;
 TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, const TransferMeshOptions& options = {},
-                          const TransferMeshRelabel& relabel = {});
+                          const TransferMeshRelabel& relabel = {}, std::int64_t* uncoveredVoxels = nullptr);
 
 // Foreground voxels (label != 0) of `grid` whose centres lie in no tet.
 std::int64_t countUncoveredVoxels(const TetMesh& mesh, const LabelGrid& grid);

@@ -1,5 +1,7 @@
 #include "geometry/parallel.h"
 
+#include "geometry/cancellation.h"
+
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -43,6 +45,55 @@ TEST(Parallel, RangesFollowTheScopedCount) {
   std::atomic<std::int64_t> sum{0};
   parallelFor(1000, 0, [&](std::int64_t i) { sum += i; });
   EXPECT_EQ(sum.load(), 999 * 1000 / 2);
+}
+
+TEST(Parallel, AScopedCancellationStopsItsThreadAndTheLoopsItStarts) {
+  std::atomic<bool> stop{false};
+  const ScopedCancellation scope(stop);
+  EXPECT_EQ(&cancellationFlag(), &stop);
+  EXPECT_NO_THROW(throwIfCancelled());
+  // Every part of a loop, on the caller or a worker, stops at the caller's flag.
+  std::mutex mutex;
+  std::set<std::atomic<bool>*> flags;
+  const ScopedWorkerThreads four(4);
+  parallelRanges(4, workerThreads(0), [&](std::int64_t, std::int64_t) {
+    std::lock_guard lock(mutex);
+    flags.insert(&cancellationFlag());
+  }, 1);
+  EXPECT_EQ(flags, std::set<std::atomic<bool>*>{&stop});
+  stop = true;
+  EXPECT_THROW(throwIfCancelled(), OperationCancelled);
+  std::atomic<std::int64_t> done{0};
+  EXPECT_THROW(parallelFor(1000, 0, [&](std::int64_t) { ++done; }), OperationCancelled);
+  EXPECT_EQ(done.load(), 0);
+  // Another thread, and the process, go on.
+  bool otherThrew = true;
+  std::atomic<bool>* otherFlag = nullptr;
+  std::thread([&] {
+    otherFlag = &cancellationFlag();
+    try {
+      throwIfCancelled();
+      otherThrew = false;
+    } catch (const OperationCancelled&) {
+    }
+  }).join();
+  EXPECT_FALSE(otherThrew);
+  EXPECT_EQ(otherFlag, &cancellationRequested());
+  EXPECT_FALSE(cancellationRequested().load());
+}
+
+TEST(Parallel, AScopedCancellationRestoresTheOuterFlag) {
+  std::atomic<bool> outer{false}, inner{true};
+  {
+    const ScopedCancellation a(outer);
+    {
+      const ScopedCancellation b(inner);
+      EXPECT_THROW(throwIfCancelled(), OperationCancelled);
+    }
+    EXPECT_EQ(&cancellationFlag(), &outer);
+    EXPECT_NO_THROW(throwIfCancelled());
+  }
+  EXPECT_EQ(&cancellationFlag(), &cancellationRequested());
 }
 
 }  // namespace

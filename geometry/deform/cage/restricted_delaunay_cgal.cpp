@@ -143,9 +143,10 @@ int vertexIndex(std::unordered_map<VertexHandle, int>& index, std::vector<Eigen:
   return it->second;
 }
 
-// The refinement polls the cancellation flag between steps (cancellation.h).
+// The refinement polls the calling thread's cancellation flag between steps
+// (cancellation.h).
 CGAL::parameters::internal::Mesh_3_options stopWhenCancelled() {
-  return CGAL::parameters::mesh_3_options(CGAL::parameters::pointer_to_stop_atomic_boolean = &cancellationRequested());
+  return CGAL::parameters::mesh_3_options(CGAL::parameters::pointer_to_stop_atomic_boolean = &cancellationFlag());
 }
 
 // The exudation (CGAL's Slivers_exuder as refine_mesh_3 runs it, with no

@@ -199,20 +199,24 @@ PipelineOptions deformPipelineOptions(const DeformGridRequest& o, const LabelGri
   // Any pose on a grid whose organ table names bones: the body parts too, for
   // the collision count and the bone measures (the label groups of a pose
   // without joints stay those of the organ names).
+  // Built, they are computed while the pipeline builds the transfer mesh.
   if (!options.bodyParts && o.organs && skeleton::namesBones(*o.organs)) {
+    options.groupsFromParts = false;
     if (stored) {
       options.bodyParts = stored->parts.parts;
-      options.groupsFromParts = false;
     } else {
-      try {
-        options.bodyParts = skeleton::bodyParts(working, *o.organs, o.input, o.organsSource).parts;
-        options.groupsFromParts = false;
-      } catch (const InputError&) {
-        // A table that names bones the grid does not hold: no body parts.
-      }
+      options.bodyPartsMeanwhile = [&working, organs = *o.organs, input = o.input, organsSource = o.organsSource]() -> std::optional<LabelGrid> {
+        try {
+          return skeleton::bodyParts(working, organs, input, organsSource).parts;
+        } catch (const InputError&) {
+          return std::nullopt;  // a table that names bones the grid does not hold: no body parts
+        }
+      };
     }
   }
   options.rigidBones = o.rigidBones;
+  // Under a memory limit the working grid is sized for one stage's grids at a time.
+  options.concurrentTransferMesh = o.maxMemoryMb <= 0;
   options.cage.dilationMm = o.dilationMm;
   options.cage.targetVertices = o.vertices;
   for (const LimbSeparation& s : o.extraSeparations) {

@@ -122,8 +122,10 @@ DeformationReport deformGrid(const DeformGridRequest& request, RasterEngines& en
 // The options deformGrid gives the cage pipeline for `request` on `working`
 // (the source block-downsampled by `factor`): the pose compiled against the
 // skeleton (prepared->skeleton when it holds one, else built), the body
-// parts of a grid whose organ table names bones, the cage options and the
-// extra separations. prepare_run.h prepares with the same options. With
+// parts of a grid whose organ table names bones (prepared->skeleton's, else
+// computed by the pipeline while it builds the transfer mesh:
+// bodyPartsMeanwhile, which holds `working` by reference), the cage options
+// and the extra separations. prepare_run.h prepares with the same options. With
 // `bonesFault`, a joint pose's bones pressed through each other are checked
 // against the skeleton the options were compiled with
 // (skeleton::bonesThroughEachOther, request.maxBoneOverlapPercent): the

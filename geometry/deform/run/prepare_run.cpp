@@ -30,11 +30,21 @@ PrepareResult prepareRestState(const PrepareRequest& o) {
   auto state = std::make_shared<PreparedState>();
   state->inputs = preparedInputs(o.input, o.organs, o.organsSource, o.parts, factor, working.dims());
   state->recording = true;
-  {
-    // The skeleton wherever deform would build one or the body parts: an
-    // organ table that names bones, or a parts grid.
+  std::vector<Pose> poses = o.poses;
+  std::vector<std::string> sources = o.poseSources;
+  if (poses.empty()) {
+    poses.emplace_back();
+    sources.emplace_back("prepare");
+  }
+  // The skeleton wherever deform would build one or the body parts: an
+  // organ table that names bones, or a parts grid. Unless the first pose
+  // compiles against it (joints, selections by body part) or a parts grid
+  // is given, the first pipeline builds it while it builds its transfer mesh.
+  const bool withSkeleton = !o.parts.empty() || (o.organs && skeleton::namesBones(*o.organs));
+  const bool skeletonMeanwhile = withSkeleton && o.parts.empty() && poses[0].joints.empty() && !usesBodyParts(poses[0]);
+  if (!skeletonMeanwhile) {
     StageTimer timer("skeleton");
-    if (!o.parts.empty() || (o.organs && skeleton::namesBones(*o.organs))) {
+    if (withSkeleton) {
       requireOrganTable(o.organs.has_value(), OrganTableNeed::Bones, "--parts");
       std::optional<LabelGrid> userParts;
       if (!o.parts.empty()) {
@@ -56,12 +66,6 @@ PrepareResult prepareRestState(const PrepareRequest& o) {
     }
     result.stages.push_back(timer.stop());
   }
-  std::vector<Pose> poses = o.poses;
-  std::vector<std::string> sources = o.poseSources;
-  if (poses.empty()) {
-    poses.emplace_back();
-    sources.emplace_back("prepare");
-  }
   for (std::size_t i = 0; i < poses.size(); ++i) {
     DeformGridRequest r;
     r.input = o.input;
@@ -77,6 +81,15 @@ PrepareResult prepareRestState(const PrepareRequest& o) {
     // The rest state only: no handles, no embedding.
     options.pose.reset();
     options.prepared = state;
+    if (i == 0 && skeletonMeanwhile)
+      options.bodyPartsMeanwhile = [&]() -> std::optional<LabelGrid> {
+        try {
+          state->skeleton = skeleton::buildSkeleton(working, *o.organs, {o.input, o.organsSource, o.parts});
+        } catch (const InputError&) {
+          return std::nullopt;  // as above: no body parts
+        }
+        return state->skeleton->parts.parts;
+      };
     const DeformationPipeline pipeline(working, options);
     for (StageTime t : pipeline.stats().stages) {
       if (poses.size() > 1) t.name = sources[i] + ": " + t.name;

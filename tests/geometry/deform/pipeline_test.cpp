@@ -11,6 +11,9 @@
 #include "geometry/deform/solve/deformation_metrics.h"
 #include "geometry/raster/rasterize.h"
 #include "geometry/io/grid_io.h"
+#include "geometry/cancellation.h"
+#include "geometry/error.h"
+#include "geometry/progress.h"
 #include "geometry/parallel.h"
 #include "geometry/raster/field_interpolation.h"
 #include "geometry/synth.h"
@@ -22,6 +25,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <iostream>
 #include <numbers>
@@ -198,9 +202,10 @@ struct PipelineRun {
 
 // Envelope, cage, TM, embedding, one frame and the refinement on `threads`
 // threads.
-PipelineRun runOnThreads(const LabelGrid& grid, int threads) {
+PipelineRun runOnThreads(const LabelGrid& grid, int threads, bool concurrentTransferMesh = true) {
   const ScopedWorkerThreads scope(threads);
   PipelineOptions options;
+  options.concurrentTransferMesh = concurrentTransferMesh;
   options.sizingFraction = kFineSizing;
   options.pose = waistBend(grid.geometry());
   DeformationPipeline pipeline(grid, options);
@@ -214,12 +219,13 @@ PipelineRun runOnThreads(const LabelGrid& grid, int threads) {
   return run;
 }
 
-TEST(DeformationPipeline, TheSameBytesOnOneTwoAndSevenThreads) {
+TEST(DeformationPipeline, TheSameBytesOnOneTwoAndSevenThreadsWithTheTransferMeshBesideTheCageOrAfterIt) {
   const LabelGrid grid = synthesize(SynthKind::StickFigure, 64);
   const PipelineRun one = runOnThreads(grid, 1);
   ASSERT_EQ(one.refinement.kept, 1u) << one.refinement.stopReason;
-  for (const int threads : {2, 7}) {
-    const PipelineRun many = runOnThreads(grid, threads);
+  // The transfer mesh built beside the cage (the default) or after it.
+  for (const auto& [threads, concurrent] : {std::pair{2, true}, std::pair{7, true}, std::pair{2, false}}) {
+    const PipelineRun many = runOnThreads(grid, threads, concurrent);
     EXPECT_EQ(one.rest.positions, many.rest.positions) << threads;
     EXPECT_EQ(one.rest.tets, many.rest.tets) << threads;
     EXPECT_EQ(one.rest.labels, many.rest.labels) << threads;
@@ -228,6 +234,44 @@ TEST(DeformationPipeline, TheSameBytesOnOneTwoAndSevenThreads) {
     EXPECT_EQ(one.inside, many.inside) << threads;
     EXPECT_EQ(one.refinement.stopReason, many.refinement.stopReason) << threads;
   }
+}
+
+// The transfer mesh is built on a thread of its own while the cage is
+// built: a cancellation while the mesher runs, and a pose that selects
+// nothing on the cage, stop the pipeline (the thread stopped and joined),
+// and the next pipeline builds as before.
+TEST(DeformationPipeline, CancellationAndAFailingPoseStopTheTransferMeshBuiltBesideTheCage) {
+  const LabelGrid grid = synthesize(SynthKind::StickFigure, 64);
+  PipelineOptions options;
+  options.envelope = false;
+  options.sizingFraction = kFineSizing;
+  setProgressSink([](std::string_view stage, double fraction) {
+    if (stage == "transfer mesh" && fraction > 0.0 && fraction < 1.0) cancellationRequested() = true;
+  });
+  EXPECT_THROW(DeformationPipeline(grid, options), OperationCancelled);
+  setProgressSink({});
+  cancellationRequested() = false;
+
+  PoseSelection nowhere;
+  nowhere.name = "nowhere";
+  nowhere.boxMin = grid.geometry().boxMax() + Eigen::Vector3d::Constant(1e3);
+  nowhere.boxMax = nowhere.boxMin + Eigen::Vector3d::Constant(10.0);
+  nowhere.fixed = true;
+  Pose pose;
+  pose.selections = {nowhere};
+  PipelineOptions failing = options;
+  failing.pose = pose;
+  EXPECT_THROW(DeformationPipeline(grid, failing), InputError);
+
+  // Its stages follow one another: their times add up to no more than the whole.
+  const auto start = std::chrono::steady_clock::now();
+  const DeformationPipeline built(grid, options);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_GT(built.transferMesh().tetCount(), 0u);
+  EXPECT_EQ(built.stats().stages.back().name, "transfer mesh");
+  double stages = 0.0;
+  for (const StageTime& t : built.stats().stages) stages += t.seconds;
+  EXPECT_LE(stages, wall);
 }
 
 TEST(DeformationPipeline, RefinementEmbedsItsMidpointsAsTheWholeEmbeddingWould) {

@@ -16,12 +16,14 @@
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/io/section_file.h"
+#include "geometry/parallel.h"
 #include "geometry/skeleton/label_groups.h"
 #include "geometry/synth.h"
 #include "tests/support/test_environment.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <functional>
 #include <zlib.h>
@@ -60,16 +62,18 @@ Pose jointPose(const std::string& joint, const std::string& dof, double degrees)
 
 // The figure prepared for a right-shoulder pose and for a pose without
 // separations.
+PrepareRequest prepareRequest() {
+  PrepareRequest request;
+  request.input = figure().grid;
+  request.organs = figure().organs;
+  request.organsSource = "figure.dat";
+  request.poses = {jointPose("right_shoulder", "abduction", 30), Pose{}};
+  request.poseSources = {"shoulder", "still"};
+  return request;
+}
+
 const PrepareResult& prepared() {
-  static const PrepareResult r = [] {
-    PrepareRequest request;
-    request.input = figure().grid;
-    request.organs = figure().organs;
-    request.organsSource = "figure.dat";
-    request.poses = {jointPose("right_shoulder", "abduction", 30), Pose{}};
-    request.poseSources = {"shoulder", "still"};
-    return prepareRestState(request);
-  }();
+  static const PrepareResult r = prepareRestState(prepareRequest());
   return r;
 }
 
@@ -107,6 +111,73 @@ TEST(PreparedState, HoldsTheSkeletonAndOneCageAndMeshPerSetOfSeparations) {
   EXPECT_EQ(s.cages[1].separations, "none");
   EXPECT_EQ(s.inputs.workingFactor, 1);
   EXPECT_FALSE(s.recording);
+}
+
+// The cage and the transfer mesh are built at once (pipeline.h): the file
+// holds the same bytes whichever finishes first, on one thread or several.
+TEST(PreparedState, TheSameBytesOnOneAndTwoThreadsAndRunAfterRun) {
+  const auto bytesOn = [](int threads) {
+    const ScopedWorkerThreads scope(threads);
+    PreparedState state = prepareRestState(prepareRequest()).state;
+    state.skeleton->seconds = 0.0;  // the time it took, the one field that differs
+    return state.bytes();
+  };
+  const std::string one = bytesOn(1);
+  EXPECT_TRUE(one == bytesOn(2));
+  EXPECT_TRUE(one == bytesOn(2));
+  EXPECT_TRUE(one == bytesOn(1));
+}
+
+// A first pose that does not compile against the skeleton: the first
+// pipeline builds the skeleton while it builds its transfer mesh; the state
+// holds what it holds when the skeleton is built first.
+TEST(PreparedState, TheSkeletonBuiltBesideTheFirstTransferMeshIsTheSame) {
+  PrepareRequest request = prepareRequest();
+  request.poses = {Pose{}, jointPose("right_shoulder", "abduction", 30)};
+  request.poseSources = {"still", "shoulder"};
+  const PrepareResult r = prepareRestState(request);
+  const PreparedState& s = prepared().state;
+  ASSERT_TRUE(r.state.skeleton.has_value());
+  EXPECT_EQ(r.state.skeleton->parts.parts.labels(), s.skeleton->parts.parts.labels());
+  EXPECT_EQ(r.state.skeleton->joints.size(), s.skeleton->joints.size());
+  ASSERT_EQ(r.state.cages.size(), 2u);
+  ASSERT_EQ(r.state.meshes.size(), 2u);
+  for (const auto& [mine, theirs] : {std::pair{0, 1}, std::pair{1, 0}}) {
+    EXPECT_EQ(r.state.cages[mine].key, s.cages[theirs].key);
+    EXPECT_TRUE(samePoints(r.state.cages[mine].cage.positions, s.cages[theirs].cage.positions));
+    EXPECT_EQ(r.state.meshes[mine].key, s.meshes[theirs].key);
+    EXPECT_TRUE(samePoints(r.state.meshes[mine].mesh.positions, s.meshes[theirs].mesh.positions));
+    EXPECT_EQ(r.state.meshes[mine].mesh.tets, s.meshes[theirs].mesh.tets);
+  }
+  const auto skeletonStage = std::find_if(r.stages.begin(), r.stages.end(), [](const StageTime& t) { return t.name == "still: skeleton"; });
+  EXPECT_NE(skeletonStage, r.stages.end());
+}
+
+// Without a prepared state, deform's body parts (a pose without joints) are
+// computed while the pipeline builds the transfer mesh: the same parts, the
+// same cage vertices' parts, the same transfer mesh as the stored ones.
+TEST(PreparedState, BodyPartsComputedBesideTheTransferMeshAreTheStoredOnes) {
+  const LabelGrid& grid = figure().labels;
+  auto state = std::make_shared<PreparedState>(PreparedState::fromBytes(prepared().state.bytes(), "figure.vxprep"));
+  const DeformGridRequest request = runRequest(Pose{});
+  PipelineOptions meanwhile = deformPipelineOptions(request, grid, 1);
+  PipelineOptions taken = deformPipelineOptions(request, grid, 1, state.get());
+  ASSERT_TRUE(bool(meanwhile.bodyPartsMeanwhile));
+  EXPECT_FALSE(meanwhile.bodyParts.has_value());
+  EXPECT_FALSE(bool(taken.bodyPartsMeanwhile));
+  meanwhile.pose.reset();
+  taken.pose.reset();
+  taken.prepared = state;
+  const DeformationPipeline a(grid, meanwhile), b(grid, taken);
+  ASSERT_TRUE(a.bodyParts().has_value());
+  ASSERT_TRUE(b.bodyParts().has_value());
+  EXPECT_EQ(a.bodyParts()->labels(), b.bodyParts()->labels());
+  EXPECT_EQ(a.cageBodyParts(), b.cageBodyParts());
+  EXPECT_TRUE(samePoints(a.transferMesh().positions, b.transferMesh().positions));
+  EXPECT_EQ(a.transferMesh().tets, b.transferMesh().tets);
+  EXPECT_EQ(a.rigidBones().vertexGroup, b.rigidBones().vertexGroup);
+  const std::vector<StageTime>& stages = a.stats().stages;
+  EXPECT_TRUE(std::any_of(stages.begin(), stages.end(), [](const StageTime& t) { return t.name == "skeleton"; }));
 }
 
 TEST(PreparedState, ReadsBackBitForBit) {

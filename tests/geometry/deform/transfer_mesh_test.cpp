@@ -52,7 +52,10 @@ TEST(TransferMesh, SphereVolumeCoverageAndDeterminism) {
   EXPECT_LT(checkedVolume(tm), 1.2 * foregroundVolume(grid));
   EXPECT_EQ(countUncoveredVoxels(tm, grid), 0);
 
-  const TetMesh again = buildTransferMesh(b, sizing);
+  // The coverage repair's own count, asked for, is countUncoveredVoxels'.
+  std::int64_t uncovered = -1;
+  const TetMesh again = buildTransferMesh(b, sizing, {}, {}, &uncovered);
+  EXPECT_EQ(uncovered, countUncoveredVoxels(again, grid));
   EXPECT_EQ(again.positions, tm.positions);
   EXPECT_EQ(again.tets, tm.tets);
   EXPECT_EQ(again.labels, tm.labels);

@@ -63,5 +63,17 @@ TEST(DeformGrid, ChecksTheBonesOfAJointPoseWhereItCompilesIt) {
   EXPECT_FALSE(fault);
 }
 
+// The transfer mesh is built beside the cage, unless a memory limit sized
+// the working grid for one stage's grids at a time.
+TEST(DeformGrid, BuildsTheTransferMeshBesideTheCageUnlessMemoryIsLimited) {
+  DeformGridRequest request;
+  const LabelGrid grid = synthesize(SynthKind::StickFigure, 32);
+  request.organs = synthOrganTable(SynthKind::StickFigure);
+  request.poseSource = "still";
+  EXPECT_TRUE(deformPipelineOptions(request, grid, 1).concurrentTransferMesh);
+  request.maxMemoryMb = 512;
+  EXPECT_FALSE(deformPipelineOptions(request, grid, 1).concurrentTransferMesh);
+}
+
 }  // namespace
 }  // namespace vox
