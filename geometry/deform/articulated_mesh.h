@@ -114,10 +114,11 @@ struct ArticulatedMeshOptions {
   // yieldingShellVoxels (the grid's coarsest spacing) outside the body's
   // sphere is soft tissue, not rigid: the staircases of the head's and the
   // socket's surfaces cross as the joint turns, and a rigid shell there has
-  // nowhere to go. The shoulders by default (docs/POSES.md, "A yielding
-  // shell at the shoulders": the hips and the hinges measured worse with it).
+  // nowhere to go. Off by default (0): those bone voxels are then no longer
+  // moved rigidly, and the humerus' shape measures below the bones' bar
+  // (docs/POSES.md, "A yielding shell at the shoulders").
   std::vector<skeleton::JointId> yieldingShellJoints = {skeleton::JointId::RightShoulder, skeleton::JointId::LeftShoulder};
-  double yieldingShellVoxels = 1.0;
+  double yieldingShellVoxels = 0.0;
   // Limb cuts start this many joint radii (the humeral or femoral head's)
   // down the limb from its shoulder or hip (<= 0: no limb cuts).
   double limbCutMarginRadii = 1.5;

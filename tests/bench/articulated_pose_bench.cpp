@@ -13,8 +13,8 @@
 // --max-iterations N (SLIM iterations per step), --volume-weight L (lambda),
 // --direct-limit N (unknowns up to which CHOLMOD factorizes every
 // iteration), --scapulae (moving
-// scapulae), --yielding-shell V (the yielding shell's thickness in voxels;
-// 0: none), --yielding-hips (the hips' shell too).
+// scapulae), --yielding-shell V (the shoulders' yielding shell, V voxels
+// thick; default none), --yielding-hips (the hips' shell too).
 // Prints a table, then one JSON line (prefix "json ") for scripts.
 
 #include "geometry/deform/articulated_mesh.h"
