@@ -22,6 +22,13 @@ const Joint* Skeleton::joint(JointId id) const {
   return nullptr;
 }
 
+const Joint* Skeleton::nearestJoint(const Eigen::Vector3d& p) const {
+  const Joint* best = nullptr;
+  for (const Joint& j : joints)
+    if (!best || (j.centre - p).squaredNorm() < (best->centre - p).squaredNorm()) best = &j;
+  return best;
+}
+
 Skeleton buildSkeleton(const LabelGrid& grid, const OrganTable& organs, const SkeletonSources& sources, std::optional<LabelGrid> userParts,
                        const BodyPartOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();

@@ -20,6 +20,9 @@ struct Skeleton {
   double seconds = 0.0;       // wall time of buildSkeleton
 
   const Joint* joint(JointId id) const;
+  // The joint whose centre is nearest p (the first of equals; null without
+  // joints).
+  const Joint* nearestJoint(const Eigen::Vector3d& p) const;
 };
 
 struct SkeletonSources {

@@ -122,16 +122,14 @@ int main(int argc, char** argv) {
     std::map<std::string, std::size_t> byJoint;
     std::map<std::string, std::array<std::size_t, 4>> where;  // front near, front far, back near, back far
     for (const Tet& t : mesh.mesh.tets) {
-      if (signedVolume(posed, t) > 0.0 || sk.joints.empty()) continue;
+      if (signedVolume(posed, t) > 0.0) continue;
       Eigen::Vector3d c = Eigen::Vector3d::Zero();
       for (const std::int32_t v : t) c += 0.25 * mesh.mesh.positions[std::size_t(v)];
-      std::size_t best = 0;
-      for (std::size_t j = 1; j < sk.joints.size(); ++j)
-        if ((sk.joints[j].centre - c).squaredNorm() < (sk.joints[best].centre - c).squaredNorm()) best = j;
-      const skeleton::Joint& joint = sk.joints[best];
-      const Eigen::Vector3d d = c - joint.centre;
-      ++byJoint[joint.kind().name];
-      ++where[joint.kind().name][(d.dot(joint.anterior) >= 0.0 ? 0 : 2) + (d.norm() >= 30.0 ? 1 : 0)];
+      const skeleton::Joint* joint = sk.nearestJoint(c);
+      if (!joint) continue;
+      const Eigen::Vector3d d = c - joint->centre;
+      ++byJoint[joint->kind().name];
+      ++where[joint->kind().name][(d.dot(joint->anterior) >= 0.0 ? 0 : 2) + (d.norm() >= 30.0 ? 1 : 0)];
     }
     std::printf("inverted tets: %zu (bones reached their motions: %s)\n", r.invertedTets, r.reachedTargets ? "yes" : "no");
     for (const auto& [name, n] : byJoint) {

@@ -385,10 +385,7 @@ PosedMesh poseArticulated(const DeformGridRequest& o, const Source& source, Defo
       if (signedVolume(out.deformed, t) > 0.0) continue;
       Eigen::Vector3d c = Eigen::Vector3d::Zero();
       for (const std::int32_t v : t) c += 0.25 * out.rest.positions[std::size_t(v)];
-      std::size_t best = 0;
-      for (std::size_t j = 1; j < sk.joints.size(); ++j)
-        if ((sk.joints[j].centre - c).squaredNorm() < (sk.joints[best].centre - c).squaredNorm()) best = j;
-      if (!near.empty()) ++near[best];
+      if (const skeleton::Joint* joint = sk.nearestJoint(c)) ++near[std::size_t(joint - sk.joints.data())];
     }
     const auto most = std::size_t(std::max_element(near.begin(), near.end()) - near.begin());
     refuseOrForce(o, report,
