@@ -51,6 +51,28 @@ bool ArticularBody::cutAt(const Eigen::Vector3d& p) const {
   return d.dot(attachment) / n < c;
 }
 
+double ArticularBody::distanceOutside(const Eigen::Vector3d& p) const {
+  return contains(p) ? 0.0 : (project(p) - p).norm();
+}
+
+Eigen::Vector3d ArticularBody::slide(const Eigen::Vector3d& p, const Eigen::Vector3d& rest) const {
+  const Eigen::Vector3d r = rest - centre, d = p - centre;
+  if (shape == ArticularShape::Sphere) {
+    const double n = d.norm();
+    return n > 0 ? Eigen::Vector3d(centre + d * (r.norm() / n)) : rest;
+  }
+  const double rs = r.dot(axis), ds = d.dot(axis);
+  const double rr = (r - rs * axis).norm();
+  // On an end disc at rest (inside the lateral surface, at or beyond an
+  // end): the end's plane.
+  if (rr < radius - 1e-6 * std::max(1.0, radius) && std::abs(rs) >= halfLength - 1e-6 * std::max(1.0, halfLength))
+    return p + (rs - ds) * axis;
+  const Eigen::Vector3d u = d - ds * axis;
+  const double un = u.norm();
+  const Eigen::Vector3d dir = un > 0 ? Eigen::Vector3d(u / un) : attachment;
+  return centre + ds * axis + rr * dir;
+}
+
 LabelGrid bonePartGrid(const LabelGrid& grid, const OrganTable& organs, const skeleton::Skeleton& skeleton) {
   if (skeleton.parts.parts.dims() != grid.dims()) throw InputError("body parts", "the body-part grid's dims differ from the grid's");
   const std::vector<skeleton::Bone> boneOf = skeleton::boneOfLabels(organs, grid.maxLabel());
@@ -227,7 +249,7 @@ void projectSlidingVertices(const ArticulatedMesh& mesh, std::span<const Eigen::
   for (std::size_t v = 0; v < mesh.role.size(); ++v) {
     if (mesh.role[v] != VertexRole::Sliding) continue;
     const auto b = std::size_t(mesh.vertexBody[v]);
-    positions[v] = m[b] * mesh.bodies[b].project(m[b].inverse() * positions[v]);
+    positions[v] = m[b] * mesh.bodies[b].slide(m[b].inverse() * positions[v], mesh.mesh.positions[v]);
   }
 }
 
@@ -490,12 +512,26 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
   };
   out.mesh = buildTransferMesh(tags, sizing, options.transferMesh, relabel);
 
-  // The sliding cuts.
+  // The owner's bone beside each body joins it (ownerShellVoxels).
+  const double ownerShell = options.ownerShellVoxels * g.spacing.maxCoeff();
+  if (ownerShell > 0.0)
+    for (std::size_t t = 0; t < out.mesh.tetCount(); ++t) {
+      Eigen::Vector3d c = Eigen::Vector3d::Zero();
+      for (const std::int32_t v : out.mesh.tets[t]) c += 0.25 * out.mesh.positions[std::size_t(v)];
+      for (const ArticularBody& b : out.bodies)
+        if (out.mesh.labels[t] == kBoneTag + std::int32_t(b.owner) && b.cutAt(c) && b.distanceOutside(c) < ownerShell) {
+          out.mesh.labels[t] = b.tag();
+          break;
+        }
+    }
+
+  // The sliding cuts: between each body and what is neither it nor its
+  // owner's bone.
   for (const ArticularBody& b : out.bodies) {
     CutSides sides;
-    const std::int32_t tag = b.tag();
+    const std::int32_t tag = b.tag(), ownerBone = kBoneTag + std::int32_t(b.owner);
     sides.sideB = [tag](std::int32_t l) { return l == tag; };
-    sides.sideA = [tag](std::int32_t l) { return l != tag; };
+    sides.sideA = [tag, ownerBone](std::int32_t l) { return l != tag && l != ownerBone; };
     sides.inRegion = [&b](const Eigen::Vector3d& p) { return b.cutAt(p); };
     out.cuts.push_back(cutTransferMesh(out.mesh, sides));
   }
@@ -530,6 +566,8 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
       for (const auto& [i, j] : groups) {
         const Eigen::Vector3d from = out.mesh.positions[std::size_t(split[i])];
         const Eigen::Vector3d to = out.bodies[b].project(from);
+        // A vertex on the owner's bone beside the body stays there.
+        if ((to - from).norm() > 0.5 * finest) continue;
         std::vector<std::pair<std::int32_t, double>> before;
         for (std::size_t k = i; k < j; ++k)
           for (const std::int32_t t : around.of(split[k])) before.emplace_back(t, volume(out.mesh.tets[std::size_t(t)]));

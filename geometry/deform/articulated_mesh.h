@@ -94,6 +94,16 @@ struct ArticularBody {
   Eigen::Vector3d project(const Eigen::Vector3d& p) const;
   // Outside the attachment: where the body's surface is cut.
   bool cutAt(const Eigen::Vector3d& p) const;
+  // How far p lies outside the body (0 inside).
+  double distanceOutside(const Eigen::Vector3d& p) const;
+  // The point nearest p on the surface that the joint's rotation maps onto
+  // itself through `rest` (a point of the body's rest frame): the sphere
+  // about the centre through it, or the cylinder about the axis through it
+  // (its end plane where `rest` lies on an end disc). A sliding vertex
+  // whose rest place is on the body's own surface slides on that surface;
+  // one off it (on the owner's bone beside the body) slides at its own
+  // distance.
+  Eigen::Vector3d slide(const Eigen::Vector3d& p, const Eigen::Vector3d& rest) const;
 };
 
 struct ArticulatedMeshOptions {
@@ -110,6 +120,15 @@ struct ArticulatedMeshOptions {
   double bodyMarginVoxels = 0.5;   // a body stops this far (finest spacing) short of the other part's bone
   double minBodyRadiusVoxels = 2.0;  // a smaller body is not built (the joint is not cut)
   double attachmentHalfAngleDeg = 50.0;
+  // The owner's bone within this many voxels (the grid's coarsest
+  // spacing) outside its body, away from the attachment, joins the body:
+  // the sliding cut follows the bone's staircase there instead of cutting
+  // through it, so that the owner's bone end turns past the other side's
+  // (the 8 mm slices' staircases of a femoral head and its acetabulum
+  // cross as the hip turns) without tissue between them. Both stay rigid;
+  // where the staircases cross they overlap by less than a voxel. 0: the
+  // body is the sphere or cylinder alone.
+  double ownerShellVoxels = 1.0;
   // At these ball joints the bone of the two parts within
   // yieldingShellVoxels (the grid's coarsest spacing) outside the body's
   // sphere is soft tissue, not rigid: the staircases of the head's and the

@@ -225,9 +225,28 @@ void ArticulatedPoser::targets(const InjectiveSolver& solver, std::span<const Ei
   for (const std::int32_t i : sliding_) {
     const auto v = std::size_t(solved_[std::size_t(i)]);
     const auto b = std::size_t(mesh_.vertexBody[v]);
-    positions_[v] = partMotionAt(motions, mesh_.bodies[b].owner, 1.0) * mesh_.bodies[b].project(now[b].inverse() * current[std::size_t(i)]);
+    positions_[v] = partMotionAt(motions, mesh_.bodies[b].owner, 1.0) * mesh_.bodies[b].slide(now[b].inverse() * current[std::size_t(i)], rest[v]);
   }
   for (std::size_t s = 0; s < sliding_.size(); ++s) slidingTargets_[s] = positions_[std::size_t(solved_[std::size_t(sliding_[s])])];
+}
+
+void ArticulatedPoser::placeUnsolved(const InjectiveSolver& solver) {
+  // Each part's best rigid fit of where its bones are in the solve.
+  const std::vector<Eigen::Vector3d>& current = solver.positions();
+  const std::vector<Eigen::Vector3d>& rest = mesh_.mesh.positions;
+  PartTransforms fit;
+  fit.fill(Eigen::Isometry3d::Identity());
+  for (int p = 1; p <= kSegmentCount; ++p) {
+    const std::vector<std::int32_t>& owned = partConstrained_[std::size_t(p)];
+    if (owned.size() < 3) continue;
+    fit[std::size_t(p)] = rigidFit(
+        owned, [&](std::int32_t c) { return rest[std::size_t(solved_[std::size_t(c)])]; },
+        [&](std::int32_t c) { return current[std::size_t(c)]; });
+  }
+  std::vector<bool> solved(rest.size(), false);
+  for (const std::int32_t v : solved_) solved[std::size_t(v)] = true;
+  for (std::size_t v = 0; v < rest.size(); ++v)
+    if (!solved[v] && mesh_.role[v] == VertexRole::Rigid) positions_[v] = fit[std::size_t(mesh_.vertexPart[v])] * rest[v];
 }
 
 void ArticulatedPoser::gather(const InjectiveSolver& solver) {
@@ -285,6 +304,11 @@ ArticulatedPoseReport ArticulatedPoser::pose(const MotionPath& path) {
       const std::vector<double> lag = boneLag(approach_);
       report.stepBoneLagMm.push_back(*std::max_element(lag.begin(), lag.end()));
       ++report.steps;
+      if (options_.onStep) {
+        gather(approach_);
+        placeUnsolved(approach_);
+        options_.onStep(s, positions_);
+      }
     }
     // At the full pose the bones stiffen (their weight times 10, 100,
     // 1000): they close on their motions as far as the tissue lets them.
@@ -321,6 +345,7 @@ ArticulatedPoseReport ArticulatedPoser::pose(const MotionPath& path) {
     gather(solver_);
   }
   placeRigidVertices(mesh_, motions, 1.0, positions_);
+  if (options_.onStep) options_.onStep(report.steps, positions_);
   const TetMesh& m = mesh_.mesh;
   for (const Tet& t : m.tets) report.invertedTets += signedVolume(positions_, t) <= 0.0;
   std::vector<Eigen::Vector3d> projected = positions_;

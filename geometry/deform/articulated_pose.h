@@ -48,6 +48,10 @@ struct ArticulatedPoseOptions {
   // before they are put on their motions exactly.
   int stiffeningRounds = 3;
   InjectiveSolveOptions solve;
+  // Called after each step of the approach (1-based) and after the last,
+  // hard step (steps + 1) with every vertex of the mesh where that step left
+  // it: what a viewer shows of the way, or a benchmark inspects.
+  std::function<void(int step, std::span<const Eigen::Vector3d> positions)> onStep;
 };
 
 struct ArticulatedPoseReport {
@@ -111,6 +115,10 @@ private:
   std::vector<Eigen::Vector3d> corrected(const std::vector<Eigen::Vector3d>& current, std::span<const Eigen::Isometry3d> motions) const;
   void nearestParts();
   void gather(const InjectiveSolver& solver);
+  // The rigid vertices outside the solve (in tets of one part's bones only)
+  // placed by their part's best rigid fit of its bones in `solver`: the
+  // mesh as the step left it.
+  void placeUnsolved(const InjectiveSolver& solver);
   // Per segment: the largest distance of its bone vertices in `solver`'s
   // positions from constrainedTargets_.
   std::vector<double> boneLag(const InjectiveSolver& solver) const;

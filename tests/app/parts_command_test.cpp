@@ -276,11 +276,10 @@ TEST(PartsCommand, ArticulatedJointPose) {
   EXPECT_NE(outOfCore.err.find("--max-memory"), std::string::npos) << outOfCore.err;
   EXPECT_FALSE(std::filesystem::exists(f.dir + "/x.nii.gz"));
 
-  // The shoulder raised 90 degrees is more than the solve reaches on this
-  // coarse figure (its tets invert at the rim of the elbow's body, 25 mm
-  // down the humerus): refused, naming the joint nearest them, nothing
-  // written.
-  const std::string raised = writeFile(f.dir + "/raised.json", R"({"joints": {"right_shoulder": {"abduction": 90}}})");
+  // The shoulder raised 180 degrees is more than the solve reaches on this
+  // coarse figure (its tets invert beside the elbow): refused, naming the
+  // joint nearest them, nothing written.
+  const std::string raised = writeFile(f.dir + "/raised.json", R"({"joints": {"right_shoulder": {"abduction": 180}}})");
   const std::string refusedOut = f.dir + "/raised.nii.gz";
   const auto refused = test::runCommand(voxmorph("deform " + test::quote(f.grid) + " --organs " + test::quote(f.organs) + " --pose " +
                                                  test::quote(raised) + " -o " + test::quote(refusedOut) + " --articulated --cpu -q"));

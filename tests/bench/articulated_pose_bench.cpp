@@ -14,7 +14,9 @@
 // --direct-limit N (unknowns up to which CHOLMOD factorizes every
 // iteration), --scapulae (moving
 // scapulae), --yielding-shell V (the shoulders' yielding shell, V voxels
-// thick; default none), --yielding-hips (the hips' shell too).
+// thick; default none), --yielding-hips (the hips' shell too),
+// --squeezed F (per step, the tets under F of their rest volume, by nearest
+// joint and by what holds their vertices: where the tissue locks).
 // Prints a table, then one JSON line (prefix "json ") for scripts.
 
 #include "geometry/deform/articulated_mesh.h"
@@ -28,12 +30,15 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
 #include <map>
+#include <set>
+#include <span>
 #include <string>
 
 namespace {
@@ -50,6 +55,83 @@ int usage() {
   return 2;
 }
 
+// Where the tissue locks: the tets of `mesh` under `below` of their rest
+// volume in `posed`, by the joint nearest their rest centroid (in front of
+// it or behind, within 30 mm or beyond) and by what their vertices are: the
+// rigid parts among them, sliding vertices, free ones.
+void squeezedTets(const vox::ArticulatedMesh& mesh, const vox::skeleton::Skeleton& sk, int step,
+                  std::span<const Eigen::Vector3d> posed, double below) {
+  using namespace vox;
+  const std::vector<Eigen::Vector3d>& rest = mesh.mesh.positions;
+  const std::vector<Eigen::Vector3d> now(posed.begin(), posed.end());
+  std::map<std::string, std::size_t> where, what;
+  std::size_t count = 0;
+  double worst = 1.0;
+  std::string worstText;
+  std::vector<std::pair<double, std::string>> listed;
+  for (std::size_t ti = 0; ti < mesh.mesh.tets.size(); ++ti) {
+    const Tet& t = mesh.mesh.tets[ti];
+    // A tet of one part's bones only moves rigidly at the end; on the way
+    // its vertices follow the solve's, and it is not in the solve.
+    bool onePart = true;
+    for (const std::int32_t v : t)
+      onePart = onePart && mesh.role[std::size_t(v)] == VertexRole::Rigid && mesh.vertexPart[std::size_t(v)] == mesh.vertexPart[std::size_t(t[0])];
+    if (onePart) continue;
+    const double r = signedVolume(now, t) / signedVolume(rest, t);
+    if (r >= below) continue;
+    ++count;
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (const std::int32_t v : t) c += 0.25 * rest[std::size_t(v)];
+    const skeleton::Joint* joint = sk.nearestJoint(c);
+    std::string at = "none";
+    if (joint) {
+      const Eigen::Vector3d d = c - joint->centre;
+      at = std::string(joint->kind().name) + (d.dot(joint->anterior) >= 0.0 ? " front" : " back") + (d.norm() >= 30.0 ? " far" : " near");
+    }
+    ++where[at];
+    std::set<std::string> parts;
+    int sliding = 0, free = 0;
+    for (const std::int32_t v : t) {
+      const auto k = std::size_t(v);
+      if (mesh.role[k] == VertexRole::Rigid) parts.insert(segmentName(int(mesh.vertexPart[k])));
+      else if (mesh.role[k] == VertexRole::Sliding) ++sliding;
+      else ++free;
+    }
+    std::string kind = std::to_string(parts.size()) + " parts";
+    for (const std::string& p : parts) kind += " " + p;
+    kind += sliding ? " +sliding" : "";
+    kind += free ? " +free" : "";
+    const std::int32_t tag = mesh.mesh.labels.empty() ? 0 : mesh.mesh.labels[ti];
+    kind += tag == kSoftTissueTag ? " (tissue tet)" : tag >= kBodyTag ? " (body tet)" : " (bone tet)";
+    ++what[kind];
+    if (joint) {
+      const Eigen::Vector3d d = c - joint->centre;
+      char line[256];
+      std::snprintf(line, sizeof line, "%s: %.0f mm from the centre (radius %.0f), along the bone %.0f, front %.0f, right %.0f; %s",
+                    joint->kind().name, d.norm(), joint->radius, d.dot(joint->longAxis), d.dot(joint->anterior), d.dot(joint->leftRight),
+                    kind.c_str());
+      listed.emplace_back(r, line);
+    }
+    if (r < worst) {
+      worst = r;
+      worstText = at + ", " + kind + ", rest centroid " + std::to_string(c.x()) + " " + std::to_string(c.y()) + " " + std::to_string(c.z());
+    }
+  }
+  std::printf("step %d: %zu tets under %.3f of rest volume; worst %.4f at %s\n", step, count, below, worst, worstText.c_str());
+  const auto top = [](const std::map<std::string, std::size_t>& m, const char* title) {
+    std::vector<std::pair<std::size_t, std::string>> v;
+    for (const auto& [k, n] : m) v.emplace_back(n, k);
+    std::sort(v.rbegin(), v.rend());
+    std::printf("  %s:", title);
+    for (std::size_t i = 0; i < v.size() && i < 6; ++i) std::printf(" [%s] %zu;", v[i].second.c_str(), v[i].first);
+    std::printf("\n");
+  };
+  top(where, "where");
+  top(what, "what");
+  std::sort(listed.begin(), listed.end());
+  for (std::size_t i = 0; i < listed.size() && i < 12; ++i) std::printf("    %.3f %s\n", listed[i].first, listed[i].second.c_str());
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -58,6 +140,7 @@ int main(int argc, char** argv) {
   ArticulatedPoseOptions poseOptions;
   ArticulatedMeshOptions meshOptions;
   bool figure = false;
+  double squeezedBelow = 0.0;
   for (int a = 1; a < argc; ++a) {
     const std::string arg = argv[a];
     const auto value = [&]() -> std::string {
@@ -74,6 +157,7 @@ int main(int argc, char** argv) {
       meshOptions.yieldingShellJoints.push_back(skeleton::JointId::RightHip);
       meshOptions.yieldingShellJoints.push_back(skeleton::JointId::LeftHip);
     }
+    else if (arg == "--squeezed") squeezedBelow = std::stod(value());
     else if (arg == "--scapulae") meshOptions.movingScapulae = true;
     else if (arg == "--yielding-shell") meshOptions.yieldingShellVoxels = std::stod(value());
     else if (arg.starts_with("--")) return usage();
@@ -98,6 +182,9 @@ int main(int argc, char** argv) {
     std::printf("mesh: %zu vertices, %zu tets, %zu bodies, built in %.1f s (skeleton %.1f s)\n", mesh.mesh.vertexCount(),
                 mesh.mesh.tetCount(), mesh.bodies.size(), meshSeconds, skeletonSeconds);
 
+    if (squeezedBelow > 0.0) poseOptions.onStep = [&](int step, std::span<const Eigen::Vector3d> posed) {
+      squeezedTets(mesh, sk, step, posed, squeezedBelow);
+    };
     ArticulatedPoser poser(mesh, poseOptions);
     const ArticulatedPoseReport r = poser.pose(jointMotionPath(sk, joints, pose.joints, mesh));
     std::printf("pose: %d steps, %d iterations, %.1f s; solved %zu vertices, %zu tets\n", r.steps, r.iterations, r.seconds,
