@@ -79,8 +79,7 @@ Source openSource(const DeformGridRequest& o) {
   }
   s.factor = downsampleFactor(s.grid->geometry(), kDefaultWorkingVoxels);
   if (s.factor > 1) {
-    LabelGridSlices slices(*s.grid);
-    s.working = downsampleLabels(slices, s.factor);
+    s.working = downsampleLabels(*s.grid, s.factor);
   } else if (o.inputGrid && o.inputGrid->borrowed()) {
     s.working = *o.inputGrid;
   }
@@ -196,10 +195,7 @@ PipelineOptions deformPipelineOptions(const DeformGridRequest& o, const LabelGri
   std::optional<LabelGrid> userParts;
   if (!o.parts.empty() && !stored) {
     LabelGrid parts = readGrid(o.parts);  // its dims checked with the request
-    if (factor > 1) {
-      LabelGridSlices slices(parts);
-      parts = downsampleLabels(slices, factor);
-    }
+    if (factor > 1) parts = downsampleLabels(parts, factor);
     userParts = std::move(parts);
   }
   // Bones held rigid turn about their joint: the cage near the joint turns
