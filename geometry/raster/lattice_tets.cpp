@@ -33,49 +33,54 @@ Eigen::Vector4d LatticeTet::barycentric(std::int32_t x, std::int32_t y, std::int
 
 std::vector<LatticeTet> latticeTets(const GridGeometry& lattice, const std::vector<Eigen::Vector3d>& positions,
                                     const std::vector<Tet>& tets) {
+  // Each tet's entry depends on its own vertices alone: on the parallel loop.
   std::vector<Eigen::Vector3d> q(positions.size());
-  for (std::size_t i = 0; i < positions.size(); ++i) q[i] = latticeCoordinates(lattice, positions[i]);
+  parallelRanges(std::int64_t(positions.size()), workerThreads(0), [&](std::int64_t i0, std::int64_t i1) {
+    for (std::int64_t i = i0; i < i1; ++i) q[std::size_t(i)] = latticeCoordinates(lattice, positions[std::size_t(i)]);
+  }, std::int64_t(1) << 14);
 
   std::vector<LatticeTet> out(tets.size());
-  for (std::size_t t = 0; t < tets.size(); ++t) {
-    const Tet& tet = tets[t];
-    LatticeTet& lt = out[t];
-    const Eigen::Vector3d& p0 = q[std::size_t(tet[0])];
-    double longest = 0.0;
-    Eigen::Vector3d lo = p0, hi = p0;
-    for (int i = 0; i < 4; ++i) {
-      const Eigen::Vector3d& pi = q[std::size_t(tet[i])];
-      lo = lo.cwiseMin(pi);
-      hi = hi.cwiseMax(pi);
-      for (int j = i + 1; j < 4; ++j) longest = std::max(longest, (q[std::size_t(tet[j])] - pi).norm());
-    }
-    const double volume6 = (q[std::size_t(tet[1])] - p0).dot((q[std::size_t(tet[2])] - p0).cross(q[std::size_t(tet[3])] - p0));
-    if (!(std::abs(volume6) > kDegenerateVolume * longest * longest * longest)) continue;
-    if (!(lo.cwiseAbs().maxCoeff() < kMaxCoordinate && hi.cwiseAbs().maxCoeff() < kMaxCoordinate)) continue;
+  parallelRanges(std::int64_t(tets.size()), workerThreads(0), [&](std::int64_t t0, std::int64_t t1) {
+    for (std::int64_t t = t0; t < t1; ++t) {
+      const Tet& tet = tets[std::size_t(t)];
+      LatticeTet& lt = out[std::size_t(t)];
+      const Eigen::Vector3d& p0 = q[std::size_t(tet[0])];
+      double longest = 0.0;
+      Eigen::Vector3d lo = p0, hi = p0;
+      for (int i = 0; i < 4; ++i) {
+        const Eigen::Vector3d& pi = q[std::size_t(tet[i])];
+        lo = lo.cwiseMin(pi);
+        hi = hi.cwiseMax(pi);
+        for (int j = i + 1; j < 4; ++j) longest = std::max(longest, (q[std::size_t(tet[j])] - pi).norm());
+      }
+      const double volume6 = (q[std::size_t(tet[1])] - p0).dot((q[std::size_t(tet[2])] - p0).cross(q[std::size_t(tet[3])] - p0));
+      if (!(std::abs(volume6) > kDegenerateVolume * longest * longest * longest)) continue;
+      if (!(lo.cwiseAbs().maxCoeff() < kMaxCoordinate && hi.cwiseAbs().maxCoeff() < kMaxCoordinate)) continue;
 
-    for (int k = 0; k < 4; ++k) {
-      std::array<std::int32_t, 3> face{};
-      for (int i = 0, n = 0; i < 4; ++i)
-        if (i != k) face[std::size_t(n++)] = tet[std::size_t(i)];
-      std::sort(face.begin(), face.end());
-      const Eigen::Vector3d& a = q[std::size_t(face[0])];
-      const Eigen::Vector3d n = (q[std::size_t(face[1])] - a).cross(q[std::size_t(face[2])] - a);
-      // The canonical normal points into this tet or out of it: the sign of
-      // its value at the opposite vertex (+-6|t|, well away from zero here).
-      const double sign = n.dot(q[std::size_t(tet[std::size_t(k)])] - a) > 0.0 ? 1.0 : -1.0;
-      const LatticeIndex anchor{nearestLatticePoint(a.x()), nearestLatticePoint(a.y()), nearestLatticePoint(a.z())};
-      const Eigen::Vector3d toAnchor(double(anchor[0]) - a.x(), double(anchor[1]) - a.y(), double(anchor[2]) - a.z());
-      lt.normal[std::size_t(k)] = sign * n;
-      lt.offset[std::size_t(k)] = sign * n.dot(toAnchor);
-      lt.anchor[std::size_t(k)] = anchor;
+      for (int k = 0; k < 4; ++k) {
+        std::array<std::int32_t, 3> face{};
+        for (int i = 0, n = 0; i < 4; ++i)
+          if (i != k) face[std::size_t(n++)] = tet[std::size_t(i)];
+        std::sort(face.begin(), face.end());
+        const Eigen::Vector3d& a = q[std::size_t(face[0])];
+        const Eigen::Vector3d n = (q[std::size_t(face[1])] - a).cross(q[std::size_t(face[2])] - a);
+        // The canonical normal points into this tet or out of it: the sign of
+        // its value at the opposite vertex (+-6|t|, well away from zero here).
+        const double sign = n.dot(q[std::size_t(tet[std::size_t(k)])] - a) > 0.0 ? 1.0 : -1.0;
+        const LatticeIndex anchor{nearestLatticePoint(a.x()), nearestLatticePoint(a.y()), nearestLatticePoint(a.z())};
+        const Eigen::Vector3d toAnchor(double(anchor[0]) - a.x(), double(anchor[1]) - a.y(), double(anchor[2]) - a.z());
+        lt.normal[std::size_t(k)] = sign * n;
+        lt.offset[std::size_t(k)] = sign * n.dot(toAnchor);
+        lt.anchor[std::size_t(k)] = anchor;
+      }
+      for (int axis = 0; axis < 3; ++axis) {
+        const double first = std::ceil(lo[axis] - kBoxMargin);
+        const double last = std::floor(hi[axis] + kBoxMargin);
+        lt.lo[std::size_t(axis)] = std::int32_t(std::max(first, 0.0));
+        lt.hi[std::size_t(axis)] = std::int32_t(std::min(last, double(lattice.dims[std::size_t(axis)] - 1)));
+      }
     }
-    for (int axis = 0; axis < 3; ++axis) {
-      const double first = std::ceil(lo[axis] - kBoxMargin);
-      const double last = std::floor(hi[axis] + kBoxMargin);
-      lt.lo[std::size_t(axis)] = std::int32_t(std::max(first, 0.0));
-      lt.hi[std::size_t(axis)] = std::int32_t(std::min(last, double(lattice.dims[std::size_t(axis)] - 1)));
-    }
-  }
+  }, std::int64_t(1) << 12);
   return out;
 }
 

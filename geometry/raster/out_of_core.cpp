@@ -1,6 +1,7 @@
 #include "geometry/raster/out_of_core.h"
 
 #include "geometry/error.h"
+#include "geometry/parallel.h"
 #include "geometry/progress.h"
 
 #include <algorithm>
@@ -8,6 +9,7 @@
 #include <cstring>
 #include <fcntl.h>
 #include <filesystem>
+#include <future>
 #include <unistd.h>
 
 namespace vox {
@@ -132,6 +134,20 @@ LabelGrid downsampleLabels(GridSliceReader& source, int factor) {
   return streamDownsample(source, factor, maxLabel, [](const Label*, std::int64_t) {});
 }
 
+LabelGrid downsampleLabels(const LabelGrid& source, int factor) {
+  if (factor < 1) throw InputError("downsampling", "factor must be at least 1");
+  const GridGeometry& g = source.geometry();
+  LabelGrid out(downsampledGeometry(g, factor));
+  const std::int64_t outSlice = out.geometry().sliceVoxels();
+  parallelRanges(out.dims()[2], workerThreads(0), [&](std::int64_t K0, std::int64_t K1) {
+    for (std::int64_t K = K0; K < K1; ++K) {
+      const std::int64_t k0 = K * factor, count = std::min<std::int64_t>(factor, g.dims[2] - k0);
+      downsampleSlice(g, factor, source.data() + k0 * g.sliceVoxels(), count, out.data() + K * outSlice);
+    }
+  }, 1);
+  return out;
+}
+
 int downsampleFactor(const GridGeometry& source, std::int64_t maxVoxels) {
   int f = 1;
   while (downsampledGeometry(source, f).voxelCount() > std::max<std::int64_t>(1, maxVoxels)) ++f;
@@ -181,11 +197,15 @@ RasterMemoryLimits rasterMemoryLimits(std::int64_t budgetBytes, int samples) {
 }
 
 void MeasuringRasterizer::rasterizeSlab(std::int64_t z0, std::int64_t z1, Label* out) {
-  engine_.rasterizeSlab(z0, z1, out);
-  projection_.addSlices(z0, z1 - z0, out);
+  rasterizeUnmeasured(z0, z1, out);
+  measureSlab(z0, z1, out);
+}
+
+void MeasuringRasterizer::measureSlab(std::int64_t z0, std::int64_t z1, const Label* slab) {
+  projection_.addSlices(z0, z1 - z0, slab);
   const std::int64_t n = (z1 - z0) * outputGeometry().sliceVoxels();
   for (std::int64_t v = 0; v < n; ++v) {
-    const Label l = out[v];
+    const Label l = slab[v];
     if (l >= counts_.size()) counts_.resize(std::size_t(l) + 1, 0);
     ++counts_[l];
   }
@@ -199,8 +219,10 @@ PosedGridMeasures writePosedGrid(SlabRasterizer& engine, GridSliceWriter& sink, 
   ProgressCounter progress("rasterize", double(nz));
   for (std::int64_t z0 = 0; z0 < nz; z0 += step) {
     const std::int64_t z1 = std::min(nz, z0 + step);
-    measuring.rasterizeSlab(z0, z1, slab.data());
-    sink.writeSlices(slab.data(), z1 - z0);
+    measuring.rasterizeUnmeasured(z0, z1, slab.data());
+    std::future<void> writing = std::async(std::launch::async, [&sink, &slab, count = z1 - z0] { sink.writeSlices(slab.data(), count); });
+    measuring.measureSlab(z0, z1, slab.data());
+    writing.get();
     progress.advance(double(z1 - z0));
   }
   if (commit) sink.commit();

@@ -34,6 +34,8 @@ namespace vox {
 // origin moved so that block corners are source voxel corners. Streams the
 // source `factor` slices at a time.
 LabelGrid downsampleLabels(GridSliceReader& source, int factor);
+// The same of a grid in memory, its slices of output on the parallel loop.
+LabelGrid downsampleLabels(const LabelGrid& source, int factor);
 // The smallest factor whose downsampled grid has at most maxVoxels voxels.
 int downsampleFactor(const GridGeometry& source, std::int64_t maxVoxels);
 
@@ -92,6 +94,9 @@ public:
   const GridGeometry& outputGeometry() const override { return engine_.outputGeometry(); }
   std::int64_t slabSlices() const override { return engine_.slabSlices(); }
   void rasterizeSlab(std::int64_t z0, std::int64_t z1, Label* out) override;
+  // The engine's slab alone, and its measures: rasterizeSlab is the two in turn.
+  void rasterizeUnmeasured(std::int64_t z0, std::int64_t z1, Label* out) { engine_.rasterizeSlab(z0, z1, out); }
+  void measureSlab(std::int64_t z0, std::int64_t z1, const Label* slab);
   // Voxels per label (index = label) over every slab so far.
   const std::vector<std::uint64_t>& counts() const { return counts_; }
   BodyProjection projection() const { return projection_.result(); }
@@ -110,7 +115,8 @@ struct PosedGridMeasures {
 // Writes G' from `engine` to `sink` slab by slab and, with `commit`, commits
 // it (a grid file appears complete or not at all; without, the caller
 // commits once it has judged the measures); returns G''s per-label voxel
-// counts and body projection.
+// counts and body projection. A slab is measured on the calling thread while
+// another writes it (the sink's encoding and compression, one thread).
 PosedGridMeasures writePosedGrid(SlabRasterizer& engine, GridSliceWriter& sink, bool commit = true);
 
 }  // namespace vox

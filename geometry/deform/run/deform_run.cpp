@@ -21,6 +21,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <future>
 #include <memory>
 #include <numbers>
 #include <optional>
@@ -78,8 +79,7 @@ Source openSource(const DeformGridRequest& o) {
   }
   s.factor = downsampleFactor(s.grid->geometry(), kDefaultWorkingVoxels);
   if (s.factor > 1) {
-    LabelGridSlices slices(*s.grid);
-    s.working = downsampleLabels(slices, s.factor);
+    s.working = downsampleLabels(*s.grid, s.factor);
   } else if (o.inputGrid && o.inputGrid->borrowed()) {
     s.working = *o.inputGrid;
   }
@@ -132,6 +132,33 @@ private:
   std::int64_t written_ = 0;
 };
 
+// What the report and the writer take from the source grid alone: its
+// projection, its label counts and its largest label (the output's datatype).
+struct SourceMeasures {
+  BodyProjection projection;
+  std::vector<std::uint64_t> counts;
+  Label maxLabel = 0;
+};
+
+// The source's measures; held whole, they are taken on a thread of their own
+// while the pipeline poses the mesh (its transfer mesh keeps one core while
+// the cage's loops leave the other waiting), out of core they come with the
+// working grid.
+std::future<SourceMeasures> measureSource(const Source& source) {
+  if (!source.grid) {
+    std::promise<SourceMeasures> ready;
+    ready.set_value({source.outOfCore->bodyProjection(), source.outOfCore->labelCounts(), source.outOfCore->maxLabel()});
+    return ready.get_future();
+  }
+  return std::async(std::launch::async, [&grid = *source.grid] {
+    SourceMeasures m;
+    m.counts = computeLabelStats(grid).counts;
+    m.maxLabel = Label(m.counts.size() - 1);
+    m.projection = bodyProjection(grid);
+    return m;
+  });
+}
+
 void warn(const DeformGridRequest& o, const std::string& message) {
   if (o.warn) o.warn(message);
 }
@@ -168,10 +195,7 @@ PipelineOptions deformPipelineOptions(const DeformGridRequest& o, const LabelGri
   std::optional<LabelGrid> userParts;
   if (!o.parts.empty() && !stored) {
     LabelGrid parts = readGrid(o.parts);  // its dims checked with the request
-    if (factor > 1) {
-      LabelGridSlices slices(parts);
-      parts = downsampleLabels(slices, factor);
-    }
+    if (factor > 1) parts = downsampleLabels(parts, factor);
     userParts = std::move(parts);
   }
   // Bones held rigid turn about their joint: the cage near the joint turns
@@ -454,7 +478,7 @@ DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines)
   Source source = openSource(o);
   report.stages.push_back(readTimer.stop());
   report.source = source.geometry();
-  report.restProjection = source.grid ? bodyProjection(*source.grid) : source.outOfCore->bodyProjection();
+  std::future<SourceMeasures> measuring = measureSource(source);
   report.workingFactor = source.factor;
   report.workingVoxels = source.workingGrid().voxelCount();
 
@@ -483,7 +507,9 @@ DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines)
   }
   const RasterSource raster = source.grid ? RasterSource{.grid = &*source.grid} : RasterSource{.slices = &source.outOfCore->slices()};
   const std::unique_ptr<SlabRasterizer> engine = makeRasterizer(engines, raster, rest, deformed, o.samples, rasterBudget);
-  const Label maxLabel = source.grid ? source.grid->maxLabel() : source.outOfCore->maxLabel();
+  const SourceMeasures measures = measuring.get();
+  report.restProjection = measures.projection;
+  const Label maxLabel = measures.maxLabel;
   PosedGridMeasures after;
   std::unique_ptr<GridSliceWriter> output;  // G', committed once the whole body is measured
   std::vector<double> deformedVolumes;
@@ -512,7 +538,7 @@ DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines)
   }
   report.engine = engines.name();
 
-  const std::vector<std::uint64_t> before = source.grid ? computeLabelStats(*source.grid).counts : source.outOfCore->labelCounts();
+  const std::vector<std::uint64_t>& before = measures.counts;
   const OrganTable* organs = o.organs ? &*o.organs : nullptr;
   report.labels = labelChanges(before, after.counts, source.geometry().voxelVolume(), organs);
   report.posedProjection = after.projection;

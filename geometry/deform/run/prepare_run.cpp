@@ -21,8 +21,7 @@ PrepareResult prepareRestState(const PrepareRequest& o) {
   const int factor = downsampleFactor(grid.geometry(), kDefaultWorkingVoxels);
   LabelGrid downsampled;
   if (factor > 1) {
-    LabelGridSlices slices(grid);
-    downsampled = downsampleLabels(slices, factor);
+    downsampled = downsampleLabels(grid, factor);
   }
   const LabelGrid& working = factor > 1 ? downsampled : grid;
   result.stages.push_back(readTimer.stop());
@@ -50,10 +49,7 @@ PrepareResult prepareRestState(const PrepareRequest& o) {
       if (!o.parts.empty()) {
         LabelGrid parts = readGrid(o.parts);
         if (parts.dims() != grid.dims()) throw InputError(o.parts, "has other dims than the grid " + o.input);
-        if (factor > 1) {
-          LabelGridSlices slices(parts);
-          parts = downsampleLabels(slices, factor);
-        }
+        if (factor > 1) parts = downsampleLabels(parts, factor);
         userParts = std::move(parts);
       }
       try {

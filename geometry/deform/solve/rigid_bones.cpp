@@ -2,6 +2,7 @@
 
 #include "geometry/deform/solve/deformation_metrics.h"
 #include "geometry/error.h"
+#include "geometry/parallel.h"
 #include "geometry/raster/lattice_tets.h"
 #include "geometry/skeleton/bones.h"
 
@@ -33,38 +34,49 @@ RigidBoneGroups rigidBoneGroups(const TetMesh& rest, const LabelGrid& boneKeys, 
   const GridGeometry& lattice = boneKeys.geometry();
   out.voxelVolume = lattice.voxelVolume();
   const std::vector<Label>& keys = boneKeys.labels();
-  // Each bone voxel's centre goes to the lowest-index tet holding it.
+  // Each bone voxel's centre goes to the lowest-index tet holding it: on the
+  // parallel loop by slabs of z, each slab's voxels taken by the tets that
+  // reach it in tet order, so no two threads write one voxel.
   std::vector<std::int32_t> owner(keys.size(), -1);
   const std::vector<LatticeTet> tets = latticeTets(lattice, rest.positions, rest.tets);
-  for (std::size_t t = 0; t < tets.size(); ++t) {
-    const LatticeTet& lt = tets[t];
-    if (lt.empty()) continue;
-    for (std::int32_t z = lt.lo[2]; z <= lt.hi[2]; ++z)
-      for (std::int32_t y = lt.lo[1]; y <= lt.hi[1]; ++y) {
-        std::int32_t x0 = 0, x1 = -1;
-        if (!rowSpan(lt, y, z, x0, x1)) continue;
-        const std::int64_t row = lattice.index(0, y, z);
-        for (std::int32_t x = x0; x <= x1; ++x) {
-          const std::int64_t v = row + x;
-          if (keys[std::size_t(v)] != 0 && owner[std::size_t(v)] < 0) owner[std::size_t(v)] = std::int32_t(t);
+  parallelRanges(lattice.dims[2], workerThreads(0), [&](std::int64_t k0, std::int64_t k1) {
+    for (std::size_t t = 0; t < tets.size(); ++t) {
+      const LatticeTet& lt = tets[t];
+      if (lt.empty()) continue;
+      const std::int32_t z0 = std::max(lt.lo[2], std::int32_t(k0)), z1 = std::min(lt.hi[2], std::int32_t(k1 - 1));
+      for (std::int32_t z = z0; z <= z1; ++z)
+        for (std::int32_t y = lt.lo[1]; y <= lt.hi[1]; ++y) {
+          std::int32_t x0 = 0, x1 = -1;
+          if (!rowSpan(lt, y, z, x0, x1)) continue;
+          const std::int64_t row = lattice.index(0, y, z);
+          for (std::int32_t x = x0; x <= x1; ++x) {
+            const std::int64_t v = row + x;
+            if (keys[std::size_t(v)] != 0 && owner[std::size_t(v)] < 0) owner[std::size_t(v)] = std::int32_t(t);
+          }
         }
-      }
-  }
-  std::vector<std::pair<std::int32_t, Label>> held;
+    }
+  }, 8);
+  // The held voxels' keys bucketed by tet, then each tet's counted by key:
+  // (tet, key) in increasing order.
+  std::vector<std::int64_t> start(tets.size() + 1, 0);
   for (std::size_t v = 0; v < keys.size(); ++v) {
     if (keys[v] == 0) continue;
-    if (owner[v] < 0) {
-      ++out.uncoveredVoxels;
-      continue;
-    }
-    held.emplace_back(owner[v], keys[v]);
+    if (owner[v] < 0) ++out.uncoveredVoxels;
+    else ++start[std::size_t(owner[v]) + 1];
   }
-  std::sort(held.begin(), held.end());
-  for (std::size_t k = 0; k < held.size();) {
-    std::size_t e = k;
-    while (e < held.size() && held[e] == held[k]) ++e;
-    out.tetVoxels.push_back({held[k].first, held[k].second, std::int32_t(e - k)});
-    k = e;
+  for (std::size_t t = 0; t < tets.size(); ++t) start[t + 1] += start[t];
+  std::vector<Label> held(std::size_t(start.back()));
+  std::vector<std::int64_t> next(start.begin(), start.end() - 1);
+  for (std::size_t v = 0; v < keys.size(); ++v)
+    if (keys[v] != 0 && owner[v] >= 0) held[std::size_t(next[std::size_t(owner[v])]++)] = keys[v];
+  for (std::size_t t = 0; t < tets.size(); ++t) {
+    const auto first = held.begin() + start[t], last = held.begin() + start[t + 1];
+    std::sort(first, last);
+    for (auto k = first; k != last;) {
+      const auto e = std::find_if(k, last, [&](Label key) { return key != *k; });
+      out.tetVoxels.push_back({std::int32_t(t), *k, std::int32_t(e - k)});
+      k = e;
+    }
   }
 
   // Vertex -> part: 0 none, part, or kShared when two parts' bones meet.

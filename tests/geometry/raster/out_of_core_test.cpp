@@ -6,6 +6,7 @@
 #include "geometry/raster/raster_engines.h"
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
+#include "geometry/parallel.h"
 #include "geometry/synth.h"
 #include "geometry/voxel_tetrahedralization.h"
 #include "tests/support/deformation_fixtures.h"
@@ -53,6 +54,24 @@ TEST(OutOfCore, DownsamplingCoversTheForegroundWithTheMajorityLabel) {
   EXPECT_EQ(downsampleFactor(even, even.voxelCount()), 1);
   EXPECT_EQ(downsampleFactor(even, even.voxelCount() / 8), 2);
   EXPECT_EQ(downsampleFactor(even, even.voxelCount() / 8 - 1), 3);
+}
+
+TEST(OutOfCore, DownsamplingInMemoryEqualsTheStreamOnAnyThreadCount) {
+  LabelGrid grid = synthesize(SynthKind::JunctionSphere, 33);
+  grid.geometry().spacing = {0.5, 0.75, 1.25};
+  LabelGridSlices slices(grid);
+  for (int factor : {1, 2, 3, 5}) {
+    const LabelGrid streamed = downsampleLabels(slices, factor);
+    for (int threads : {1, 3}) {
+      const ScopedWorkerThreads scope(threads);
+      const LabelGrid d = downsampleLabels(grid, factor);
+      EXPECT_EQ(d.labels(), streamed.labels()) << factor << " " << threads;
+      EXPECT_EQ(d.dims(), streamed.dims());
+      EXPECT_TRUE(d.geometry().boxMin().isApprox(streamed.geometry().boxMin()));
+      EXPECT_TRUE(d.spacing().isApprox(streamed.spacing()));
+    }
+  }
+  EXPECT_THROW(downsampleLabels(grid, 0), InputError);
 }
 
 TEST(OutOfCore, MemoryLimitsStayWithinTheBudget) {

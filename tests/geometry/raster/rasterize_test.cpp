@@ -7,6 +7,7 @@
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
 #include "geometry/label_stats.h"
+#include "geometry/parallel.h"
 #include "geometry/synth.h"
 #include "tests/support/deformation_fixtures.h"
 #include "tests/support/test_environment.h"
@@ -147,6 +148,30 @@ TEST(RasterizeCpu, TieRuleIsLowestTetIndexAndWatertight) {
       if (rotated.tets()[t].contains(std::int32_t(q[0]), std::int32_t(q[1]), std::int32_t(q[2]))) first = std::int32_t(t);
     const std::int32_t got = located[std::size_t(v)] == kNoTet ? -1 : all.tets[located[std::size_t(v)]];
     ASSERT_EQ(got, first) << v;
+  }
+}
+
+TEST(RasterizeCpu, LatticeTetsAreTheSameOnAnyThreadCount) {
+  const LabelGrid grid = synthesize(SynthKind::JunctionSphere, 41);
+  const TetMesh tm = coveringTransferMesh(grid, 2);
+  ASSERT_GT(tm.tetCount(), 3u * 4096u);  // several ranges of the parallel loop
+  const auto deformed = deformPositions(tm.positions, test::twist(gridCentre(grid.geometry()), 1.5));
+  std::vector<LatticeTet> one;
+  {
+    const ScopedWorkerThreads scope(1);
+    one = latticeTets(grid.geometry(), deformed, tm.tets);
+  }
+  const ScopedWorkerThreads scope(3);
+  const std::vector<LatticeTet> three = latticeTets(grid.geometry(), deformed, tm.tets);
+  ASSERT_EQ(three.size(), one.size());
+  for (std::size_t t = 0; t < one.size(); ++t) {
+    ASSERT_EQ(three[t].lo, one[t].lo) << t;
+    ASSERT_EQ(three[t].hi, one[t].hi) << t;
+    for (std::size_t k = 0; k < 4; ++k) {
+      ASSERT_EQ(three[t].normal[k], one[t].normal[k]) << t;
+      ASSERT_EQ(three[t].offset[k], one[t].offset[k]) << t;
+      ASSERT_EQ(three[t].anchor[k], one[t].anchor[k]) << t;
+    }
   }
 }
 

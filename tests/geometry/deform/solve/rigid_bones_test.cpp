@@ -11,7 +11,9 @@
 #include "geometry/deform/solve/rigid_bones.h"
 #include "geometry/deform/pose/joint_pose.h"
 #include "geometry/io/grid_io.h"
+#include "geometry/parallel.h"
 #include "geometry/synth.h"
+#include "geometry/voxel_tetrahedralization.h"
 #include "tests/support/test_environment.h"
 
 #include <gtest/gtest.h>
@@ -60,6 +62,52 @@ TEST(RigidBones, FitReproducesARigidMotionAndYieldsToAGivenOne) {
   fit.precompute(group, fitted, rest);
   EXPECT_EQ(fit.droppedGroups(), 2u);
   EXPECT_EQ(std::count(fit.placed().begin(), fit.placed().end(), 1), 0);
+}
+
+TEST(RigidBones, GroupsAreTheSameOnAnyThreadCountAndCountEveryHeldVoxel) {
+  const LabelGrid grid = synthesize(SynthKind::JunctionSphere, 41);
+  LabelGrid keys(grid.geometry(), 0);
+  std::int64_t keyed = 0;
+  for (std::size_t v = 0; v < keys.labels().size(); ++v)
+    if (const Label l = grid.labels()[v]; l != 0) {
+      keys.labels()[v] = Label((1 + l % 2) * kBoneKeyStride + l);
+      ++keyed;
+    }
+  // A mesh that leaves some voxel centres out: the six tets of every seventh
+  // voxel (tets 6 v to 6 v + 5) dropped.
+  const TetMesh all = tetrahedralizeVoxels(grid, {.includeBackground = false});
+  TetMesh tm;
+  tm.positions = all.positions;
+  for (std::size_t t = 0; t < all.tetCount(); ++t)
+    if (t / 6 % 7 != 3) {
+      tm.tets.push_back(all.tets[t]);
+      tm.labels.push_back(all.labels[t]);
+    }
+  RigidBoneGroups one;
+  {
+    const ScopedWorkerThreads scope(1);
+    one = rigidBoneGroups(tm, keys, 1);
+  }
+  const ScopedWorkerThreads scope(3);
+  const RigidBoneGroups three = rigidBoneGroups(tm, keys, 1);
+  EXPECT_GT(one.uncoveredVoxels, 0);
+  EXPECT_EQ(three.uncoveredVoxels, one.uncoveredVoxels);
+  EXPECT_EQ(three.vertexGroup, one.vertexGroup);
+  EXPECT_EQ(three.groupPart, one.groupPart);
+  ASSERT_EQ(three.tetVoxels.size(), one.tetVoxels.size());
+  std::int64_t held = 0;
+  for (std::size_t k = 0; k < one.tetVoxels.size(); ++k) {
+    const RigidBoneGroups::TetVoxels &a = one.tetVoxels[k], &b = three.tetVoxels[k];
+    ASSERT_EQ(a.tet, b.tet);
+    ASSERT_EQ(a.key, b.key);
+    ASSERT_EQ(a.voxels, b.voxels);
+    if (k > 0) {
+      const RigidBoneGroups::TetVoxels& p = one.tetVoxels[k - 1];
+      ASSERT_TRUE(p.tet < a.tet || (p.tet == a.tet && p.key < a.key)) << k;
+    }
+    held += a.voxels;
+  }
+  EXPECT_EQ(held + one.uncoveredVoxels, keyed);
 }
 
 // The largest distance of a part's rigid TM vertices from where its motion sends them.
