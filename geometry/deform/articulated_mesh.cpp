@@ -12,6 +12,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <numeric>
 
 namespace vox {
 
@@ -630,6 +631,23 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
         out.vertexBody[std::size_t(v)] = std::int8_t(b);
       }
   splitBridgingEdges(out);
+  // Bone and body tets first: where the two sides of a sliding cut overlap
+  // (the owner's bone staircase turned past the socket's), the
+  // rasterization's lowest-index tet gives the posed voxel the rigid bone's
+  // label, not the tissue's it sweeps over.
+  {
+    std::vector<std::size_t> order(out.mesh.tetCount());
+    std::iota(order.begin(), order.end(), std::size_t(0));
+    std::stable_partition(order.begin(), order.end(), [&](std::size_t t) { return out.mesh.labels[t] != kSoftTissueTag; });
+    std::vector<Tet> tets(order.size());
+    std::vector<std::int32_t> labels(order.size());
+    for (std::size_t i = 0; i < order.size(); ++i) {
+      tets[i] = out.mesh.tets[order[i]];
+      labels[i] = out.mesh.labels[order[i]];
+    }
+    out.mesh.tets = std::move(tets);
+    out.mesh.labels = std::move(labels);
+  }
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
 }
