@@ -85,6 +85,10 @@ TEST(ArticulatedMesh, BonesAndBodiesAreResolvedAndTheirVerticesRigid) {
   }
   EXPECT_EQ(free.size(), m.conflictVertices);
   EXPECT_GT(m.rigidVertices[std::size_t(Part::RightForearm)], 4u);
+  // Bone and body tets come first: the rasterization's lowest-index tet
+  // gives an overlap across a cut to the bone.
+  const auto tissue = std::find(m.mesh.labels.begin(), m.mesh.labels.end(), kSoftTissueTag);
+  EXPECT_TRUE(std::all_of(tissue, m.mesh.labels.end(), [](std::int32_t l) { return l == kSoftTissueTag; }));
 }
 
 // Each scapula is its own segment; past 30 degrees of elevation it turns
