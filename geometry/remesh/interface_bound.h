@@ -66,36 +66,40 @@ private:
     std::array<Eigen::Vector3f, 3> corners;
     std::int32_t pair;
   };
-  struct Sample {
-    Eigen::Vector3f p;
-    std::int32_t pair;
-  };
-  // Items of each cell of a uniform grid (CSR), sorted by pair in a cell.
+  // A uniform grid: the items of each cell (CSR).
   struct Cells {
+    Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+    double size = 1.0;
+    std::array<std::int64_t, 3> dims{1, 1, 1};
     std::vector<std::int64_t> start;
     std::vector<std::int32_t> items;
+    // Cells of `size` over [lo, hi], or coarser when that would make too many.
+    void cover(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, double size);
+    std::int64_t count() const { return dims[0] * dims[1] * dims[2]; }
+    std::array<std::int64_t, 3> cellOf(const Eigen::Vector3d& p) const;  // clamped to the grid
+    std::int64_t index(std::int64_t i, std::int64_t j, std::int64_t k) const { return (k * dims[1] + j) * dims[0] + i; }
   };
-  std::array<std::int64_t, 3> cellOf(const Eigen::Vector3d& p) const;
-  std::int64_t cellIndex(std::int64_t i, std::int64_t j, std::int64_t k) const {
-    return (k * dims_[1] + j) * dims_[0] + i;
-  }
-  template <typename Pair, typename Box>
-  void buildCells(std::size_t count, const Pair& pairOf, const Box& boxOf, Cells& out) const;
-  // Calls visit(item) for the items of `pair` in the cells the box [lo, hi]
-  // meets (visit.pairOf(item) gives an item's pair) until it returns true;
-  // returns whether it did.
-  template <typename Visit>
-  bool visitCells(const Cells& cells, std::int32_t pair, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
-                  const Visit& visit) const;
+  // The samples of one label pair in one cell (samples_[first, last)), and their box.
+  struct SampleRun {
+    std::int32_t pair, first, last;
+    Eigen::Vector3f lo, hi;
+  };
+  // Calls visit(item) for the items of `pair` (pairOf(item)) in the cells
+  // the box [lo, hi] meets until it returns true; returns whether it did.
+  template <typename PairOf, typename Visit>
+  static bool visitCells(const Cells& cells, std::int32_t pair, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
+                         const PairOf& pairOf, const Visit& visit);
+  // The second test of keeps() for one pair.
+  bool coveredSamples(std::int32_t pair, const std::vector<InterfaceFacet>& before,
+                      const std::vector<InterfaceFacet>& after) const;
 
   double bound_;
   std::vector<std::uint64_t> pairKeys_;  // sorted (x << 32 | y), x < y as unsigned
   std::vector<Triangle> triangles_;
-  std::vector<Sample> samples_;
-  Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();
-  double cell_ = 1.0;
-  std::array<std::int64_t, 3> dims_{1, 1, 1};
-  Cells triangleCells_, sampleCells_;
+  Cells triangleCells_;                  // items: triangles, sorted by pair in a cell
+  std::vector<Eigen::Vector3f> samples_;  // sorted by cell, then pair
+  Cells sampleCells_;                    // items: runs_, sorted by pair in a cell
+  std::vector<SampleRun> runs_;
 };
 
 // Squared distance from p to the triangle (a, b, c) (Ericson, Real-Time
