@@ -1,7 +1,8 @@
 #pragma once
 // The interfaces' distance bound (issue 37: the interface Hausdorff distance
 // at most 0.5 l; MMG3D's -hausd). A collapse or a smoothing move of an
-// interface vertex is made only when the interface facets it creates stay
+// interface vertex (or a flip of an interface edge for the valences) is
+// made only when the interface facets it creates stay
 // within the bound of the INPUT's interface of the same label pair, and the
 // input's interface stays within the bound of them where it was within the
 // bound of the facets they replace. Checked against the current surface

@@ -84,6 +84,7 @@ void remeshComplex(RemeshComplex& complex, const RemeshOptions& options, RemeshS
     }
     FlipOptions flipOptions = options.flip;
     flipOptions.threads = options.threads;
+    flipOptions.interfaces = interfaceBound.get();
     const FlipCounts flips = flipEdges(complex, flipOptions);
     step.surfaceFlips = flips.surface;
     step.innerFlips = flips.inner;
@@ -111,6 +112,7 @@ void remeshComplex(RemeshComplex& complex, const RemeshOptions& options, RemeshS
   if (inserted > 0) {
     FlipOptions flipOptions = options.flip;
     flipOptions.threads = options.threads;
+    flipOptions.interfaces = interfaceBound.get();
     const FlipCounts flips = flipEdges(complex, flipOptions);
     sliverFlips = flips.surface + flips.inner + flips.face;
     polished += polishWorstTets(complex, surfaces.get(), hull, options.steiner.angle, options.threads, interfaceBound.get());
