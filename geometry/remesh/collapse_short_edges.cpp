@@ -17,8 +17,9 @@ const double kGuardQuality = 2.0 * std::sin(kCollapseMinDihedral * M_PI / 180.0)
 constexpr double kUnknownCosine = 3.0;
 }  // namespace
 
-EdgeCollapser::EdgeCollapser(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull)
-    : complex_(complex), bounds_(bounds), hull_(hull) {}
+EdgeCollapser::EdgeCollapser(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull,
+                             const InterfaceBound* interfaces)
+    : complex_(complex), bounds_(bounds), hull_(hull), interfaces_(interfaces) {}
 
 const LabelSet& EdgeCollapser::edgeLabels(const VertexNeighborhood& n, std::int32_t w) const {
   return n.edgeLabels[std::size_t(n.find(w))];
@@ -91,6 +92,7 @@ std::int32_t EdgeCollapser::tryCollapse(std::int32_t u, std::int32_t v, bool app
     if (keptMoves && k.onHull() && !hull_.allows(planes[&k == &nu_ ? 0 : 1], o.p)) continue;
     if (!test2NoLongEdges(r, k, o.p) || !test1PositiveVolumes(r, k, o.p)) continue;
     if (!keepsTaggedLine(r, k, o.p)) continue;
+    if (!keepsInterfaces(r, k, o.p)) continue;
     if (move) *move = o.move;
     if (apply) collapse(r, k, o.p);
     return k.vertex;
@@ -122,6 +124,74 @@ bool EdgeCollapser::keepsTaggedLine(const VertexNeighborhood& r, const VertexNei
   const FeatureEdges& features = complex_.features();
   return near(features.projectOnLine(r.featureLine, pos(r.vertex))) &&
          (!kMoves || near(k.featureLine >= 0 ? features.projectOnLine(k.featureLine, pos(k.vertex)) : pos(k.vertex)));
+}
+
+bool EdgeCollapser::keepsInterfaces(const VertexNeighborhood& r, const VertexNeighborhood& k,
+                                    const Eigen::Vector3d& p) const {
+  if (!interfaces_) return true;
+  const bool keptMoves = p != complex_.position(k.vertex);
+  auto onInterface = [](const VertexNeighborhood& nb) {
+    int labels = 0;
+    for (std::int32_t l : nb.labels) labels += l >= 0;
+    return labels >= 2;
+  };
+  if (!onInterface(r) && !onInterface(k)) return true;
+  // The interface facets through r and k before the collapse, and through
+  // k after it (r's tets joined to k at p, the ring's tets gone: a facet
+  // that faced a ring tet faces the tet beyond it), each taken from its side
+  // of the larger label. An interface facet after it that was there before
+  // (same vertices, same labels) is unchanged.
+  struct Facet {
+    std::array<std::int32_t, 3> ids;  // sorted, r renamed k
+    InterfaceFacet facet;
+  };
+  thread_local std::vector<Facet> before, after;
+  before.clear();
+  after.clear();
+  const std::int32_t rv = r.vertex, kv = k.vertex;
+  auto gather = [&](const VertexNeighborhood& nb, bool collapsed, std::vector<Facet>& out) {
+    const std::int32_t x = nb.vertex;
+    for (std::int32_t q : nb.tets) {
+      const std::int32_t lq = complex_.label(q);
+      if (lq <= 0) continue;
+      if (collapsed && complex_.localIndex(q, rv) >= 0 && complex_.localIndex(q, kv) >= 0) continue;  // a ring tet
+      const Tet& t = complex_.tet(q);
+      for (int f = 0; f < 4; ++f) {
+        if (t[std::size_t(f)] == x) continue;  // the facet opposite x
+        std::int32_t n = complex_.neighbor(q, f);
+        if (collapsed && complex_.localIndex(n, rv) >= 0 && complex_.localIndex(n, kv) >= 0)
+          n = complex_.neighbor(n, complex_.localIndex(n, x));
+        const std::int32_t ln = std::max(complex_.label(n), 0);
+        if (ln >= lq) continue;
+        Facet out1;
+        const Tri v = tetFace(t, f);
+        for (int i = 0; i < 3; ++i) {
+          const std::int32_t w = v[std::size_t(i)];
+          const bool moved = collapsed && (w == rv || w == kv);
+          out1.ids[std::size_t(i)] = collapsed && w == rv ? kv : w;
+          out1.facet.corners[std::size_t(i)] = moved ? p : complex_.position(w);
+        }
+        std::sort(out1.ids.begin(), out1.ids.end());
+        out1.facet.pair = interfaces_->pairIndex(lq, ln);
+        out.push_back(out1);
+      }
+    }
+  };
+  gather(r, false, before);
+  gather(k, false, before);
+  gather(r, true, after);
+  gather(k, true, after);
+  thread_local std::vector<InterfaceFacet> replaced, replacing;
+  replaced.clear();
+  replacing.clear();
+  for (const Facet& f : before) replaced.push_back(f.facet);
+  for (Facet& f : after) {
+    if (!keptMoves)
+      for (const Facet& b : before)
+        if (b.ids == f.ids && b.facet.pair == f.facet.pair) f.facet.changed = false;
+    replacing.push_back(f.facet);
+  }
+  return interfaces_->keeps(replaced, replacing);
 }
 
 bool EdgeCollapser::mergesTaggedEdges(std::int32_t u, std::int32_t v) const {
@@ -382,7 +452,7 @@ void EdgeCollapser::collapse(const VertexNeighborhood& r, const VertexNeighborho
 }
 
 std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull,
-                               int threads) {
+                               int threads, const InterfaceBound* interfaces) {
   auto tooShort = [&](std::int32_t a, std::int32_t b, double l2) {
     return bounds.belowEmin(complex.position(a), complex.position(b), l2);
   };
@@ -400,7 +470,7 @@ std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& b
   // cannot be collapsed either, and finding out is again read-only). Every
   // wave but the last collapses at least its first promising edge. What a
   // wave holds does not depend on the thread count, nor does the result.
-  EdgeCollapser collapser(complex, bounds, hull);
+  EdgeCollapser collapser(complex, bounds, hull, interfaces);
   std::vector<char> touched(std::size_t(complex.vertexSlots()), 0);
   std::vector<std::int32_t> touchedList, star, ring, byVertex;
   std::vector<CollapseMove> plans;
@@ -421,7 +491,7 @@ std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& b
       return std::tie(edges[std::size_t(x)].a, edges[std::size_t(x)].b) < std::tie(edges[std::size_t(y)].a, edges[std::size_t(y)].b);
     });
     parallelRanges(std::int64_t(edges.size()), threads, [&](std::int64_t b, std::int64_t e) {
-      EdgeCollapser screen(complex, bounds, hull);
+      EdgeCollapser screen(complex, bounds, hull, interfaces);
       for (std::int64_t x = b; x < e; ++x) {
         throwIfCancelled();
         const std::size_t i = std::size_t(byVertex[std::size_t(x)]);

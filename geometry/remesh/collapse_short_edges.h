@@ -16,10 +16,15 @@
 // Tagged features (feature_edges.h) follow Table 2.4 (edgeRule), no
 // collapse merges the two tagged edges of a triangle, and a collapse along a
 // tagged line keeps its new edges within l / 20 of the vertices it removes.
+// With an interface bound (interface_bound.h), a collapse that moves an
+// interface is made only when the interface facets around the surviving
+// vertex stay within the bound of the input's interfaces, and the input's
+// within the bound of them.
 
 #include "geometry/remesh/edge_length_bounds.h"
 #include "geometry/remesh/element_classification.h"
 #include "geometry/remesh/hull_constraint.h"
+#include "geometry/remesh/interface_bound.h"
 #include "geometry/remesh/remesh_complex.h"
 
 #include <Eigen/Core>
@@ -43,7 +48,9 @@ enum class CollapseMove : std::uint8_t {
 
 class EdgeCollapser {
 public:
-  EdgeCollapser(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull);
+  // `interfaces` (may be null: no bound) is not owned.
+  EdgeCollapser(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull,
+                const InterfaceBound* interfaces = nullptr);
 
   // Collapses edge (u, v) when the rules above allow it. Returns the vertex
   // that remains, or -1 (nothing changed). With apply = false only says
@@ -64,6 +71,7 @@ private:
   bool nearPinch() const;
   bool mergesTaggedEdges(std::int32_t u, std::int32_t v) const;
   bool keepsTaggedLine(const VertexNeighborhood& removed, const VertexNeighborhood& kept, const Eigen::Vector3d& p) const;
+  bool keepsInterfaces(const VertexNeighborhood& removed, const VertexNeighborhood& kept, const Eigen::Vector3d& p) const;
   bool topologyTests(const LabelSet& edgeLabels) const;
   bool linkCondition() const;
   bool test1PositiveVolumes(const VertexNeighborhood& removed, const VertexNeighborhood& kept,
@@ -76,6 +84,7 @@ private:
   RemeshComplex& complex_;
   EdgeLengthBounds bounds_;
   const HullConstraint& hull_;
+  const InterfaceBound* interfaces_;
   StarWalker walker_;
   VertexNeighborhood nu_, nv_;
   EdgeRing ring_;
@@ -107,7 +116,8 @@ private:
 // collapses are then applied one at a time in order: as screened while no
 // collapse has touched the edge's end points since, re-checked otherwise.
 // The result does not depend on the thread count.
+// `interfaces`: the interface bound, or null.
 std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& bounds, const HullConstraint& hull,
-                               int threads = 2);
+                               int threads = 2, const InterfaceBound* interfaces = nullptr);
 
 }  // namespace vox::remesh

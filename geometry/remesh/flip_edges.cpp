@@ -226,6 +226,15 @@ bool EdgeFlipper::tryFlipSurfaceEdge(std::int32_t a, std::int32_t b, bool apply,
   }
   if (fanCreatesExistingEdge(bestApex)) return false;
   if (bestApex == n) return false;
+  if (options_.interfaces && !removesSliver) {
+    // The facets (a, b, c), (a, b, d) become (c, d, a), (c, d, b): a flip
+    // for the valences keeps the bound; one that removes a sliver may cross it.
+    const std::int32_t pair = options_.interfaces->pairIndex(x, y);
+    auto facet = [&](std::int32_t p, std::int32_t q, std::int32_t r) {
+      return InterfaceFacet{pair, {P[std::size_t(p)], P[std::size_t(q)], P[std::size_t(r)]}};
+    };
+    if (!options_.interfaces->keeps({facet(a, b, c), facet(a, b, d)}, {facet(c, d, a), facet(c, d, b)})) return false;
+  }
   if (apex) *apex = std::uint8_t(bestApex);
   if (!apply) return true;
   fanTowards(bestApex);

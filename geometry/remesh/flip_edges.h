@@ -17,6 +17,7 @@
 // that touch the domain: the rest of the imaginary layer is not output and
 // only needs to stay valid.
 
+#include "geometry/remesh/interface_bound.h"
 #include "geometry/remesh/remesh_complex.h"
 
 #include <cstddef>
@@ -37,6 +38,9 @@ struct FlipOptions {
   // A surface flip may not bend the interface more than this (degrees,
   // angle between the normals of the two facets replaced).
   double surfaceFlipMaxBend = 20.0;
+  // The interface bound (interface_bound.h; not owned): a surface flip is
+  // made only when its two new facets keep it. Null: no bound.
+  const InterfaceBound* interfaces = nullptr;
   int threads = 2;  // for the quality scans
 };
 

@@ -5,6 +5,7 @@
 #include "geometry/remesh/collapse_short_edges.h"
 #include "geometry/remesh/edge_length_bounds.h"
 #include "geometry/remesh/hull_constraint.h"
+#include "geometry/remesh/interface_bound.h"
 #include "geometry/remesh/interface_surfaces.h"
 #include "geometry/remesh/smooth_vertices.h"
 #include "geometry/remesh/split_long_edges.h"
@@ -44,6 +45,9 @@ void remeshComplex(RemeshComplex& complex, const RemeshOptions& options, RemeshS
   const auto start = std::chrono::steady_clock::now();
   const EdgeLengthBounds bounds = EdgeLengthBounds::forSizing(options.targetLength, options.sizing);
   const HullConstraint hull(complex);
+  std::unique_ptr<InterfaceBound> interfaceBound;
+  if (options.hausdorff > 0.0)
+    interfaceBound = std::make_unique<InterfaceBound>(complex, options.hausdorff * options.targetLength);
 
   std::unique_ptr<InterfaceSurfaces> surfaces;
   if (options.projectOnInterfaces) {
@@ -75,17 +79,18 @@ void remeshComplex(RemeshComplex& complex, const RemeshOptions& options, RemeshS
     if (refine) {
       step.splits = splitLongEdges(complex, bounds, options.threads);
       step.splitSeconds = lap();
-      step.collapses = collapseShortEdges(complex, bounds, hull, options.threads);
+      step.collapses = collapseShortEdges(complex, bounds, hull, options.threads, interfaceBound.get());
       step.collapseSeconds = lap();
     }
     FlipOptions flipOptions = options.flip;
     flipOptions.threads = options.threads;
+    flipOptions.interfaces = interfaceBound.get();
     const FlipCounts flips = flipEdges(complex, flipOptions);
     step.surfaceFlips = flips.surface;
     step.innerFlips = flips.inner;
     step.faceFlips = flips.face;
     step.flipSeconds = lap();
-    const SmoothCounts smoothed = smoothVertices(complex, surfaces.get(), hull, options.threads);
+    const SmoothCounts smoothed = smoothVertices(complex, surfaces.get(), hull, options.threads, interfaceBound.get());
     step.smoothSeconds = lap();
     step.smoothedFeature = smoothed.feature;
     step.smoothedSurface = smoothed.surface;
@@ -99,16 +104,18 @@ void remeshComplex(RemeshComplex& complex, const RemeshOptions& options, RemeshS
   // move helps. The new vertices open room for one more round of flips,
   // moves and insertions.
   const auto polishStart = std::chrono::steady_clock::now();
-  std::size_t polished = polishWorstTets(complex, surfaces.get(), hull, options.polishAngle, options.threads);
+  std::size_t polished = polishWorstTets(complex, surfaces.get(), hull, options.polishAngle, options.threads,
+                                       interfaceBound.get());
   const auto insertStart = std::chrono::steady_clock::now();
   std::size_t inserted = insertSteinerPoints(complex, options.steiner);
   std::size_t sliverFlips = 0;
   if (inserted > 0) {
     FlipOptions flipOptions = options.flip;
     flipOptions.threads = options.threads;
+    flipOptions.interfaces = interfaceBound.get();
     const FlipCounts flips = flipEdges(complex, flipOptions);
     sliverFlips = flips.surface + flips.inner + flips.face;
-    polished += polishWorstTets(complex, surfaces.get(), hull, options.steiner.angle, options.threads);
+    polished += polishWorstTets(complex, surfaces.get(), hull, options.steiner.angle, options.threads, interfaceBound.get());
     inserted += insertSteinerPoints(complex, options.steiner);
   }
   if (stats) {

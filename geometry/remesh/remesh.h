@@ -45,6 +45,15 @@ struct RemeshOptions {
   // label volumes far better on voxel input (docs/REMESH.md).
   bool hermite = true;
   int threads = 2;
+  // The interfaces' Hausdorff bound, in units of l (l_B with a sizing
+  // field): a collapse, a smoothing or polish move of an interface vertex
+  // and a flip of an interface edge for the valences are made only when the
+  // interface facets they make stay within it of the input's interface of
+  // the same labels, and the input's within it of them (interface_bound.h;
+  // MMG3D's -hausd). The acceptance asks 0.5 l of the report's sampled
+  // distance; the flips that remove a sliver and the Steiner points still
+  // move the interfaces a little. 0: no bound.
+  double hausdorff = 0.45;
   FlipOptions flip;
   // After the last round, the vertices of tets with a dihedral angle under
   // this (degrees) are moved to lift the smallest angle (polishWorstTets,

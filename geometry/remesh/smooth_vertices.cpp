@@ -43,8 +43,9 @@ VertexTets vertexTets(const RemeshComplex& complex) {
 
 class Smoother {
 public:
-  Smoother(RemeshComplex& complex, const InterfaceSurfaces* surfaces, const HullConstraint& hull, const VertexTets& vt)
-      : complex_(complex), surfaces_(surfaces), hull_(hull), vt_(vt) {}
+  Smoother(RemeshComplex& complex, const InterfaceSurfaces* surfaces, const HullConstraint& hull, const VertexTets& vt,
+           const InterfaceBound* interfaces)
+      : complex_(complex), surfaces_(surfaces), hull_(hull), vt_(vt), interfaces_(interfaces) {}
 
   // Where v should go, from the current positions; false to stay.
   bool target(VertexNeighborhood& nb, Eigen::Vector3d& out) const {
@@ -113,7 +114,7 @@ public:
     double worstBefore = kUnknownCosine;
     for (double f : {1.0, 0.5, 0.25, 0.125}) {
       const Eigen::Vector3d p = from + f * (to - from);
-      if (valid(v, p, tets, worstBefore)) {
+      if (valid(v, p, tets, worstBefore) && (!interfaces_ || interfaces_->keepsMove(complex_, v, tets, p))) {
         complex_.setPosition(v, p);
         return true;
       }
@@ -194,7 +195,7 @@ public:
         Eigen::Vector3d p = at + step * d;
         if (!project(p) || !p.allFinite()) continue;
         const double score = polishScore(v, p, nb.tets);
-        if (score < found) {
+        if (score < found && (!interfaces_ || interfaces_->keepsMove(complex_, v, nb.tets, p))) {
           found = score;
           next = p;
         }
@@ -301,6 +302,7 @@ private:
   const InterfaceSurfaces* surfaces_;
   const HullConstraint& hull_;
   const VertexTets& vt_;
+  const InterfaceBound* interfaces_;
 };
 
 // Moves level[i] towards targets[i] where moves[i], with the result of doing
@@ -393,7 +395,7 @@ std::size_t applyMoves(RemeshComplex& complex, const Smoother& smoother, const V
 // One pass of polishWorstTets: the vertices of the domain tets under the
 // angle, in index order. Returns the vertices moved.
 std::size_t polishPass(RemeshComplex& complex, const InterfaceSurfaces* surfaces, const HullConstraint& hull,
-                       double angleDeg, int threads) {
+                       double angleDeg, int threads, const InterfaceBound* interfaces) {
   const double cosine = std::cos(angleDeg * M_PI / 180.0);
   const std::int32_t nv = complex.vertexSlots();
   // Marks are idempotent writes of 1: racing threads agree.
@@ -411,7 +413,7 @@ std::size_t polishPass(RemeshComplex& complex, const InterfaceSurfaces* surfaces
     if (marks[std::size_t(v)].load(std::memory_order_relaxed) && v != complex.dummyVertex()) vertices.push_back(v);
   if (vertices.empty()) return 0;
   const VertexTets vt = vertexTets(complex);
-  Smoother smoother(complex, surfaces, hull, vt);
+  Smoother smoother(complex, surfaces, hull, vt, interfaces);
   VertexNeighborhood nb;
   std::size_t moved = 0;
   for (std::int32_t v : vertices) {
@@ -425,13 +427,13 @@ std::size_t polishPass(RemeshComplex& complex, const InterfaceSurfaces* surfaces
 }  // namespace
 
 std::size_t polishWorstTets(RemeshComplex& complex, const InterfaceSurfaces* surfaces, const HullConstraint& hull,
-                            double angleDeg, int threads) {
+                            double angleDeg, int threads, const InterfaceBound* interfaces) {
   if (!(angleDeg > 0.0)) return 0;
   // A vertex moved changes its neighbours' stars: a second pass over the
   // tets still poor uses that room.
   std::size_t moved = 0;
   for (int pass = 0; pass < 2; ++pass) {
-    const std::size_t n = polishPass(complex, surfaces, hull, angleDeg, threads);
+    const std::size_t n = polishPass(complex, surfaces, hull, angleDeg, threads, interfaces);
     moved += n;
     if (n == 0) break;
   }
@@ -439,7 +441,7 @@ std::size_t polishWorstTets(RemeshComplex& complex, const InterfaceSurfaces* sur
 }
 
 SmoothCounts smoothVertices(RemeshComplex& complex, const InterfaceSurfaces* surfaces, const HullConstraint& hull,
-                            int threads) {
+                            int threads, const InterfaceBound* interfaces) {
   const VertexTets vt = vertexTets(complex);
   const std::int32_t nv = complex.vertexSlots();
   const std::int32_t dummy = complex.dummyVertex();
@@ -457,7 +459,7 @@ SmoothCounts smoothVertices(RemeshComplex& complex, const InterfaceSurfaces* sur
     }
   });
 
-  Smoother smoother(complex, surfaces, hull, vt);
+  Smoother smoother(complex, surfaces, hull, vt, interfaces);
   SmoothCounts counts;
   std::vector<std::int32_t> level;
   std::vector<Eigen::Vector3d> targets;

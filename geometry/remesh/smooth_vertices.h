@@ -21,6 +21,7 @@
 // lower index), so it does not depend on the thread count.
 
 #include "geometry/remesh/hull_constraint.h"
+#include "geometry/remesh/interface_bound.h"
 #include "geometry/remesh/interface_surfaces.h"
 #include "geometry/remesh/remesh_complex.h"
 
@@ -33,8 +34,11 @@ struct SmoothCounts {
 };
 
 // `surfaces` may be null: boundary vertices then move tangentially only.
+// With `interfaces` (the interface bound, may be null) a move of an
+// interface vertex is shortened like an inverting one until its interface
+// facets keep the bound (InterfaceBound::keepsMove).
 SmoothCounts smoothVertices(RemeshComplex& complex, const InterfaceSurfaces* surfaces, const HullConstraint& hull,
-                            int threads);
+                            int threads, const InterfaceBound* interfaces = nullptr);
 
 // Polish: the vertices of the domain tets whose smallest dihedral angle is
 // under `angleDeg` move, one at a time in index order, to where the smallest
@@ -45,8 +49,9 @@ SmoothCounts smoothVertices(RemeshComplex& complex, const InterfaceSurfaces* sur
 // stay. A move is kept only when that angle grows and no tet around the
 // vertex inverts or falls under the quality floor, so the smallest angle of
 // the mesh never drops. Returns the vertices moved. Sequential: the result
-// does not depend on `threads` (used for the scan).
+// does not depend on `threads` (used for the scan). With `interfaces`, no
+// place that breaks the interface bound is taken.
 std::size_t polishWorstTets(RemeshComplex& complex, const InterfaceSurfaces* surfaces, const HullConstraint& hull,
-                            double angleDeg, int threads);
+                            double angleDeg, int threads, const InterfaceBound* interfaces = nullptr);
 
 }  // namespace vox::remesh
