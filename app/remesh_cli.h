@@ -102,7 +102,7 @@ inline void addRemeshOptions(CLI::App& cmd, RemeshCliOptions& o) {
                  "Polylines to keep (world mm): a Medit .mesh with Vertices and Edges, or a text file of segments "
                  "'x0 y0 z0 x1 y1 z1' per line; snapped to the mesh's edges (split where they stray from it), tagged and "
                  "written like --sharp-features");
-  cmd.add_option("--hausdorff", o.remesh.hausdorff, "Interface bound (units of l): collapses and smoothing moves keep every "
+  cmd.add_option("--hausdorff", o.remesh.hausdorff, "Interface bound (units of l): collapses, smoothing moves and valence flips keep every "
                  "interface within it of the input's, both ways; 0: none")->capture_default_str()->check(numberIn(0, 10, "l"));
   cmd.add_option("--threads", o.remesh.threads, "Threads")->capture_default_str()->check(integerIn(1, 64));
   cmd.add_option("--organs", o.organs,

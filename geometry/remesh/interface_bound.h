@@ -1,6 +1,6 @@
 #pragma once
-// The interfaces' distance bound (issue 37: the interface Hausdorff distance
-// at most 0.5 l; MMG3D's -hausd). A collapse or a smoothing move of an
+// The interfaces' distance bound (the interface Hausdorff distance held
+// under a bound, 0.45 l by default, as MMG3D's -hausd holds it). A collapse or a smoothing move of an
 // interface vertex (or a flip of an interface edge for the valences) is
 // made only when the interface facets it creates stay
 // within the bound of the INPUT's interface of the same label pair, and the
