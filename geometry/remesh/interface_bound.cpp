@@ -1,5 +1,6 @@
 #include "geometry/remesh/interface_bound.h"
 
+#include "geometry/cancellation.h"
 #include "geometry/error.h"
 
 #include <algorithm>
@@ -105,7 +106,10 @@ InterfaceBound::InterfaceBound(const RemeshComplex& complex, double bound) : bou
     Tri v;
   };
   std::vector<Facet> facets;
+  // Seconds on a grid of millions of voxels: the loops poll the
+  // cancellation (the process's Ctrl-C, the Python module's interrupt).
   for (std::int32_t t = 0; t < complex.tetSlots(); ++t) {
+    if (t % 65536 == 0) throwIfCancelled();
     if (!complex.tetAlive(t) || complex.label(t) <= 0) continue;
     const std::int32_t lt = complex.label(t);
     for (int k = 0; k < 4; ++k) {
@@ -116,6 +120,7 @@ InterfaceBound::InterfaceBound(const RemeshComplex& complex, double bound) : bou
   }
   for (const Facet& f : facets) pairKeys_.push_back(f.key);
   std::sort(pairKeys_.begin(), pairKeys_.end());
+  throwIfCancelled();
   pairKeys_.erase(std::unique(pairKeys_.begin(), pairKeys_.end()), pairKeys_.end());
   auto indexOf = [&](std::uint64_t key) {
     return std::int32_t(std::lower_bound(pairKeys_.begin(), pairKeys_.end(), key) - pairKeys_.begin());
@@ -125,7 +130,9 @@ InterfaceBound::InterfaceBound(const RemeshComplex& complex, double bound) : bou
   std::vector<std::tuple<std::int32_t, std::int32_t, std::int32_t>> points;  // pair, a, b (a == b: vertex)
   triangles_.reserve(facets.size());
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-  for (const Facet& f : facets) {
+  for (std::size_t n = 0; n < facets.size(); ++n) {
+    if (n % 65536 == 0) throwIfCancelled();
+    const Facet& f = facets[n];
     const std::int32_t pair = indexOf(f.key);
     Triangle tri;
     tri.pair = pair;
@@ -141,7 +148,9 @@ InterfaceBound::InterfaceBound(const RemeshComplex& complex, double bound) : bou
     triangles_.push_back(tri);
   }
   if (triangles_.empty()) lo = hi = Eigen::Vector3d::Zero();
+  throwIfCancelled();
   std::sort(points.begin(), points.end());
+  throwIfCancelled();
   points.erase(std::unique(points.begin(), points.end()), points.end());
   std::vector<std::pair<Eigen::Vector3f, std::int32_t>> samples;
   samples.reserve(points.size() + triangles_.size());
@@ -162,6 +171,7 @@ InterfaceBound::InterfaceBound(const RemeshComplex& complex, double bound) : bou
       for (std::int64_t j = a[1]; j <= b[1]; ++j)
         for (std::int64_t i = a[0]; i <= b[0]; ++i) f(tc.index(i, j, k));
   };
+  throwIfCancelled();
   for (const Triangle& t : triangles_) forCells(t, [&](std::int64_t c) { ++tc.start[std::size_t(c + 1)]; });
   for (std::int64_t c = 0; c < tc.count(); ++c) tc.start[std::size_t(c + 1)] += tc.start[std::size_t(c)];
   tc.items.resize(std::size_t(tc.start.back()));
@@ -170,7 +180,8 @@ InterfaceBound::InterfaceBound(const RemeshComplex& complex, double bound) : bou
     for (std::size_t n = 0; n < triangles_.size(); ++n)
       forCells(triangles_[n], [&](std::int64_t c) { tc.items[std::size_t(fill[std::size_t(c)]++)] = std::int32_t(n); });
   }
-  for (std::int64_t c = 0; c < tc.count(); ++c)
+  throwIfCancelled();
+  for (std::int64_t c = 0; c < tc.count(); ++c, c % 65536 == 0 ? throwIfCancelled() : void())
     std::stable_sort(tc.items.begin() + tc.start[std::size_t(c)], tc.items.begin() + tc.start[std::size_t(c + 1)],
                      [&](std::int32_t x, std::int32_t y) { return triangles_[std::size_t(x)].pair < triangles_[std::size_t(y)].pair; });
 
@@ -186,10 +197,12 @@ InterfaceBound::InterfaceBound(const RemeshComplex& complex, double bound) : bou
     cellOfSample[n] = sc.index(c[0], c[1], c[2]);
     order[n] = std::int32_t(n);
   }
+  throwIfCancelled();
   std::sort(order.begin(), order.end(), [&](std::int32_t x, std::int32_t y) {
     return std::tie(cellOfSample[std::size_t(x)], samples[std::size_t(x)].second, x) <
            std::tie(cellOfSample[std::size_t(y)], samples[std::size_t(y)].second, y);
   });
+  throwIfCancelled();
   samples_.reserve(samples.size());
   sc.start.assign(std::size_t(sc.count() + 1), 0);
   for (std::size_t n = 0; n < order.size();) {
