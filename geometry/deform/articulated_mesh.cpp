@@ -74,6 +74,12 @@ Eigen::Vector3d ArticularBody::slide(const Eigen::Vector3d& p, const Eigen::Vect
   return centre + ds * axis + rr * dir;
 }
 
+bool rigidWithOneSegment(const ArticulatedMesh& mesh, const Tet& t) {
+  for (const std::int32_t v : t)
+    if (mesh.role[std::size_t(v)] != VertexRole::Rigid || mesh.vertexPart[std::size_t(v)] != mesh.vertexPart[std::size_t(t[0])]) return false;
+  return true;
+}
+
 LabelGrid bonePartGrid(const LabelGrid& grid, const OrganTable& organs, const skeleton::Skeleton& skeleton) {
   if (skeleton.parts.parts.dims() != grid.dims()) throw InputError("body parts", "the body-part grid's dims differ from the grid's");
   const std::vector<skeleton::Bone> boneOf = skeleton::boneOfLabels(organs, grid.maxLabel());

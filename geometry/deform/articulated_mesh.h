@@ -171,6 +171,10 @@ struct ArticulatedMesh {
   double seconds = 0.0;
 };
 
+// Whether every vertex of `t` is rigid with one and the same segment: the
+// tet moves rigidly with it (the poser leaves it out of the solve).
+bool rigidWithOneSegment(const ArticulatedMesh& mesh, const Tet& t);
+
 // The bodies the skeleton's joints allow (a joint whose body would be
 // smaller than options.minBodyRadiusVoxels gets none).
 std::vector<ArticularBody> articularBodies(const LabelGrid& grid, const LabelGrid& boneParts,

@@ -34,12 +34,9 @@ ArticulatedPoser::ArticulatedPoser(const ArticulatedMesh& mesh, const Articulate
   std::vector<std::int32_t> index(m.vertexCount(), -1);
   std::vector<Tet> tets;
   for (const Tet& t : m.tets) {
-    bool oneRigidPart = true, allRigid = true;
-    for (const std::int32_t v : t) {
-      allRigid = allRigid && mesh.role[std::size_t(v)] == VertexRole::Rigid;
-      oneRigidPart = oneRigidPart && mesh.role[std::size_t(v)] == VertexRole::Rigid && mesh.vertexPart[std::size_t(v)] == mesh.vertexPart[std::size_t(t[0])];
-    }
-    if (oneRigidPart) continue;
+    if (rigidWithOneSegment(mesh, t)) continue;
+    bool allRigid = true;
+    for (const std::int32_t v : t) allRigid = allRigid && mesh.role[std::size_t(v)] == VertexRole::Rigid;
     if (allRigid) ++bridgingTets_;
     Tet local;
     for (int k = 0; k < 4; ++k) {
@@ -214,24 +211,16 @@ void ArticulatedPoser::targets(const InjectiveSolver& solver, std::span<const Ei
   // ahead of the tissue or behind it.
   const std::vector<Eigen::Vector3d>& current = solver.positions();
   const std::vector<Eigen::Vector3d>& rest = mesh_.mesh.positions;
-  std::vector<Eigen::Isometry3d> now(mesh_.bodies.size(), Eigen::Isometry3d::Identity());
-  for (std::size_t b = 0; b < mesh_.bodies.size(); ++b) {
-    const std::vector<std::int32_t>& owned = partConstrained_[std::size_t(mesh_.bodies[b].owner)];
-    if (owned.size() < 3) continue;
-    now[b] = rigidFit(
-        owned, [&](std::int32_t c) { return rest[std::size_t(solved_[std::size_t(c)])]; },
-        [&](std::int32_t c) { return current[std::size_t(c)]; });
-  }
+  const PartTransforms now = partFits(solver);
   for (const std::int32_t i : sliding_) {
     const auto v = std::size_t(solved_[std::size_t(i)]);
-    const auto b = std::size_t(mesh_.vertexBody[v]);
-    positions_[v] = partMotionAt(motions, mesh_.bodies[b].owner, 1.0) * mesh_.bodies[b].slide(now[b].inverse() * current[std::size_t(i)], rest[v]);
+    const ArticularBody& body = mesh_.bodies[std::size_t(mesh_.vertexBody[v])];
+    positions_[v] = partMotionAt(motions, body.owner, 1.0) * body.slide(now[std::size_t(body.owner)].inverse() * current[std::size_t(i)], rest[v]);
   }
   for (std::size_t s = 0; s < sliding_.size(); ++s) slidingTargets_[s] = positions_[std::size_t(solved_[std::size_t(sliding_[s])])];
 }
 
-void ArticulatedPoser::placeUnsolved(const InjectiveSolver& solver) {
-  // Each part's best rigid fit of where its bones are in the solve.
+ArticulatedPoser::PartTransforms ArticulatedPoser::partFits(const InjectiveSolver& solver) const {
   const std::vector<Eigen::Vector3d>& current = solver.positions();
   const std::vector<Eigen::Vector3d>& rest = mesh_.mesh.positions;
   PartTransforms fit;
@@ -243,6 +232,12 @@ void ArticulatedPoser::placeUnsolved(const InjectiveSolver& solver) {
         owned, [&](std::int32_t c) { return rest[std::size_t(solved_[std::size_t(c)])]; },
         [&](std::int32_t c) { return current[std::size_t(c)]; });
   }
+  return fit;
+}
+
+void ArticulatedPoser::placeUnsolved(const InjectiveSolver& solver) {
+  const std::vector<Eigen::Vector3d>& rest = mesh_.mesh.positions;
+  const PartTransforms fit = partFits(solver);
   std::vector<bool> solved(rest.size(), false);
   for (const std::int32_t v : solved_) solved[std::size_t(v)] = true;
   for (std::size_t v = 0; v < rest.size(); ++v)

@@ -115,6 +115,9 @@ private:
   std::vector<Eigen::Vector3d> corrected(const std::vector<Eigen::Vector3d>& current, std::span<const Eigen::Isometry3d> motions) const;
   void nearestParts();
   void gather(const InjectiveSolver& solver);
+  // Per segment: the rigid motion that best takes its bone vertices from
+  // rest to where they are in `solver` (identity for fewer than three).
+  PartTransforms partFits(const InjectiveSolver& solver) const;
   // The rigid vertices outside the solve (in tets of one part's bones only)
   // placed by their part's best rigid fit of its bones in `solver`: the
   // mesh as the step left it.

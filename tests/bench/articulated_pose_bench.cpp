@@ -73,19 +73,16 @@ void squeezedTets(const vox::ArticulatedMesh& mesh, const vox::skeleton::Skeleto
     const Tet& t = mesh.mesh.tets[ti];
     // A tet of one part's bones only moves rigidly at the end; on the way
     // its vertices follow the solve's, and it is not in the solve.
-    bool onePart = true;
-    for (const std::int32_t v : t)
-      onePart = onePart && mesh.role[std::size_t(v)] == VertexRole::Rigid && mesh.vertexPart[std::size_t(v)] == mesh.vertexPart[std::size_t(t[0])];
-    if (onePart) continue;
+    if (rigidWithOneSegment(mesh, t)) continue;
     const double r = signedVolume(now, t) / signedVolume(rest, t);
     if (r >= below) continue;
     ++count;
     Eigen::Vector3d c = Eigen::Vector3d::Zero();
     for (const std::int32_t v : t) c += 0.25 * rest[std::size_t(v)];
     const skeleton::Joint* joint = sk.nearestJoint(c);
+    const Eigen::Vector3d d = joint ? Eigen::Vector3d(c - joint->centre) : Eigen::Vector3d::Zero();
     std::string at = "none";
     if (joint) {
-      const Eigen::Vector3d d = c - joint->centre;
       at = std::string(joint->kind().name) + (d.dot(joint->anterior) >= 0.0 ? " front" : " back") + (d.norm() >= 30.0 ? " far" : " near");
     }
     ++where[at];
@@ -105,7 +102,6 @@ void squeezedTets(const vox::ArticulatedMesh& mesh, const vox::skeleton::Skeleto
     kind += tag == kSoftTissueTag ? " (tissue tet)" : tag >= kBodyTag ? " (body tet)" : " (bone tet)";
     ++what[kind];
     if (joint) {
-      const Eigen::Vector3d d = c - joint->centre;
       char line[256];
       std::snprintf(line, sizeof line, "%s: %.0f mm from the centre (radius %.0f), along the bone %.0f, front %.0f, right %.0f; %s",
                     joint->kind().name, d.norm(), joint->radius, d.dot(joint->longAxis), d.dot(joint->anterior), d.dot(joint->leftRight),
