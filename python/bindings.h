@@ -43,6 +43,11 @@ const LabelGrid& ownedGrid(const LabelGrid& grid, std::optional<LabelGrid>& copy
 // A report's JSON text as Python objects (dicts, lists, numbers).
 py::object fromJson(const std::string& json);
 
+// Issues `message` as a RuntimeWarning; raises what the warnings machinery
+// raised instead (a filter turning warnings into errors, or the
+// KeyboardInterrupt of a Ctrl-C that arrives while it runs).
+void warn(const std::string& message);
+
 // A pose given as a dict (the JSON schema of docs/POSES.md) or a path, in
 // the grid frame of `grid`; `source` names it in errors ("pose" or the path).
 struct PoseArgument {

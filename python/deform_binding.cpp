@@ -35,7 +35,7 @@ struct Warnings {
     return [this](const std::string& m) { messages.push_back(m); };
   }
   void emit() const {
-    for (const std::string& m : messages) PyErr_WarnEx(PyExc_RuntimeWarning, m.c_str(), 1);
+    for (const std::string& m : messages) warn(m);
   }
 };
 
@@ -126,7 +126,7 @@ py::tuple deform(const py::object& gridArgument, const py::object& pose, const p
     return deformGrid(request, *engines);
   });
   warnings.emit();
-  for (const std::string& w : deformationWarnings(report)) PyErr_WarnEx(PyExc_RuntimeWarning, w.c_str(), 1);
+  for (const std::string& w : deformationWarnings(report)) warn(w);
   return py::make_tuple(makeGrid(std::move(posed), output.empty() ? "posed grid" : output), fromJson(deformationReportJson(report)));
 }
 

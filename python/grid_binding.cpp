@@ -160,6 +160,10 @@ const LabelGrid& ownedGrid(const LabelGrid& grid, std::optional<LabelGrid>& copy
 
 py::object fromJson(const std::string& json) { return py::module_::import("json").attr("loads")(json); }
 
+void warn(const std::string& message) {
+  if (PyErr_WarnEx(PyExc_RuntimeWarning, message.c_str(), 1) != 0) throw py::error_already_set();
+}
+
 OrganArgument organArgument(const py::object& organs) {
   OrganArgument a;
   if (organs.is_none()) return a;

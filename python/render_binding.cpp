@@ -74,7 +74,7 @@ py::array_t<std::uint8_t> render(const GridHandle& gridHandle, const py::object&
     }
     return raycastReference(grid, mesh, frame, view, palette, shading);
   });
-  for (const std::string& w : warnings) PyErr_WarnEx(PyExc_RuntimeWarning, w.c_str(), 1);
+  for (const std::string& w : warnings) warn(w);
   py::array_t<std::uint8_t> rgb({py::ssize_t(image.height), py::ssize_t(image.width), py::ssize_t(3)});
   static_assert(sizeof(Rgb) == 3);
   std::memcpy(rgb.mutable_data(), image.pixels.data(), image.pixels.size() * 3);

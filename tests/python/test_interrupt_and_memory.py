@@ -19,10 +19,10 @@ grid = voxmorph.Grid.read(sys.argv[1])
 print("ready", flush=True)
 try:
     voxmorph.deform(grid, sys.argv[3], organs=sys.argv[2], cpu=True, output=sys.argv[4])
+    print("finished", flush=True)
 except KeyboardInterrupt:
     print("interrupted", time.monotonic(), flush=True)
     sys.exit(3)
-print("finished", flush=True)
 """
 
 
@@ -40,7 +40,10 @@ def test_ctrl_c_stops_deform_within_a_second_leaving_no_file(tmp_path, delay):
     sent = time.monotonic()
     child.send_signal(signal.SIGINT)
     stdout, stderr = child.communicate(timeout=60)
-    if stdout.startswith("finished"):
+    # The posed grid's writer renames a complete file into place: one there
+    # means the run had finished when the signal arrived (and the
+    # KeyboardInterrupt came from the warnings or the return after it).
+    if stdout.startswith("finished") or os.listdir(out) == ["posed.nii.gz"]:
         pytest.skip(f"deform finished within {delay} s")
     assert child.returncode == 3, stderr
     latency = float(stdout.split()[1]) - sent

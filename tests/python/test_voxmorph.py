@@ -7,6 +7,7 @@ import json
 import os
 import threading
 import time
+import warnings
 
 import meshio
 import nibabel as nib
@@ -170,6 +171,21 @@ def test_deform_is_byte_identical_to_the_cli(figure, tmp_path):
     labels = pd.DataFrame(report["labels"])
     assert {"label", "voxels_before", "voxels_after"} <= set(labels.columns)
     assert sorted(os.listdir(tmp_path)) == ["cli.nii.gz", "paths.nii.gz", "python.nii.gz"]
+
+
+def test_warnings_raise_as_errors_under_an_error_filter(figure, tmp_path):
+    # An organ table without label 1: the run warns that its mass is left out.
+    with open(figure["organs"]) as f:
+        lines = [line for line in f if not line.startswith("1 ")]
+    (tmp_path / "less.dat").write_text("".join(lines))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        voxmorph.deform(figure["grid"], figure["pose"], organs=str(tmp_path / "less.dat"), cpu=True, force=True)
+    assert any("labels without a name in the organ table: 1 (" in str(w.message) for w in caught)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(RuntimeWarning):
+            voxmorph.deform(figure["grid"], figure["pose"], organs=str(tmp_path / "less.dat"), cpu=True, force=True)
 
 
 def test_deform_takes_a_prepared_state(figure, tmp_path):
