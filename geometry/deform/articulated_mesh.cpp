@@ -519,14 +519,19 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
   };
   out.mesh = buildTransferMesh(tags, sizing, options.transferMesh, relabel);
 
-  // The owner's bone beside each body joins it (ownerShellVoxels).
+  // The owner's bone beside each body joins it: within ownerShellVoxels of
+  // its surface, and at a hinge within hingeOwnerReachMm.
   const double ownerShell = options.ownerShellVoxels * g.spacing.maxCoeff();
-  if (ownerShell > 0.0)
+  const auto shellOf = [&](const ArticularBody& b) {
+    return b.shape == ArticularShape::Cylinder ? std::max(ownerShell, options.hingeOwnerReachMm) : ownerShell;
+  };
+  if (ownerShell > 0.0 || options.hingeOwnerReachMm > 0.0)
     for (std::size_t t = 0; t < out.mesh.tetCount(); ++t) {
       Eigen::Vector3d c = Eigen::Vector3d::Zero();
       for (const std::int32_t v : out.mesh.tets[t]) c += 0.25 * out.mesh.positions[std::size_t(v)];
       for (const ArticularBody& b : out.bodies)
-        if (out.mesh.labels[t] == kBoneTag + std::int32_t(b.owner) && b.cutAt(c) && b.distanceOutside(c) < ownerShell) {
+        if (out.mesh.labels[t] == kBoneTag + std::int32_t(b.owner) && b.cutAt(c) &&
+            b.distanceOutside(c) < shellOf(b)) {
           out.mesh.labels[t] = b.tag();
           break;
         }

@@ -129,6 +129,15 @@ struct ArticulatedMeshOptions {
   // where the staircases cross they overlap by less than a voxel. 0: the
   // body is the sphere or cylinder alone.
   double ownerShellVoxels = 1.0;
+  // At a hinge, the owner's bone up to hingeOwnerReachMm outside the
+  // cylinder, away from the attachment, joins the body as well: the
+  // sliding cut follows the owner's bone end all round, where the cylinder
+  // alone does not reach (the femoral trochlea 60 mm in front of the knee's
+  // axis, under the patella that turns with the lower leg; the humerus'
+  // epicondyles). The tissue between the other part's bone and the owner's
+  // then moves with the other part instead of being sheared across a gap
+  // of a few millimetres. 0: the ball joints' shell alone.
+  double hingeOwnerReachMm = 60.0;
   // At these ball joints the bone of the two parts within
   // yieldingShellVoxels (the grid's coarsest spacing) outside the body's
   // sphere is soft tissue, not rigid: the staircases of the head's and the

@@ -15,7 +15,8 @@
 // iteration), --scapulae (moving
 // scapulae), --yielding-shell V (the shoulders' yielding shell, V voxels
 // thick; default none), --yielding-hips (the hips' shell too),
-// --squeezed F (per step, the tets under F of their rest volume, by nearest
+// --dump PREFIX (the mesh's arrays for numpy, rest and posed: dumpMesh),
+// --mesh-only (build the mesh, dump it, stop), --squeezed F (per step, the tets under F of their rest volume, by nearest
 // joint and by what holds their vertices: where the tissue locks).
 // Prints a table, then one JSON line (prefix "json ") for scripts.
 
@@ -50,7 +51,7 @@ double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>
 int usage() {
   std::fprintf(stderr,
                "usage: articulated_pose_bench GRID ORGANS POSE [--steps N] [--bone-weight W] [--max-iterations N] "
-               "[--volume-weight L] [--direct-limit N] [--scapulae] [--yielding-shell V] [--yielding-hips]\n"
+               "[--volume-weight L] [--direct-limit N] [--scapulae] [--yielding-shell V] [--yielding-hips] [--squeezed F] [--dump PREFIX] [--mesh-only]\n"
                "       articulated_pose_bench --figure POSE [options]\n");
   return 2;
 }
@@ -130,6 +131,24 @@ void squeezedTets(const vox::ArticulatedMesh& mesh, const vox::skeleton::Skeleto
 
 }  // namespace
 
+// The mesh as raw arrays for numpy (np.fromfile): PREFIX.tets (int32 x4),
+// PREFIX.tags (int32), PREFIX.roles and PREFIX.parts (uint8 per vertex),
+// PREFIX.WHICH (float64 x3 per vertex: rest or posed positions).
+void dumpMesh(const std::string& prefix, const vox::ArticulatedMesh& mesh, std::span<const Eigen::Vector3d> positions,
+              const std::string& which) {
+  const auto write = [&](const std::string& suffix, const void* data, std::size_t bytes) {
+    std::FILE* f = std::fopen((prefix + "." + suffix).c_str(), "wb");
+    if (!f || std::fwrite(data, 1, bytes, f) != bytes) throw std::runtime_error("cannot write " + prefix + "." + suffix);
+    std::fclose(f);
+  };
+  write(which, positions.data(), positions.size() * sizeof(Eigen::Vector3d));
+  if (which != "rest") return;
+  write("tets", mesh.mesh.tets.data(), mesh.mesh.tets.size() * sizeof(vox::Tet));
+  write("tags", mesh.mesh.labels.data(), mesh.mesh.labels.size() * sizeof(std::int32_t));
+  write("roles", mesh.role.data(), mesh.role.size());
+  write("parts", mesh.vertexPart.data(), mesh.vertexPart.size());
+}
+
 int main(int argc, char** argv) {
   using namespace vox;
   std::vector<std::string> positional;
@@ -137,6 +156,8 @@ int main(int argc, char** argv) {
   ArticulatedMeshOptions meshOptions;
   bool figure = false;
   double squeezedBelow = 0.0;
+  std::string dumpPrefix;
+  bool meshOnly = false;
   for (int a = 1; a < argc; ++a) {
     const std::string arg = argv[a];
     const auto value = [&]() -> std::string {
@@ -154,6 +175,8 @@ int main(int argc, char** argv) {
       meshOptions.yieldingShellJoints.push_back(skeleton::JointId::LeftHip);
     }
     else if (arg == "--squeezed") squeezedBelow = std::stod(value());
+    else if (arg == "--dump") dumpPrefix = value();
+    else if (arg == "--mesh-only") meshOnly = true;
     else if (arg == "--scapulae") meshOptions.movingScapulae = true;
     else if (arg == "--yielding-shell") meshOptions.yieldingShellVoxels = std::stod(value());
     else if (arg.starts_with("--")) return usage();
@@ -178,6 +201,9 @@ int main(int argc, char** argv) {
     std::printf("mesh: %zu vertices, %zu tets, %zu bodies, built in %.1f s (skeleton %.1f s)\n", mesh.mesh.vertexCount(),
                 mesh.mesh.tetCount(), mesh.bodies.size(), meshSeconds, skeletonSeconds);
 
+    if (!dumpPrefix.empty()) dumpMesh(dumpPrefix, mesh, mesh.mesh.positions, "rest");
+    if (meshOnly) return 0;
+
     if (squeezedBelow > 0.0) poseOptions.onStep = [&](int step, std::span<const Eigen::Vector3d> posed) {
       squeezedTets(mesh, sk, step, posed, squeezedBelow);
     };
@@ -200,6 +226,7 @@ int main(int argc, char** argv) {
 
     // Inverted tets in the final positions, by the joint nearest their rest centroid.
     const std::vector<Eigen::Vector3d>& posed = poser.positions();
+    if (!dumpPrefix.empty()) dumpMesh(dumpPrefix, mesh, posed, "posed");
     // Where, in the nearest joint's frame (rest): in front of the joint's
     // centre or behind it, and within 30 mm of it or farther.
     std::map<std::string, std::size_t> byJoint;

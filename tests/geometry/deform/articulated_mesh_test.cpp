@@ -222,6 +222,39 @@ TEST(ArticulatedMesh, TheOwnersBoneBesideItsBodyJoinsTheBody) {
   EXPECT_GT(besideBodies(buildArticulatedMesh(f.grid, f.organs, f.skeleton, without)), 0u);
 }
 
+// At a hinge the owner's bone end joins the body up to hingeOwnerReachMm
+// outside the cylinder, away from the attachment: the elbows' and knees'
+// cuts follow the humerus' and femur's ends (the knee's trochlea, in front
+// of the cylinder, under the patella).
+TEST(ArticulatedMesh, TheOwnersBoneEndJoinsAHingesBody) {
+  const Figure& f = figure();
+  // The balls' one-voxel shell off, so that the hinges' reach is what joins.
+  ArticulatedMeshOptions with;
+  with.ownerShellVoxels = 0.0;
+  ArticulatedMeshOptions without = with;
+  without.hingeOwnerReachMm = 0.0;
+  const auto besideHinges = [&](const ArticulatedMesh& m) {
+    std::size_t beside = 0, joined = 0;
+    for (std::size_t t = 0; t < m.mesh.tetCount(); ++t) {
+      Eigen::Vector3d c = Eigen::Vector3d::Zero();
+      for (const std::int32_t v : m.mesh.tets[t]) c += 0.25 * m.mesh.positions[std::size_t(v)];
+      for (const ArticularBody& b : m.bodies) {
+        if (b.shape != ArticularShape::Cylinder || !b.cutAt(c) || b.contains(c) || b.distanceOutside(c) >= 0.9 * with.hingeOwnerReachMm)
+          continue;
+        beside += m.mesh.labels[t] == kBoneTag + std::int32_t(b.owner);
+        joined += m.mesh.labels[t] == b.tag();
+      }
+    }
+    return std::pair{beside, joined};
+  };
+  const auto [beside, joined] = besideHinges(buildArticulatedMesh(f.grid, f.organs, f.skeleton, with));
+  EXPECT_EQ(beside, 0u);
+  EXPECT_GT(joined, 0u);
+  const auto [besideWithout, joinedWithout] = besideHinges(buildArticulatedMesh(f.grid, f.organs, f.skeleton, without));
+  EXPECT_GT(besideWithout, 0u);
+  EXPECT_LT(joinedWithout, joined);
+}
+
 // The joint turned with the body's owner moved rigidly, the other side
 // still: the body's tets keep their volume (rigid), and no face is shared
 // across the cut (the two sides can slide).
