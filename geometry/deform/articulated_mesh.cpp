@@ -13,6 +13,7 @@
 #include <limits>
 #include <numbers>
 #include <numeric>
+#include <tuple>
 
 namespace vox {
 
@@ -72,6 +73,49 @@ Eigen::Vector3d ArticularBody::slide(const Eigen::Vector3d& p, const Eigen::Vect
   const double un = u.norm();
   const Eigen::Vector3d dir = un > 0 ? Eigen::Vector3d(u / un) : attachment;
   return centre + ds * axis + rr * dir;
+}
+
+namespace {
+
+// The point of triangle abc nearest p (Ericson, Real-Time Collision
+// Detection, 5.1.5: by the Voronoi region of p).
+Eigen::Vector3d nearestOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Eigen::Vector3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + (d1 / (d1 - d3)) * ab;
+  const Eigen::Vector3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + (d2 / (d2 - d6)) * ac;
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
+  const double sum = va + vb + vc;
+  if (!(sum > 0)) return a;  // degenerate triangle
+  return a + ab * (vb / sum) + ac * (vc / sum);
+}
+
+}  // namespace
+
+Eigen::Vector3d slideOnBody(const ArticulatedMesh& mesh, std::size_t body, const Eigen::Vector3d& p, const Eigen::Vector3d& rest) {
+  const ArticularBody& b = mesh.bodies[body];
+  if (b.shape != ArticularShape::Cylinder || body >= mesh.bodySurfaces.size() || mesh.bodySurfaces[body].empty()) return b.slide(p, rest);
+  Eigen::Vector3d best = p;
+  double bestD2 = std::numeric_limits<double>::infinity();
+  for (const auto& t : mesh.bodySurfaces[body]) {
+    const Eigen::Vector3d q = nearestOnTriangle(p, t[0], t[1], t[2]);
+    const double d2 = (q - p).squaredNorm();
+    if (d2 < bestD2) {
+      bestD2 = d2;
+      best = q;
+    }
+  }
+  return best;
 }
 
 bool rigidWithOneSegment(const ArticulatedMesh& mesh, const Tet& t) {
@@ -189,8 +233,139 @@ std::vector<ArticularBody> articularBodies(const LabelGrid& grid, const LabelGri
 const char* segmentName(int segment) {
   if (segment == kRightScapula) return "right_scapula";
   if (segment == kLeftScapula) return "left_scapula";
+  if (segment == kRightPatella) return "right_patella";
+  if (segment == kLeftPatella) return "left_patella";
   return skeleton::partName(Part(segment));
 }
+
+Part segmentPart(int segment) {
+  if (segment == kRightScapula || segment == kLeftScapula) return Part::Trunk;
+  if (segment == kRightPatella) return Part::RightLowerLeg;
+  if (segment == kLeftPatella) return Part::LeftLowerLeg;
+  return Part(segment);
+}
+
+void markPatellae(LabelGrid& boneParts, const skeleton::Skeleton& skeleton) {
+  const GridGeometry& g = boneParts.geometry();
+  for (const auto& [knee, leg, patella] : {std::tuple{JointId::RightKnee, Part::RightLowerLeg, kRightPatella},
+                                            std::tuple{JointId::LeftKnee, Part::LeftLowerLeg, kLeftPatella}}) {
+    const skeleton::Joint* joint = skeleton.joint(knee);
+    if (!joint) continue;
+    std::vector<std::uint8_t> marked(boneParts.labels().size(), 0);
+    for (std::size_t v = 0; v < marked.size(); ++v) marked[v] = boneParts.labels()[v] == Label(leg);
+    std::vector<std::vector<std::int64_t>> pieces;
+    skeleton::forEachComponent(g, marked, [&](std::uint8_t, const std::vector<std::int64_t>& piece) { pieces.push_back(piece); });
+    if (pieces.size() < 2) continue;
+    const auto largest = std::max_element(pieces.begin(), pieces.end(), [](const auto& a, const auto& b) { return a.size() < b.size(); });
+    for (auto it = pieces.begin(); it != pieces.end(); ++it) {
+      if (it == largest) continue;
+      Eigen::Vector3d c = Eigen::Vector3d::Zero();
+      for (const std::int64_t v : *it) {
+        const Index3 ijk = g.ijk(v);
+        c += g.voxelCenter(ijk[0], ijk[1], ijk[2]);
+      }
+      c /= double(it->size());
+      if ((c - joint->centre).dot(joint->longAxis) >= 0.0) continue;
+      for (const std::int64_t v : *it) boneParts.labels()[std::size_t(v)] = Label(patella);
+    }
+  }
+}
+
+namespace {
+
+// The patella's motion (segmentMotions): in the thigh's rest frame it
+// turns about the knee's axis by psi, between none and the lower leg's
+// turn, at its rest height above the femur's profile there, the psi that
+// keeps its ligament's length (its centre to the tibia's nearest rigid
+// vertex below the knee's centre) best.
+Eigen::Isometry3d patellaMotion(const skeleton::Joint& joint, const ArticulatedMesh& mesh, std::span<const Eigen::Isometry3d> motions,
+                                Part thighPart, Part legPart, int patella) {
+  const Eigen::Isometry3d thigh = motions[std::size_t(thighPart)], leg = motions[std::size_t(legPart)];
+  const Eigen::Isometry3d rel = thigh.inverse() * leg;
+  const Eigen::Vector3d axis = joint.axis(skeleton::Dof::Flexion).normalized();
+  Eigen::Vector3d e1 = joint.anterior - joint.anterior.dot(axis) * axis;
+  if (e1.norm() < 1e-9) return leg;
+  e1.normalize();
+  const Eigen::Vector3d e2 = axis.cross(e1);
+  const Eigen::Vector3d& c = joint.centre;
+  const std::vector<Eigen::Vector3d>& rest = mesh.mesh.positions;
+  // The patella's centre and width along the axis.
+  Eigen::Vector3d pc = Eigen::Vector3d::Zero();
+  std::size_t n = 0;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (std::size_t v = 0; v < rest.size(); ++v)
+    if (mesh.role[v] == VertexRole::Rigid && int(mesh.vertexPart[v]) == patella) {
+      pc += rest[v];
+      ++n;
+      lo = std::min(lo, (rest[v] - c).dot(axis));
+      hi = std::max(hi, (rest[v] - c).dot(axis));
+    }
+  if (n == 0) return leg;
+  pc /= double(n);
+  // The ligament's tibial end and length.
+  Eigen::Vector3d tibia = pc;
+  double nearest = std::numeric_limits<double>::infinity();
+  for (std::size_t v = 0; v < rest.size(); ++v)
+    if (mesh.role[v] == VertexRole::Rigid && mesh.vertexPart[v] == legPart && (rest[v] - c).dot(joint.longAxis) > 0.0 &&
+        (rest[v] - pc).norm() < nearest) {
+      nearest = (rest[v] - pc).norm();
+      tibia = rest[v];
+    }
+  if (!std::isfinite(nearest)) return leg;
+  const double ligament = nearest;
+  const Eigen::Vector3d tibiaNow = rel * tibia;
+  // The femur's profile: per 2 degrees about the axis, the farthest rigid
+  // vertex of the thigh across the patella's width.
+  constexpr int kBins = 180;
+  std::array<double, kBins> profile;
+  profile.fill(-1.0);
+  const auto binOf = [](double phi) {
+    const double turns = phi / (2.0 * std::numbers::pi);
+    return int(std::floor((turns - std::floor(turns)) * kBins)) % kBins;
+  };
+  for (std::size_t v = 0; v < rest.size(); ++v) {
+    if (mesh.role[v] != VertexRole::Rigid || mesh.vertexPart[v] != thighPart) continue;
+    const Eigen::Vector3d d = rest[v] - c;
+    const double a = d.dot(axis);
+    if (a < lo || a > hi) continue;
+    double& r = profile[std::size_t(binOf(std::atan2(d.dot(e2), d.dot(e1))))];
+    r = std::max(r, std::hypot(d.dot(e1), d.dot(e2)));
+  }
+  const auto height = [&](double phi) {  // the profile within 6 degrees of phi
+    double r = -1.0;
+    for (int k = -3; k <= 3; ++k) r = std::max(r, profile[std::size_t((binOf(phi) + k + kBins) % kBins)]);
+    return r;
+  };
+  const Eigen::Vector3d d = pc - c;
+  const double phi0 = std::atan2(d.dot(e2), d.dot(e1)), axial = d.dot(axis);
+  const double r0 = std::hypot(d.dot(e1), d.dot(e2)), base = height(phi0);
+  if (base < 0.0) return leg;
+  const double gap = r0 - base;
+  const Eigen::AngleAxisd turn(rel.linear());
+  const double theta = turn.angle() * (turn.axis().dot(axis) < 0.0 ? -1.0 : 1.0);
+  // psi from none to theta in half-degree steps.
+  const int steps = std::max(1, int(std::ceil(std::abs(theta) / (0.5 * std::numbers::pi / 180.0))));
+  double bestPsi = 0.0, bestCost = std::numeric_limits<double>::infinity();
+  Eigen::Vector3d bestPlace = pc;
+  for (int i = 0; i <= steps; ++i) {
+    const double psi = theta * double(i) / double(steps), h = height(phi0 + psi);
+    if (h < 0.0) continue;
+    const Eigen::Vector3d place =
+        c + axial * axis + (h + gap) * (std::cos(phi0 + psi) * e1 + std::sin(phi0 + psi) * e2);
+    const double cost = std::abs((place - tibiaNow).norm() - ligament);
+    if (cost < bestCost) {
+      bestCost = cost;
+      bestPsi = psi;
+      bestPlace = place;
+    }
+  }
+  Eigen::Isometry3d local = Eigen::Isometry3d::Identity();
+  local.linear() = Eigen::AngleAxisd(bestPsi, axis).toRotationMatrix();
+  local.translation() = bestPlace - local.linear() * pc;
+  return thigh * local;
+}
+
+}  // namespace
 
 std::vector<Eigen::Isometry3d> segmentMotions(std::span<const Eigen::Isometry3d> partMotions, const skeleton::Skeleton& skeleton,
                                               const ArticulatedMesh& mesh, const ScapularRhythm& rhythm) {
@@ -233,6 +408,13 @@ std::vector<Eigen::Isometry3d> segmentMotions(std::span<const Eigen::Isometry3d>
     out[std::size_t(side.scapula)] = scapula;
     for (const Part p : side.arm) out[std::size_t(p)] = carry * out[std::size_t(p)];
   }
+  for (const auto& [knee, thighPart, legPart, patella] :
+       {std::tuple{JointId::RightKnee, Part::RightThigh, Part::RightLowerLeg, kRightPatella},
+        std::tuple{JointId::LeftKnee, Part::LeftThigh, Part::LeftLowerLeg, kLeftPatella}}) {
+    out[std::size_t(patella)] = out[std::size_t(legPart)];
+    const skeleton::Joint* joint = skeleton.joint(knee);
+    if (joint && mesh.rigidVertices[std::size_t(patella)] > 0) out[std::size_t(patella)] = patellaMotion(*joint, mesh, out, thighPart, legPart, patella);
+  }
   return out;
 }
 
@@ -256,7 +438,7 @@ void projectSlidingVertices(const ArticulatedMesh& mesh, std::span<const Eigen::
   for (std::size_t v = 0; v < mesh.role.size(); ++v) {
     if (mesh.role[v] != VertexRole::Sliding) continue;
     const auto b = std::size_t(mesh.vertexBody[v]);
-    positions[v] = m[b] * mesh.bodies[b].slide(m[b].inverse() * positions[v], mesh.mesh.positions[v]);
+    positions[v] = m[b] * slideOnBody(mesh, b, m[b].inverse() * positions[v], mesh.mesh.positions[v]);
   }
 }
 
@@ -325,8 +507,8 @@ std::vector<Part> tetParts(const ArticulatedMesh& out, const skeleton::Skeleton&
   for (std::size_t t = 0; t < m.tetCount(); ++t) {
     const std::int32_t tag = m.labels[t];
     if (tag > kBoneTag && tag <= kBoneTag + kSegmentCount) {
-      // A scapula goes with the trunk's group.
-      result[t] = tag - kBoneTag > skeleton::kPartCount ? Part::Trunk : Part(tag - kBoneTag);
+      // A scapula goes with the trunk's group, a patella with its leg's.
+      result[t] = segmentPart(tag - kBoneTag);
       continue;
     }
     if (tag >= kBodyTag) {
@@ -427,7 +609,8 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
   const auto start = std::chrono::steady_clock::now();
   ArticulatedMesh out;
   const GridGeometry& g = grid.geometry();
-  const LabelGrid boneParts = bonePartGrid(grid, organs, skeleton);
+  LabelGrid boneParts = bonePartGrid(grid, organs, skeleton);
+  if (options.movingPatellae) markPatellae(boneParts, skeleton);
   out.bodies = articularBodies(grid, boneParts, skeleton, options);
 
   // Tags: the bones that move against each other resolved, the rest soft;
@@ -642,6 +825,28 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
         out.vertexBody[std::size_t(v)] = std::int8_t(b);
       }
   splitBridgingEdges(out);
+  // Each body's side of its cut: its tets' faces that the cut opened.
+  {
+    const std::vector<std::array<std::int32_t, 4>> neighbours = faceNeighbors(out.mesh, "articulated transfer mesh");
+    out.bodySurfaces.resize(out.bodies.size());
+    std::array<std::int32_t, skeleton::kJointCount> bodyOf;
+    bodyOf.fill(-1);
+    for (std::size_t b = 0; b < out.bodies.size(); ++b) bodyOf[std::size_t(out.bodies[b].joint)] = std::int32_t(b);
+    for (std::size_t t = 0; t < out.mesh.tetCount(); ++t) {
+      const std::int32_t tag = out.mesh.labels[t];
+      if (tag < kBodyTag || tag >= kBodyTag + skeleton::kJointCount || bodyOf[std::size_t(tag - kBodyTag)] < 0) continue;
+      const auto b = std::size_t(bodyOf[std::size_t(tag - kBodyTag)]);
+      const Tet& tet = out.mesh.tets[t];
+      for (int f = 0; f < 4; ++f) {
+        if (neighbours[t][std::size_t(f)] >= 0) continue;
+        // Face f is the one opposite vertex f.
+        std::array<Eigen::Vector3d, 3> tri;
+        for (int k = 0, n = 0; k < 4; ++k)
+          if (k != f) tri[std::size_t(n++)] = out.mesh.positions[std::size_t(tet[std::size_t(k)])];
+        if (out.bodies[b].cutAt((tri[0] + tri[1] + tri[2]) / 3.0)) out.bodySurfaces[b].push_back(tri);
+      }
+    }
+  }
   // Bone and body tets first: where the two sides of a sliding cut overlap
   // (the owner's bone staircase turned past the socket's), the
   // rasterization's lowest-index tet gives the posed voxel the rigid bone's

@@ -65,15 +65,22 @@ inline constexpr std::int32_t kSoftTissueTag = 1;
 inline constexpr std::int32_t kBoneTag = 1;   // + skeleton::Part: 2..17
 inline constexpr std::int32_t kBodyTag = 32;  // + skeleton::JointId: 32..45
 
-// Rigid segments: the body parts (skeleton::Part, 1..kPartCount) and the
+// Rigid segments: the body parts (skeleton::Part, 1..kPartCount), the
 // scapulae, which the body-part grid counts with the trunk but the
-// articulated mesh moves with their shoulders (segmentMotions). Motions
-// and per-part arrays of the articulated mesh are indexed by segment.
+// articulated mesh moves with their shoulders, and the patellae, which it
+// counts with the lower legs but the mesh slides down the femur as the knee
+// bends (segmentMotions). Motions and per-part arrays of the articulated
+// mesh are indexed by segment.
 inline constexpr int kRightScapula = skeleton::kPartCount + 1;
 inline constexpr int kLeftScapula = skeleton::kPartCount + 2;
-inline constexpr int kSegmentCount = skeleton::kPartCount + 2;
-// partName for a body part, "right_scapula" / "left_scapula" beyond.
+inline constexpr int kRightPatella = skeleton::kPartCount + 3;
+inline constexpr int kLeftPatella = skeleton::kPartCount + 4;
+inline constexpr int kSegmentCount = skeleton::kPartCount + 4;
+// partName for a body part, "right_scapula" ... "left_patella" beyond.
 const char* segmentName(int segment);
+// The body part a segment belongs to: itself for a part, the trunk for a
+// scapula, the lower leg for a patella.
+skeleton::Part segmentPart(int segment);
 
 enum class ArticularShape : std::uint8_t { Sphere, Cylinder };
 
@@ -155,6 +162,10 @@ struct ArticulatedMeshOptions {
   // default, the tissue between the scapula and the ribs has no sliding
   // plane).
   bool movingScapulae = false;
+  // Each patella its own rigid segment (markPatellae), which slides down
+  // the femur's trochlea as its knee bends (segmentMotions); false: the
+  // lower leg's.
+  bool movingPatellae = true;
   TransferMeshOptions transferMesh;
 };
 
@@ -177,8 +188,21 @@ struct ArticulatedMesh {
   // Edges between vertices of two parts (tissue spanning the gap between
   // two bones in one tet) split at their midpoints, free vertices.
   std::size_t splitEdges = 0;
+  // Per body: the triangles of its side of the sliding cut (rest frame).
+  // At a hinge, whose body takes the owner's bone end beyond the cylinder
+  // (hingeOwnerReachMm), they are the surface its sliding vertices stay on
+  // (slideOnBody).
+  std::vector<std::vector<std::array<Eigen::Vector3d, 3>>> bodySurfaces;
   double seconds = 0.0;
 };
+
+// Where sliding vertex p (in the rest frame of body `body`'s owner) goes,
+// its rest place `rest`: at a ball joint ArticularBody::slide (the sphere
+// through its rest place); at a hinge the nearest point of the body's cut
+// surface (bodySurfaces): the tissue stays on the owner's bone end as the
+// other side turns, where that end is no cylinder (the femoral trochlea
+// under the patella), instead of leaving a gap or pressing into it.
+Eigen::Vector3d slideOnBody(const ArticulatedMesh& mesh, std::size_t body, const Eigen::Vector3d& p, const Eigen::Vector3d& rest);
 
 // Whether every vertex of `t` is rigid with one and the same segment: the
 // tet moves rigidly with it (the poser leaves it out of the solve).
@@ -199,6 +223,12 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
 // bones.h, and the skeleton's part grid), 0 elsewhere.
 LabelGrid bonePartGrid(const LabelGrid& grid, const OrganTable& organs, const skeleton::Skeleton& skeleton);
 
+// The patellae in `boneParts` (bonePartGrid): of each lower leg's bone,
+// the 26-connected pieces but the largest whose centre lies above the
+// knee's centre (towards the thigh), relabelled kRightPatella or
+// kLeftPatella. A side without its knee keeps its labels.
+void markPatellae(LabelGrid& boneParts, const skeleton::Skeleton& skeleton);
+
 // The scapulohumeral rhythm: past thresholdDeg of the humerus' elevation
 // (the angle between its rest and posed long axes), the scapula turns
 // upward by `ratio` of the further elevation, in the same plane, about the
@@ -213,7 +243,13 @@ struct ScapularRhythm {
 // The motions of every segment (index = segment, kSegmentCount + 1 entries)
 // from the forward kinematics' part motions (index = Part): each scapula
 // resolved in `mesh` turned by its shoulder's rhythm, the parts below that
-// shoulder carried with it.
+// shoulder carried with it; each patella resolved in `mesh` slid along the
+// femur: relative to the thigh it turns about the knee's axis by the angle
+// that keeps its centre's distance to the tibia where its ligament holds
+// (the lower leg's rigid vertex nearest it below the knee's centre), at
+// its rest height above the femur's profile (the thigh's rigid vertices
+// farthest from the axis in each direction about it, across the patella's
+// width).
 std::vector<Eigen::Isometry3d> segmentMotions(std::span<const Eigen::Isometry3d> partMotions, const skeleton::Skeleton& skeleton,
                                               const ArticulatedMesh& mesh, const ScapularRhythm& rhythm = {});
 

@@ -214,8 +214,9 @@ void ArticulatedPoser::targets(const InjectiveSolver& solver, std::span<const Ei
   const PartTransforms now = partFits(solver);
   for (const std::int32_t i : sliding_) {
     const auto v = std::size_t(solved_[std::size_t(i)]);
-    const ArticularBody& body = mesh_.bodies[std::size_t(mesh_.vertexBody[v])];
-    positions_[v] = partMotionAt(motions, body.owner, 1.0) * body.slide(now[std::size_t(body.owner)].inverse() * current[std::size_t(i)], rest[v]);
+    const auto b = std::size_t(mesh_.vertexBody[v]);
+    const skeleton::Part owner = mesh_.bodies[b].owner;
+    positions_[v] = partMotionAt(motions, owner, 1.0) * slideOnBody(mesh_, b, now[std::size_t(owner)].inverse() * current[std::size_t(i)], rest[v]);
   }
   for (std::size_t s = 0; s < sliding_.size(); ++s) slidingTargets_[s] = positions_[std::size_t(solved_[std::size_t(sliding_[s])])];
 }

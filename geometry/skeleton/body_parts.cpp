@@ -55,39 +55,6 @@ struct Neighbourhood {
   }
 };
 
-// Components of `marked` voxels (26-connected; `marked` holds a class per
-// voxel, 0 for none, and a component keeps to one class): calls
-// fn(class, voxels) per component and clears what it visits.
-void forEachComponent(const GridGeometry& g, std::vector<std::uint8_t>& marked,
-                      const std::function<void(std::uint8_t, const std::vector<std::int64_t>&)>& fn) {
-  std::vector<std::int64_t> piece, stack;
-  for (std::int64_t seed = 0; seed < g.voxelCount(); ++seed) {
-    const std::uint8_t cls = marked[std::size_t(seed)];
-    if (cls == 0) continue;
-    piece.clear();
-    stack.assign(1, seed);
-    marked[std::size_t(seed)] = 0;
-    while (!stack.empty()) {
-      const std::int64_t v = stack.back();
-      stack.pop_back();
-      piece.push_back(v);
-      const Index3 c = g.ijk(v);
-      for (int dk = -1; dk <= 1; ++dk)
-        for (int dj = -1; dj <= 1; ++dj)
-          for (int di = -1; di <= 1; ++di) {
-            const std::int64_t i = c[0] + di, j = c[1] + dj, k = c[2] + dk;
-            if (!g.contains(i, j, k)) continue;
-            const std::int64_t n = g.index(i, j, k);
-            if (marked[std::size_t(n)] == cls) {
-              marked[std::size_t(n)] = 0;
-              stack.push_back(n);
-            }
-          }
-    }
-    fn(cls, piece);
-  }
-}
-
 Eigen::Vector3d centreOf(const GridGeometry& g, std::int64_t v) {
   const Index3 c = g.ijk(v);
   return g.voxelCenter(c[0], c[1], c[2]);
@@ -202,6 +169,37 @@ void countParts(BodyParts& out) {
 }
 
 }  // namespace
+
+void forEachComponent(const GridGeometry& g, std::vector<std::uint8_t>& marked,
+                      const std::function<void(std::uint8_t, const std::vector<std::int64_t>&)>& fn) {
+  std::vector<std::int64_t> piece, stack;
+  for (std::int64_t seed = 0; seed < g.voxelCount(); ++seed) {
+    const std::uint8_t cls = marked[std::size_t(seed)];
+    if (cls == 0) continue;
+    piece.clear();
+    stack.assign(1, seed);
+    marked[std::size_t(seed)] = 0;
+    while (!stack.empty()) {
+      const std::int64_t v = stack.back();
+      stack.pop_back();
+      piece.push_back(v);
+      const Index3 c = g.ijk(v);
+      for (int dk = -1; dk <= 1; ++dk)
+        for (int dj = -1; dj <= 1; ++dj)
+          for (int di = -1; di <= 1; ++di) {
+            const std::int64_t i = c[0] + di, j = c[1] + dj, k = c[2] + dk;
+            if (!g.contains(i, j, k)) continue;
+            const std::int64_t n = g.index(i, j, k);
+            if (marked[std::size_t(n)] == cls) {
+              marked[std::size_t(n)] = 0;
+              stack.push_back(n);
+            }
+          }
+    }
+    fn(cls, piece);
+  }
+}
+
 
 const char* partName(Part part) {
   const int i = int(part);

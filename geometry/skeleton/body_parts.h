@@ -37,6 +37,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -150,5 +151,11 @@ LabelGrid labelGroupsOfParts(const LabelGrid& parts);
 // 26-connected components of each part's voxels (index = Part; 0 for absent
 // parts).
 std::array<int, kPartCount + 1> partComponents(const LabelGrid& parts);
+
+// Components of `marked` voxels (26-connected; `marked` holds a class per
+// voxel, 0 for none, and a component keeps to one class): calls
+// fn(class, voxels) per component and clears what it visits.
+void forEachComponent(const GridGeometry& g, std::vector<std::uint8_t>& marked,
+                      const std::function<void(std::uint8_t, const std::vector<std::int64_t>&)>& fn);
 
 }  // namespace vox::skeleton

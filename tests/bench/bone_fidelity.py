@@ -13,7 +13,9 @@ bone (per side) is its rest voxels moved by their parts' transforms and
 resampled nearest neighbour on the posed grid's lattice: a posed voxel belongs
 to it when the rest voxel holding its centre mapped back by the part's
 inverse transform is one of the bone's voxels of that part. A posed voxel of
-the bone's labels goes to the side whose reference is nearer. Per bone and
+the bone's labels goes to the side whose reference is nearer. A segment the
+report moves on its own (a scapula, a patella: "right_patella") moves its
+bone's voxels by its own transform. Per bone and
 side: Dice of the posed bone and the reference, and the posed volume against
 the reference's. With --min-dice / --max-volume-pct the exit status is 1 when
 a bone of at least 1000 rest voxels misses either bound (the bones are listed).
@@ -73,6 +75,26 @@ def reference(rest, posed, rest_ijk, parts_at, transforms, own=None):
     return out
 
 
+def patella_rows(ijk, rest, superior):
+    """Which voxels of a side's lower-leg bones (rows of ijk) are its patella: the 26-connected pieces but the
+    largest whose centre lies above the largest's top (as voxmorph's articulated mesh finds it below its knee)."""
+    mask = np.zeros(rest.data.shape, bool)
+    mask[tuple(ijk.T)] = True
+    pieces, n = ndimage.label(mask, structure=np.ones((3, 3, 3), bool))
+    at = pieces[tuple(ijk.T)]
+    if n < 2:
+        return np.zeros(len(ijk), bool)
+    height = (ijk @ rest.linear.T + rest.affine[:3, 3]) @ superior
+    largest = np.argmax(np.bincount(at)[1:]) + 1
+    top = height[at == largest].max()
+    out = np.zeros(len(ijk), bool)
+    for k in range(1, n + 1):
+        sel = at == k
+        if k != largest and height[sel].mean() > top:
+            out |= sel
+    return out
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("rest")
@@ -109,7 +131,16 @@ def main():
                 # A bone the deformation moved as its own segment ("right_scapula"
                 # in part_transforms, deform --articulated) follows that transform.
                 own = by_name.get(f"{side}_{bone}")
-                refs[side] = (len(ijk), reference(rest, posed, ijk, parts[tuple(ijk.T)], transforms, own))
+                patella = by_name.get(f"{side}_patella") if bone == "lower_leg_bones" else None
+                if patella is not None:
+                    # The patella moved as its own segment ("right_patella"), the rest by their parts.
+                    on = patella_rows(ijk, rest, frame["superior"])
+                    ref = reference(rest, posed, ijk[~on], parts[tuple(ijk[~on].T)], transforms)
+                    if on.any():
+                        ref |= reference(rest, posed, ijk[on], parts[tuple(ijk[on].T)], transforms, patella)
+                    refs[side] = (len(ijk), ref)
+                else:
+                    refs[side] = (len(ijk), reference(rest, posed, ijk, parts[tuple(ijk.T)], transforms, own))
         if not refs:
             continue
         posed_bone = posed.mask(bone)

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <numbers>
 #include <set>
 
@@ -371,6 +372,71 @@ TEST(ArticulatedPose, AnElbowAt90PartsTheForearmFromTheTrunk) {
     if (f.mesh.role[v] == VertexRole::Rigid) {
       EXPECT_LT((p[v] - motions[std::size_t(f.mesh.vertexPart[v])] * f.mesh.mesh.positions[v]).norm(), 1e-6);
     }
+}
+
+// A patella slides along the femur's profile as its knee bends: relative
+// to the thigh it keeps its height above the profile and its ligament's
+// length to the tibia; where the profile is round about the knee's axis it
+// turns with the lower leg.
+TEST(ArticulatedPose, APatellaSlidesAlongTheFemurKeepingItsLigament) {
+  const Figure& f = figure();
+  const skeleton::Joint& knee = *f.skeleton.joint(JointId::RightKnee);
+  const Eigen::Vector3d& c = knee.centre;
+  const Eigen::Vector3d axis = knee.axis(skeleton::Dof::Flexion).normalized();
+  const Eigen::Vector3d e1 = (knee.anterior - knee.anterior.dot(axis) * axis).normalized(), e2 = axis.cross(e1);
+  const Eigen::Vector3d down = (knee.longAxis - knee.longAxis.dot(axis) * axis).normalized();
+  const auto at = [&](double r, double degrees, double a) {
+    const double phi = degrees * std::numbers::pi / 180.0;
+    return Eigen::Vector3d(c + a * axis + r * (std::cos(phi) * e1 + std::sin(phi) * e2));
+  };
+  const auto mesh = [&](const std::function<double(double)>& profile) {
+    ArticulatedMesh m;
+    const auto add = [&](const Eigen::Vector3d& p, int segment) {
+      m.mesh.positions.push_back(p);
+      m.role.push_back(VertexRole::Rigid);
+      m.vertexPart.push_back(Part(segment));
+      m.vertexBody.push_back(-1);
+      ++m.rigidVertices[std::size_t(segment)];
+    };
+    for (int d = -180; d < 180; ++d)
+      for (const double a : {-12.0, 0.0, 12.0}) {
+        add(at(profile(d), d, a), int(Part::RightThigh));
+        add(at(0.5 * profile(d), d, a), int(Part::RightThigh));
+      }
+    for (const double d : {-10.0, 0.0, 10.0})
+      for (const double r : {3.0, 10.0})
+        for (const double a : {-8.0, 0.0, 8.0}) add(at(profile(0.0) + r, d, a), kRightPatella);
+    add(c + 30.0 * e1 + 45.0 * down, int(Part::RightLowerLeg));
+    return m;
+  };
+  const skeleton::PartMotions motions = figureMotions(f.skeleton, {jointAngles(JointId::RightKnee, 60.0)});
+  const Eigen::Isometry3d thigh = motions[std::size_t(Part::RightThigh)], leg = motions[std::size_t(Part::RightLowerLeg)];
+  // Receding from 40 mm in front to 25 mm at a quarter turn either way.
+  const auto receding = [](double d) { return 40.0 - 15.0 * std::min(std::abs(d), 90.0) / 90.0; };
+  const ArticulatedMesh m = mesh(receding);
+  const std::vector<Eigen::Isometry3d> segments = segmentMotions(motions, f.skeleton, m);
+  const Eigen::Isometry3d patella = segments[std::size_t(kRightPatella)];
+  EXPECT_FALSE(patella.isApprox(leg, 1e-3));
+  Eigen::Vector3d pc = Eigen::Vector3d::Zero();
+  std::size_t n = 0;
+  for (std::size_t v = 0; v < m.role.size(); ++v)
+    if (int(m.vertexPart[v]) == kRightPatella) {
+      pc += m.mesh.positions[v];
+      ++n;
+    }
+  pc /= double(n);
+  const Eigen::Vector3d tibia = m.mesh.positions.back();
+  const Eigen::Vector3d moved = thigh.inverse() * patella * pc, tibiaMoved = thigh.inverse() * leg * tibia;
+  EXPECT_NEAR((moved - tibiaMoved).norm(), (pc - tibia).norm(), 1.0);
+  const Eigen::Vector3d d = moved - c;
+  const double degrees = std::atan2(d.dot(e2), d.dot(e1)) * 180.0 / std::numbers::pi;
+  EXPECT_GT(std::abs(degrees), 5.0);  // it turned
+  // Its rest height above the profile (6.5 mm: 46.5 against 40), within
+  // the profile's 6-degree window.
+  EXPECT_NEAR(std::hypot(d.dot(e1), d.dot(e2)) - receding(degrees), 6.5, 1.5);
+  // Round about the axis: the lower leg's motion.
+  const ArticulatedMesh round = mesh([](double) { return 40.0; });
+  EXPECT_TRUE(segmentMotions(motions, f.skeleton, round)[std::size_t(kRightPatella)].isApprox(leg, 1e-6));
 }
 
 }  // namespace
