@@ -10,6 +10,7 @@
 //   build/release/bench/articulated_pose_bench --figure POSE [options]   # the synthetic figure (96)
 //
 // Options: --steps N (pose steps, default the poser's), --bone-weight W,
+// --sliding-weight W (the sliding vertices' pull onto their bodies),
 // --max-iterations N (SLIM iterations per step), --volume-weight L (lambda),
 // --direct-limit N (unknowns up to which CHOLMOD factorizes every
 // iteration), --scapulae (moving
@@ -50,7 +51,7 @@ double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>
 
 int usage() {
   std::fprintf(stderr,
-               "usage: articulated_pose_bench GRID ORGANS POSE [--steps N] [--bone-weight W] [--max-iterations N] "
+               "usage: articulated_pose_bench GRID ORGANS POSE [--steps N] [--bone-weight W] [--sliding-weight W] [--max-iterations N] "
                "[--volume-weight L] [--direct-limit N] [--scapulae] [--yielding-shell V] [--yielding-hips] [--squeezed F] [--dump PREFIX] [--mesh-only]\n"
                "       articulated_pose_bench --figure POSE [options]\n");
   return 2;
@@ -167,6 +168,7 @@ int main(int argc, char** argv) {
     if (arg == "--figure") figure = true;
     else if (arg == "--steps") poseOptions.steps = std::stoi(value());
     else if (arg == "--bone-weight") poseOptions.boneWeight = std::stod(value());
+    else if (arg == "--sliding-weight") poseOptions.slidingWeight = std::stod(value());
     else if (arg == "--max-iterations") poseOptions.solve.maxIterations = std::stoi(value());
     else if (arg == "--volume-weight") poseOptions.solve.volumeWeight = std::stod(value());
     else if (arg == "--direct-limit") poseOptions.solve.directSolveLimit = std::stoll(value());
