@@ -5,7 +5,10 @@
 // writers leave no file. CGAL's mesher, which reports no progress while it
 // refines, polls the flag itself (restricted_delaunay_cgal.cpp).
 
+#include <algorithm>
 #include <atomic>
+#include <cstdint>
+#include <functional>
 #include <stdexcept>
 
 namespace vox {
@@ -22,6 +25,19 @@ std::atomic<bool>& cancellationRequested();
 // Throws OperationCancelled while cancellation is requested, or while the
 // flag of a ScopedCancellation on the calling thread is set.
 void throwIfCancelled();
+
+// std::sort that polls for cancellation every 65536 comparisons: a sort of a
+// whole mesh's faces or edges runs for a second and more. The same
+// comparisons in the same order as std::sort, so the same result; cancelled,
+// the range is left in some order (the work it belonged to is discarded).
+template <typename It, typename Less = std::less<>>
+void sortCancellable(It first, It last, Less less = {}) {
+  std::uint32_t compared = 0;
+  std::sort(first, last, [&](const auto& a, const auto& b) {
+    if ((++compared & 0xFFFFu) == 0) throwIfCancelled();
+    return less(a, b);
+  });
+}
 
 // The flag that stops the calling thread's work: a ScopedCancellation's
 // while one lives on this thread, else the process-wide one. CGAL's mesher,

@@ -1,5 +1,7 @@
 #include "geometry/mesh_quality.h"
 
+#include "geometry/cancellation.h"
+
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -43,6 +45,7 @@ TetQualitySummary summarizeTetQuality(const TetMesh& mesh) {
   const double kIdeal = std::acos(1.0 / 3.0) * 180.0 / M_PI;
   double devSum = 0.0;
   for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
+    if (t % 65536 == 0) throwIfCancelled();  // a mesh of millions of tets
     const std::int32_t label = mesh.labels[t];
     if (label <= 0) continue;
     const Tet& q = mesh.tets[t];
@@ -82,6 +85,7 @@ struct LabeledFace {
 BoundaryFacetSummary summarizeBoundaryFacets(const TetMesh& mesh) {
   std::vector<LabeledFace> faces;
   for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
+    if (t % 65536 == 0) throwIfCancelled();
     if (mesh.labels[t] <= 0) continue;
     for (int k = 0; k < 4; ++k) {
       const Tri f = tetFace(mesh.tets[t], k);
@@ -90,7 +94,7 @@ BoundaryFacetSummary summarizeBoundaryFacets(const TetMesh& mesh) {
       faces.push_back({v, mesh.labels[t], std::int32_t(t), k});
     }
   }
-  std::sort(faces.begin(), faces.end());
+  sortCancellable(faces.begin(), faces.end());
   BoundaryFacetSummary s;
   double devSum = 0.0;
   for (std::size_t i = 0; i < faces.size();) {
@@ -121,6 +125,7 @@ BoundaryFacetSummary summarizeBoundaryFacets(const TetMesh& mesh) {
 EdgeLengthSummary summarizeEdgeLengths(const TetMesh& mesh, double target) {
   std::vector<std::uint64_t> edges;
   for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
+    if (t % 65536 == 0) throwIfCancelled();
     if (mesh.labels[t] <= 0) continue;
     const Tet& q = mesh.tets[t];
     for (int i = 0; i < 4; ++i)
@@ -130,7 +135,7 @@ EdgeLengthSummary summarizeEdgeLengths(const TetMesh& mesh, double target) {
         edges.push_back((std::uint64_t(a) << 32) | b);
       }
   }
-  std::sort(edges.begin(), edges.end());
+  sortCancellable(edges.begin(), edges.end());
   edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
   EdgeLengthSummary s;
   s.edges = edges.size();

@@ -1,5 +1,6 @@
 #include "geometry/tet_mesh.h"
 
+#include "geometry/cancellation.h"
 #include "geometry/error.h"
 
 #include <Eigen/Dense>
@@ -15,6 +16,7 @@ void TetMesh::validate(const std::string& source) const {
     if (!positions[v].allFinite()) throw InputError(source, "vertex " + std::to_string(v) + " has a non-finite coordinate");
   const auto nv = std::int64_t(positions.size());
   for (std::size_t t = 0; t < tets.size(); ++t) {
+    if (t % 65536 == 0) throwIfCancelled();  // a mesh of millions of tets
     const Tet& q = tets[t];
     for (int k = 0; k < 4; ++k) {
       if (q[k] < 0 || q[k] >= nv)

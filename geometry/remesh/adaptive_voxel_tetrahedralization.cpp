@@ -342,7 +342,7 @@ private:
     }
     std::int32_t next = 0;
     const GridGeometry& g = grid_.geometry();
-    for (std::int64_t z = 0; z < corners_[2]; ++z)
+    for (std::int64_t z = 0; z < corners_[2]; ++z, throwIfCancelled())
       for (std::int64_t y = 0; y < corners_[1]; ++y)
         for (std::int64_t x = 0; x < corners_[0]; ++x) {
           auto& r = remap[std::size_t(x + corners_[0] * (y + corners_[1] * z))];
@@ -353,6 +353,7 @@ private:
                                                                                      double(z + offset_[2]) - 0.5)));
         }
     for (std::size_t i = 0; i < simplices.size(); ++i) {
+      if (i % 65536 == 0) throwIfCancelled();
       if (labels[i] == 0 && !includeBackground) continue;
       const Simplex& t = simplices[i];
       std::array<std::array<std::int64_t, 3>, 4> c;

@@ -477,7 +477,7 @@ std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& b
   std::vector<std::pair<std::int32_t, std::int32_t>> next;  // lengths taken again when the wave starts
   std::size_t collapses = 0;
   while (!edges.empty()) {
-    std::sort(edges.begin(), edges.end(), shorter);
+    sortCancellable(edges.begin(), edges.end(), shorter);
     edges.erase(std::unique(edges.begin(), edges.end(),
                             [](const WeightedEdge& x, const WeightedEdge& y) { return x.a == y.a && x.b == y.b; }),
                 edges.end());
@@ -487,7 +487,7 @@ std::size_t collapseShortEdges(RemeshComplex& complex, const EdgeLengthBounds& b
     // depend on the order in which plans are found).
     byVertex.resize(edges.size());
     for (std::size_t i = 0; i < edges.size(); ++i) byVertex[i] = std::int32_t(i);
-    std::sort(byVertex.begin(), byVertex.end(), [&](std::int32_t x, std::int32_t y) {
+    sortCancellable(byVertex.begin(), byVertex.end(), [&](std::int32_t x, std::int32_t y) {
       return std::tie(edges[std::size_t(x)].a, edges[std::size_t(x)].b) < std::tie(edges[std::size_t(y)].a, edges[std::size_t(y)].b);
     });
     parallelRanges(std::int64_t(edges.size()), threads, [&](std::int64_t b, std::int64_t e) {

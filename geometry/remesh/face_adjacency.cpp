@@ -27,8 +27,10 @@ std::vector<std::array<std::int32_t, 4>> tetFaceAdjacency(const std::vector<Tet>
     std::sort(f.begin(), f.end());
     return f;
   };
-  for (std::size_t t = 0; t < nt; ++t)
+  for (std::size_t t = 0; t < nt; ++t) {
+    if (t % 65536 == 0) throwIfCancelled();
     for (int k = 0; k < 4; ++k) ++start[std::size_t(sortedFace(t, k)[0]) + 1];
+  }
   for (std::size_t v = 0; v < std::size_t(vertexCount); ++v) start[v + 1] += start[v];
 
   struct Entry {

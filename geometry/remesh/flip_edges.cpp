@@ -286,8 +286,10 @@ namespace {
 void worstCosines(const RemeshComplex& complex, int threads, std::vector<double>& out) {
   out.assign(std::size_t(complex.tetSlots()), 2.0);
   parallelRanges(complex.tetSlots(), threads, [&](std::int64_t b, std::int64_t e) {
-    for (std::int32_t t = std::int32_t(b); t < std::int32_t(e); ++t)
+    for (std::int32_t t = std::int32_t(b); t < std::int32_t(e); ++t) {
+      if (t % 65536 == 0) throwIfCancelled();
       if (complex.tetAlive(t) && !complex.isDummyTet(t)) out[std::size_t(t)] = complex.minDihedralCosineOf(t);
+    }
   });
 }
 }  // namespace
@@ -337,6 +339,7 @@ FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
   parallelRanges(complex.tetSlots(), options.threads, [&](std::int64_t begin, std::int64_t end) {
     std::vector<std::pair<std::int32_t, std::int32_t>> found;
     for (std::int32_t t = std::int32_t(begin); t < std::int32_t(end); ++t) {
+      if (t % 65536 == 0) throwIfCancelled();
       if (!complex.tetAlive(t) || complex.isDummyTet(t)) continue;
       for (int k = 0; k < 4; ++k) {
         const std::int32_t n = complex.neighbor(t, k);
@@ -350,7 +353,7 @@ FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
     std::lock_guard lock(gather);
     edges.insert(edges.end(), found.begin(), found.end());
   });
-  std::sort(edges.begin(), edges.end());
+  sortCancellable(edges.begin(), edges.end());
   edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
   worstCosines(complex, options.threads, worst);
   counts.surface = screenAndFlip(complex, options, flipper, edges, worst,
@@ -363,9 +366,11 @@ FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
   // The imaginary layer is not output: its tets are candidates only where
   // they touch the domain (their shape limits how its boundary can move).
   std::vector<char> nearDomain(std::size_t(complex.vertexSlots()), 0);
-  for (std::int32_t t = 0; t < complex.tetSlots(); ++t)
+  for (std::int32_t t = 0; t < complex.tetSlots(); ++t) {
+    if (t % 65536 == 0) throwIfCancelled();
     if (complex.tetAlive(t) && complex.label(t) > 0)
       for (std::int32_t v : complex.tet(t)) nearDomain[std::size_t(v)] = 1;
+  }
   auto candidate = [&](std::int32_t t) {
     if (complex.label(t) > 0) return true;
     for (std::int32_t v : complex.tet(t))
@@ -380,6 +385,7 @@ FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
     std::vector<Candidate> found;
     const auto& P = complex.positions();
     for (std::int32_t t = std::int32_t(begin); t < std::int32_t(end); ++t) {
+      if (t % 65536 == 0) throwIfCancelled();
       const double w = worst[std::size_t(t)];
       if (w <= threshold || w > 1.5 || !candidate(t)) continue;
       // The edges at its largest dihedral angles: removing either one
@@ -401,7 +407,7 @@ FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
     candidates.insert(candidates.end(), found.begin(), found.end());
   });
   // Each edge once, at its worst tet's key; worst first.
-  std::sort(candidates.begin(), candidates.end(), [](const auto& x, const auto& y) {
+  sortCancellable(candidates.begin(), candidates.end(), [](const auto& x, const auto& y) {
     return std::tie(std::get<1>(x), std::get<2>(x), std::get<0>(x)) < std::tie(std::get<1>(y), std::get<2>(y), std::get<0>(y));
   });
   candidates.erase(std::unique(candidates.begin(), candidates.end(),
@@ -409,7 +415,7 @@ FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
                                  return std::get<1>(x) == std::get<1>(y) && std::get<2>(x) == std::get<2>(y);
                                }),
                    candidates.end());
-  std::sort(candidates.begin(), candidates.end());
+  sortCancellable(candidates.begin(), candidates.end());
   edges.clear();
   for (const auto& [w, a, b] : candidates) edges.push_back({a, b});
   counts.inner = screenAndFlip(complex, options, flipper, edges, worst,
@@ -420,28 +426,34 @@ FlipCounts flipEdges(RemeshComplex& complex, const FlipOptions& options) {
   // Face flips for the slivers and caps that are left.
   std::vector<std::pair<double, std::int32_t>> poor;
   worstCosines(complex, options.threads, worst);
-  for (std::int32_t t = 0; t < complex.tetSlots(); ++t)
+  for (std::int32_t t = 0; t < complex.tetSlots(); ++t) {
+    if (t % 65536 == 0) throwIfCancelled();
     if (worst[std::size_t(t)] > threshold && worst[std::size_t(t)] < 1.5 && candidate(t)) poor.push_back({-worst[std::size_t(t)], t});
-  std::sort(poor.begin(), poor.end());
+  }
+  sortCancellable(poor.begin(), poor.end());
   {
     std::vector<char> any(poor.size(), 0);
     parallelRanges(std::int64_t(poor.size()), options.threads, [&](std::int64_t b, std::int64_t e) {
       EdgeFlipper f(complex, options);
       f.useWorstCosines(&worst);
-      for (std::int64_t i = b; i < e; ++i)
+      for (std::int64_t i = b; i < e; ++i) {
+        throwIfCancelled();
         for (int k = 0; k < 4 && !any[std::size_t(i)]; ++k) any[std::size_t(i)] = f.tryFlipFace(poor[std::size_t(i)].second, k, false);
+      }
     });
     std::size_t kept = 0;
     for (std::size_t i = 0; i < poor.size(); ++i)
       if (any[i]) poor[kept++] = poor[i];
     poor.resize(kept);
   }
-  for (const auto& [w, t] : poor)
+  for (const auto& [w, t] : poor) {
+    throwIfCancelled();
     for (int k = 0; k < 4; ++k)
       if (flipper.tryFlipFace(t, k)) {
         ++counts.face;
         break;
       }
+  }
   return counts;
 }
 

@@ -1,5 +1,6 @@
 #include "geometry/remesh/insert_steiner_points.h"
 
+#include "geometry/cancellation.h"
 #include "geometry/mesh_quality.h"
 #include "geometry/remesh/split_long_edges.h"
 #include "geometry/remesh/tet_shape.h"
@@ -240,6 +241,7 @@ std::size_t insertSteinerPoints(RemeshComplex& complex, const SteinerOptions& op
   for (int pass = 0; pass < options.passes; ++pass) {
     std::vector<PoorTet> poor;
     for (std::int32_t t = 0; t < complex.tetSlots(); ++t) {
+      if (t % 65536 == 0) throwIfCancelled();
       if (!complex.tetAlive(t) || complex.isDummyTet(t) || complex.label(t) <= 0) continue;
       const double c = complex.minDihedralCosineOf(t);
       if (c <= cosine) continue;
@@ -247,11 +249,12 @@ std::size_t insertSteinerPoints(RemeshComplex& complex, const SteinerOptions& op
       std::sort(s.begin(), s.end());
       poor.push_back({c, s, t});
     }
-    std::sort(poor.begin(), poor.end(), [](const PoorTet& x, const PoorTet& y) {
+    sortCancellable(poor.begin(), poor.end(), [](const PoorTet& x, const PoorTet& y) {
       return std::tie(y.cosine, x.sorted) < std::tie(x.cosine, y.sorted);  // worst first
     });
     std::size_t now = 0;
     for (const PoorTet& pt : poor) {
+      throwIfCancelled();
       // An earlier split may have replaced the tet (its slot then holds one of the halves).
       if (!complex.tetAlive(pt.slot)) continue;
       Tet s = complex.tet(pt.slot);

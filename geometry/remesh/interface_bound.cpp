@@ -119,7 +119,7 @@ InterfaceBound::InterfaceBound(const RemeshComplex& complex, double bound) : bou
     }
   }
   for (const Facet& f : facets) pairKeys_.push_back(f.key);
-  std::sort(pairKeys_.begin(), pairKeys_.end());
+  sortCancellable(pairKeys_.begin(), pairKeys_.end());
   throwIfCancelled();
   pairKeys_.erase(std::unique(pairKeys_.begin(), pairKeys_.end()), pairKeys_.end());
   auto indexOf = [&](std::uint64_t key) {
@@ -148,8 +148,7 @@ InterfaceBound::InterfaceBound(const RemeshComplex& complex, double bound) : bou
     triangles_.push_back(tri);
   }
   if (triangles_.empty()) lo = hi = Eigen::Vector3d::Zero();
-  throwIfCancelled();
-  std::sort(points.begin(), points.end());
+  sortCancellable(points.begin(), points.end());
   throwIfCancelled();
   points.erase(std::unique(points.begin(), points.end()), points.end());
   std::vector<std::pair<Eigen::Vector3f, std::int32_t>> samples;
@@ -197,15 +196,15 @@ InterfaceBound::InterfaceBound(const RemeshComplex& complex, double bound) : bou
     cellOfSample[n] = sc.index(c[0], c[1], c[2]);
     order[n] = std::int32_t(n);
   }
-  throwIfCancelled();
-  std::sort(order.begin(), order.end(), [&](std::int32_t x, std::int32_t y) {
+  sortCancellable(order.begin(), order.end(), [&](std::int32_t x, std::int32_t y) {
     return std::tie(cellOfSample[std::size_t(x)], samples[std::size_t(x)].second, x) <
            std::tie(cellOfSample[std::size_t(y)], samples[std::size_t(y)].second, y);
   });
   throwIfCancelled();
   samples_.reserve(samples.size());
   sc.start.assign(std::size_t(sc.count() + 1), 0);
-  for (std::size_t n = 0; n < order.size();) {
+  for (std::size_t n = 0, runs = 0; n < order.size(); ++runs) {
+    if (runs % 65536 == 0) throwIfCancelled();
     const std::int64_t cell = cellOfSample[std::size_t(order[n])];
     const std::int32_t pair = samples[std::size_t(order[n])].second;
     SampleRun run{pair, std::int32_t(samples_.size()), 0, samples[std::size_t(order[n])].first,

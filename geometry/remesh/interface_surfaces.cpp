@@ -1,5 +1,7 @@
 #include "geometry/remesh/interface_surfaces.h"
 
+#include "geometry/cancellation.h"
+
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -57,6 +59,7 @@ InterfaceSurfaces::InterfaceSurfaces(const RemeshComplex& complex, double radius
   // 2-junctions: each boundary facet once, normal from the lower label.
   std::vector<std::pair<std::int32_t, std::int32_t>> boundaryEdges;
   for (std::int32_t t = 0; t < complex.tetSlots(); ++t) {
+    if (t % 65536 == 0) throwIfCancelled();
     if (!complex.tetAlive(t) || complex.isDummyTet(t)) continue;
     const std::int32_t lt = complex.label(t);
     for (int k = 0; k < 4; ++k) {
@@ -81,10 +84,12 @@ InterfaceSurfaces::InterfaceSurfaces(const RemeshComplex& complex, double radius
     }
   }
   // 1-junctions: boundary edges with three or more labels around them.
-  std::sort(boundaryEdges.begin(), boundaryEdges.end());
+  sortCancellable(boundaryEdges.begin(), boundaryEdges.end());
   boundaryEdges.erase(std::unique(boundaryEdges.begin(), boundaryEdges.end()), boundaryEdges.end());
   EdgeRing ring;
+  std::size_t walked = 0;
   for (const auto& [a, b] : boundaryEdges) {
+    if (++walked % 4096 == 0) throwIfCancelled();
     const std::int32_t t = complex.findEdgeTet(a, b);
     complex.edgeRing(a, b, t, ring);
     LabelSet s;
@@ -97,7 +102,9 @@ InterfaceSurfaces::InterfaceSurfaces(const RemeshComplex& complex, double radius
     curve.push_back({(0.5 * (P[std::size_t(a)] + P[std::size_t(b)])).cast<float>(), (d / len).cast<float>(), float(len),
                      it->second});
   }
+  throwIfCancelled();
   surfaceIndex_.build(std::move(surface), 2.0 * radius_);
+  throwIfCancelled();
   curveIndex_.build(std::move(curve), 2.0 * radius_);
 }
 

@@ -141,7 +141,8 @@ void checkLocalEmbedding(const std::vector<Eigen::Vector3d>& positions, const st
   // star (sorted locally), so the whole is linear in the mesh for bounded
   // stars.
   const std::size_t nt = tets.size(), nv = positions.size();
-  for (std::size_t t = 0; t < nt; ++t)
+  for (std::size_t t = 0; t < nt; ++t) {
+    if (t % 65536 == 0) throwIfCancelled();
     for (int k = 0; k < 4; ++k) {
       const std::int32_t code = neighbors[t][std::size_t(k)];
       if (code == kNoFace || std::size_t(code >> 2) < t) continue;
@@ -157,18 +158,22 @@ void checkLocalEmbedding(const std::vector<Eigen::Vector3d>& positions, const st
                                      ", " + std::to_string(f[1]) + ", " + std::to_string(f[2]) + ")");
       }
     }
+  }
+  throwIfCancelled();
 
   // The tets of each vertex (counting sort), for the stars below.
   std::vector<std::int64_t> first(nv + 1, 0);
   for (const Tet& q : tets)
     for (std::int32_t v : q) ++first[std::size_t(v) + 1];
   for (std::size_t v = 0; v < nv; ++v) first[v + 1] += first[v];
+  throwIfCancelled();
   std::vector<std::int32_t> star(static_cast<std::size_t>(first[nv]));
   {
     std::vector<std::int64_t> fill(first.begin(), first.end() - 1);
     for (std::size_t t = 0; t < nt; ++t)
       for (std::int32_t v : tets[t]) star[std::size_t(fill[std::size_t(v)]++)] = std::int32_t(t);
   }
+  throwIfCancelled();
 
   // Around each edge (v, w), found from its smaller end point v.
   struct Incidence {
@@ -218,11 +223,15 @@ void checkLocalEmbedding(const std::vector<Eigen::Vector3d>& positions, const st
 
   // Around each vertex.
   std::vector<double> solid(nv, 0.0);
-  for (const Tet& q : tets)
+  for (std::size_t t = 0; t < nt; ++t) {
+    if (t % 65536 == 0) throwIfCancelled();
+    const Tet& q = tets[t];
     for (int i = 0; i < 4; ++i)
       solid[std::size_t(q[std::size_t(i)])] +=
           solidAngle(positions[std::size_t(q[std::size_t(i)])], positions[std::size_t(q[std::size_t((i + 1) % 4)])],
                      positions[std::size_t(q[std::size_t((i + 2) % 4)])], positions[std::size_t(q[std::size_t((i + 3) % 4)])]);
+  }
+  throwIfCancelled();
   for (std::size_t v = 0; v < nv; ++v)
     if (solid[v] > 2 * kTurn + kAngleSlack) {
       group.assign(star.begin() + first[v], star.begin() + first[v + 1]);
@@ -243,6 +252,7 @@ void checkLocalEmbedding(const std::vector<Eigen::Vector3d>& positions, const st
   // curves: no two arcs cross, and just beyond an arc (at its midpoint) no
   // other tet covers the direction. Each fan of tets is then an embedded
   // disc (or annulus), and two fans neither cross nor nest.
+  throwIfCancelled();
   std::vector<std::int64_t> arcsFirst(nv + 1, 0);
   for (std::size_t t = 0; t < nt; ++t)
     for (int k = 0; k < 4; ++k)
@@ -250,6 +260,7 @@ void checkLocalEmbedding(const std::vector<Eigen::Vector3d>& positions, const st
         for (int i = 0; i < 4; ++i)
           if (i != k) ++arcsFirst[std::size_t(tets[t][std::size_t(i)]) + 1];
   for (std::size_t v = 0; v < nv; ++v) arcsFirst[v + 1] += arcsFirst[v];
+  throwIfCancelled();
   std::vector<std::int32_t> arcs(static_cast<std::size_t>(arcsFirst[nv]));  // 4 * tet + open face
   {
     std::vector<std::int64_t> fill(arcsFirst.begin(), arcsFirst.end() - 1);
@@ -271,7 +282,9 @@ void checkLocalEmbedding(const std::vector<Eigen::Vector3d>& positions, const st
     throw InputError(source, describeTet(std::size_t(named), tets[std::size_t(named)]) + " overlaps " +
                                  describeTet(std::size_t(other), tets[std::size_t(other)]) + " around vertex " + std::to_string(v));
   };
+  throwIfCancelled();
   for (std::size_t v = 0; v < nv; ++v) {
+    if (v % 4096 == 0) throwIfCancelled();
     if (arcsFirst[v] == arcsFirst[v + 1]) continue;
     boundary.clear();
     const Eigen::Vector3d& pv = positions[v];

@@ -32,6 +32,7 @@ void collectEdges(const RemeshComplex& complex,
         }
       }
   }, 1);
+  throwIfCancelled();
   std::size_t total = 0;
   for (const auto& c : chunks) total += c.size();
   out.clear();

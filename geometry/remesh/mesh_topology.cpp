@@ -5,6 +5,8 @@
 #include "geometry/remesh/face_adjacency.h"
 #include "geometry/remesh/label_set.h"
 
+#include "geometry/cancellation.h"
+
 #include <algorithm>
 #include <numeric>
 
@@ -18,7 +20,7 @@ std::vector<std::int32_t> toVector(const LabelSet& s) { return {s.begin(), s.end
 // the connected components of each group.
 void countJunctionCurves(std::vector<std::pair<std::vector<std::int32_t>, std::pair<std::int64_t, std::int64_t>>>& edges,
                          MeshTopology& out) {
-  std::sort(edges.begin(), edges.end());
+  sortCancellable(edges.begin(), edges.end());
   out.featureEdges = edges.size();
   std::vector<std::int64_t> vertices;
   for (std::size_t b = 0; b < edges.size();) {
@@ -50,11 +52,13 @@ MeshTopology computeMeshTopology(const TetMesh& input) {
   // Domain tets only; vertices compacted.
   std::vector<Tet> tets;
   std::vector<std::int32_t> labels;
-  for (std::size_t t = 0; t < input.tets.size(); ++t)
+  for (std::size_t t = 0; t < input.tets.size(); ++t) {
+    if (t % 65536 == 0) throwIfCancelled();
     if (input.labels[t] > 0) {
       tets.push_back(input.tets[t]);
       labels.push_back(input.labels[t]);
     }
+  }
   const std::int32_t nv = std::int32_t(input.positions.size());
   const std::size_t nt = tets.size();
   const auto adjacency = tetFaceAdjacency(tets, nv, "mesh");
@@ -66,6 +70,7 @@ MeshTopology computeMeshTopology(const TetMesh& input) {
   std::map<std::int32_t, Counts> counts;
   DisjointSets components(nt);
   for (std::size_t t = 0; t < nt; ++t) {
+    if (t % 65536 == 0) throwIfCancelled();
     ++counts[labels[t]].t;
     for (int k = 0; k < 4; ++k) {
       const std::int32_t code = adjacency[t][std::size_t(k)];
@@ -77,6 +82,7 @@ MeshTopology computeMeshTopology(const TetMesh& input) {
     }
   }
   for (std::size_t t = 0; t < nt; ++t) {
+    if (t % 65536 == 0) throwIfCancelled();
     LabelTopology& lt = out.labels[labels[t]];
     ++lt.tets;
     if (components.find(std::int32_t(t)) == std::int32_t(t)) ++lt.components;
@@ -91,6 +97,7 @@ MeshTopology computeMeshTopology(const TetMesh& input) {
   std::vector<std::int32_t> nbr;
   std::vector<LabelSet> nbrLabels;
   for (std::int32_t v = 0; v < nv; ++v) {
+    if (v % 16384 == 0) throwIfCancelled();
     if (start[std::size_t(v)] == start[std::size_t(v) + 1]) continue;
     LabelSet sv;
     nbr.clear();
@@ -148,7 +155,7 @@ MeshTopology computeGridTopology(const LabelGrid& grid) {
 
   // Voxels (T) and face-connected components.
   DisjointSets components(std::size_t(grid.voxelCount()));
-  for (std::int64_t k = 0; k < nz; ++k)
+  for (std::int64_t k = 0; k < nz; ++k, throwIfCancelled())
     for (std::int64_t j = 0; j < ny; ++j)
       for (std::int64_t i = 0; i < nx; ++i) {
         const std::int32_t l = at(i, j, k);
@@ -162,6 +169,7 @@ MeshTopology computeGridTopology(const LabelGrid& grid) {
         if (k > 0 && at(i, j, k - 1) == l) components.unite(idx, std::int32_t(grid.geometry().index(i, j, k - 1)));
       }
   for (std::int64_t idx = 0; idx < grid.voxelCount(); ++idx) {
+    if (idx % 65536 == 0) throwIfCancelled();
     const std::int32_t l = grid.data()[idx];
     if (l != 0 && components.find(std::int32_t(idx)) == std::int32_t(idx)) ++out.labels[l].components;
   }
@@ -174,7 +182,7 @@ MeshTopology computeGridTopology(const LabelGrid& grid) {
   };
   // Faces: perpendicular to axis a, between voxel (c - e_a) and c.
   for (int a = 0; a < 3; ++a)
-    for (std::int64_t k = 0; k <= nz - (a != 2); ++k)
+    for (std::int64_t k = 0; k <= nz - (a != 2); ++k, throwIfCancelled())
       for (std::int64_t j = 0; j <= ny - (a != 1); ++j)
         for (std::int64_t i = 0; i <= nx - (a != 0); ++i) {
           LabelSet s;
@@ -199,7 +207,7 @@ MeshTopology computeGridTopology(const LabelGrid& grid) {
     return s;
   };
   for (int a = 0; a < 3; ++a)
-    for (std::int64_t k = 0; k <= nz - (a == 2); ++k)
+    for (std::int64_t k = 0; k <= nz - (a == 2); ++k, throwIfCancelled())
       for (std::int64_t j = 0; j <= ny - (a == 1); ++j)
         for (std::int64_t i = 0; i <= nx - (a == 0); ++i) {
           const LabelSet s = edgeLabels(a, i, j, k);
@@ -208,7 +216,7 @@ MeshTopology computeGridTopology(const LabelGrid& grid) {
             featureEdges.push_back({toVector(s), {point(i, j, k), point(i + (a == 0), j + (a == 1), k + (a == 2))}});
         }
   // Lattice points: the 8 voxels around, and the 6 axis edges for corners.
-  for (std::int64_t k = 0; k <= nz; ++k)
+  for (std::int64_t k = 0; k <= nz; ++k, throwIfCancelled())
     for (std::int64_t j = 0; j <= ny; ++j)
       for (std::int64_t i = 0; i <= nx; ++i) {
         LabelSet s;

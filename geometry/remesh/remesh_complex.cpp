@@ -26,6 +26,7 @@ void checkNoFlatTets(const TetMesh& mesh, const std::string& source) {
 
 RemeshComplex::RemeshComplex(const TetMesh& mesh, const std::string& source) {
   mesh.validate(source);
+  throwIfCancelled();
   if (mesh.positions.size() >= std::size_t(std::numeric_limits<std::int32_t>::max() / 4) ||
       mesh.tets.size() >= std::size_t(std::numeric_limits<std::int32_t>::max() / 8))
     throw InputError(source, "is too large to remesh (more than 2^28 tets)");
@@ -34,6 +35,7 @@ RemeshComplex::RemeshComplex(const TetMesh& mesh, const std::string& source) {
   // Either orientation is accepted: negative tets are turned over; a tet
   // without volume is the input's fault.
   for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
+    if (t % 65536 == 0) throwIfCancelled();
     if (mesh.labels[t] < 0) throw InputError(source, "tet " + std::to_string(t) + " has a negative label");
     const double v = signedVolume(mesh.positions, mesh.tets[t]);
     if (v < 0.0) std::swap(tets_[t][2], tets_[t][3]);
@@ -43,6 +45,7 @@ RemeshComplex::RemeshComplex(const TetMesh& mesh, const std::string& source) {
   labels_ = mesh.labels;
   neighbors_ = tetFaceAdjacency(tets_, std::int32_t(positions_.size()), source);
   checkLocalEmbedding(positions_, tets_, neighbors_, source);
+  throwIfCancelled();
   // Edges met by more than two open facets: parts of the input touch along
   // them. Their end points are pinned, so the contact stays as it is.
   std::vector<std::pair<std::int32_t, std::int32_t>> openEdges;
@@ -52,8 +55,9 @@ RemeshComplex::RemeshComplex(const TetMesh& mesh, const std::string& source) {
         const Tri f = tetFace(tets_[t], k);
         for (int i = 0; i < 3; ++i) openEdges.push_back(std::minmax(f[std::size_t(i)], f[std::size_t((i + 1) % 3)]));
       }
-  std::sort(openEdges.begin(), openEdges.end());
+  sortCancellable(openEdges.begin(), openEdges.end());
   splitPinchedVertices();
+  throwIfCancelled();
   pinned_.assign(positions_.size() + 1, 0);
   for (std::size_t v = 0; v < pinchOf_.size(); ++v)
     if (pinchOf_[v] >= 0) pinned_[v] = 1;
@@ -78,6 +82,7 @@ RemeshComplex::RemeshComplex(const TetMesh& mesh, const std::string& source) {
         cone.push_back({f[0], f[1], f[2], dummy_});
         coneBase.push_back(std::int32_t(4 * t + std::size_t(k)));
       }
+  throwIfCancelled();
   for (std::size_t c = 0; c < cone.size(); ++c) {
     const std::int32_t base = coneBase[c];
     tets_.push_back(cone[c]);
@@ -86,6 +91,7 @@ RemeshComplex::RemeshComplex(const TetMesh& mesh, const std::string& source) {
     neighbors_[std::size_t(base / 4)][std::size_t(base % 4)] = 4 * std::int32_t(domainTets + c) + 3;
   }
   glueCone(domainTets, source);
+  throwIfCancelled();
 
   vertexTet_.assign(positions_.size(), -1);
   std::vector<std::int32_t> incidence(positions_.size(), 0);
@@ -97,6 +103,7 @@ RemeshComplex::RemeshComplex(const TetMesh& mesh, const std::string& source) {
   for (std::int32_t v = 0; v < std::int32_t(positions_.size()); ++v)
     if (vertexTet_[std::size_t(v)] < 0 && v != dummy_) freeVertices_.push_back(v);
   std::reverse(freeVertices_.begin(), freeVertices_.end());
+  throwIfCancelled();
 
   // The operations find a vertex's tets by walking through its faces, and an
   // edge's tets by walking around it: the first walk must reach all of them,
@@ -186,6 +193,7 @@ void RemeshComplex::splitPinchedVertices() {
       if (neighbors_[t][std::size_t(k)] == kNoFace)
         for (int i = 0; i < 4; ++i)
           if (i != k) open[std::size_t(tets_[t][std::size_t(i)])] = 1;
+  throwIfCancelled();
   std::vector<std::int64_t> first(nv + 1, 0);
   for (const Tet& q : tets_)
     for (std::int32_t v : q) first[std::size_t(v) + 1] += open[std::size_t(v)];
@@ -197,11 +205,13 @@ void RemeshComplex::splitPinchedVertices() {
       for (std::int32_t v : tets_[t])
         if (open[std::size_t(v)]) star[std::size_t(fill[std::size_t(v)]++)] = std::int32_t(t);
   }
+  throwIfCancelled();
   pinchOf_.assign(nv, -1);
   std::vector<std::uint32_t> seen(nt, 0);
   std::uint32_t stamp = 0;
   std::vector<std::int32_t> queue;
   for (std::size_t v = 0; v < nv; ++v) {
+    if (v % 65536 == 0) throwIfCancelled();
     const std::int64_t b = first[v], e = first[v + 1];
     if (e - b < 2) continue;
     ++stamp;
@@ -257,7 +267,7 @@ void RemeshComplex::glueCone(std::size_t domainTets, const std::string& source) 
       const std::int32_t x = tets_[t][std::size_t((k + 1) % 3)], y = tets_[t][std::size_t((k + 2) % 3)];
       entries.push_back({std::min(x, y), std::max(x, y), std::int32_t(4 * t + std::size_t(k))});
     }
-  std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) {
+  sortCancellable(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) {
     return std::tie(a.lo, a.hi, a.face) < std::tie(b.lo, b.hi, b.face);
   });
   auto glueFaces = [&](std::int32_t f, std::int32_t g) {
@@ -327,7 +337,7 @@ void RemeshComplex::glueCone(std::size_t domainTets, const std::string& source) 
   std::vector<std::pair<std::int32_t, std::int32_t>> fans;  // (vertex, cone tet)
   for (std::size_t t = domainTets; t < tets_.size(); ++t)
     for (int k = 0; k < 3; ++k) fans.push_back({tets_[t][std::size_t(k)], std::int32_t(t)});
-  std::sort(fans.begin(), fans.end());
+  sortCancellable(fans.begin(), fans.end());
   std::vector<std::int32_t> queue;
   std::vector<std::uint32_t> seen(tets_.size(), 0);
   std::uint32_t stamp = 0;
@@ -363,22 +373,26 @@ TetMesh RemeshComplex::toTetMesh(bool keepImaginary, std::vector<TaggedEdge>* fe
   };
   // Copies of a pinched vertex are written as the vertex itself.
   auto original = [&](std::int32_t v) { return pinchOf(v) >= 0 ? pinchOf(v) : v; };
-  for (std::size_t t = 0; t < tets_.size(); ++t)
+  for (std::size_t t = 0; t < tets_.size(); ++t) {
+    if (t % 65536 == 0) throwIfCancelled();
     if (kept(t))
       for (std::int32_t v : tets_[t]) remap[std::size_t(original(v))] = 0;
+  }
   std::int32_t next = 0;
   for (std::size_t v = 0; v < positions_.size(); ++v)
     if (remap[v] == 0) {
       remap[v] = next++;
       out.positions.push_back(positions_[v]);
     }
-  for (std::size_t t = 0; t < tets_.size(); ++t)
-    if (kept(t)) {
-      Tet q = tets_[t];
-      for (auto& v : q) v = remap[std::size_t(original(v))];
-      out.tets.push_back(q);
-      out.labels.push_back(labels_[t]);
-    }
+  throwIfCancelled();
+  for (std::size_t t = 0; t < tets_.size(); ++t) {
+    if (t % 65536 == 0) throwIfCancelled();
+    if (!kept(t)) continue;
+    Tet q = tets_[t];
+    for (auto& v : q) v = remap[std::size_t(original(v))];
+    out.tets.push_back(q);
+    out.labels.push_back(labels_[t]);
+  }
   if (features) {
     features->clear();
     for (TaggedEdge e : features_.list()) {
@@ -661,7 +675,7 @@ void RemeshComplex::reorderForLocality() {
     }
     keys.push_back({key, std::int32_t(v)});
   }
-  std::sort(keys.begin(), keys.end());
+  sortCancellable(keys.begin(), keys.end());
   std::vector<std::int32_t> vmap(nv, -1);
   for (std::size_t i = 0; i < keys.size(); ++i) vmap[std::size_t(keys[i].second)] = std::int32_t(i);
 
@@ -673,7 +687,7 @@ void RemeshComplex::reorderForLocality() {
     for (std::int32_t v : tets_[t]) m = std::min(m, vmap[std::size_t(v)]);
     tetKeys.push_back({m, std::int32_t(t)});
   }
-  std::sort(tetKeys.begin(), tetKeys.end());
+  sortCancellable(tetKeys.begin(), tetKeys.end());
   std::vector<std::int32_t> tmap(nt, -1);
   for (std::size_t i = 0; i < tetKeys.size(); ++i) tmap[std::size_t(tetKeys[i].second)] = std::int32_t(i);
 
@@ -686,6 +700,7 @@ void RemeshComplex::reorderForLocality() {
       if (v < data.size()) out[i] = map(data[v]);
     }
     data = std::move(out);
+    throwIfCancelled();
   };
   permuteVertices(positions_, Eigen::Vector3d::Zero().eval(), [](const Eigen::Vector3d& p) { return p; });
   permuteVertices(vertexTet_, std::int32_t(-1),
@@ -698,6 +713,7 @@ void RemeshComplex::reorderForLocality() {
     std::remove_reference_t<decltype(data)> out(tetKeys.size());
     for (std::size_t i = 0; i < tetKeys.size(); ++i) out[i] = map(data[std::size_t(tetKeys[i].second)]);
     data = std::move(out);
+    throwIfCancelled();
   };
   permuteTets(tets_, [&](const Tet& q) {
     Tet r;

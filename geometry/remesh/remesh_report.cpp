@@ -1,5 +1,6 @@
 #include "geometry/remesh/remesh_report.h"
 
+#include "geometry/cancellation.h"
 #include "geometry/progress.h"
 
 #include <nlohmann/json.hpp>
@@ -15,6 +16,7 @@ namespace {
 void histogramDihedralAngles(const TetMesh& mesh, RemeshReport& r) {
   const auto& P = mesh.positions;
   for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
+    if (t % 65536 == 0) throwIfCancelled();
     if (mesh.labels[t] <= 0) continue;
     const Tet& q = mesh.tets[t];
     const auto angles = dihedralAngles(P[std::size_t(q[0])], P[std::size_t(q[1])], P[std::size_t(q[2])], P[std::size_t(q[3])]);

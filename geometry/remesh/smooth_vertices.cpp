@@ -29,15 +29,19 @@ struct VertexTets {
 VertexTets vertexTets(const RemeshComplex& complex) {
   VertexTets vt;
   vt.start.assign(std::size_t(complex.vertexSlots()) + 1, 0);
-  for (std::int32_t t = 0; t < complex.tetSlots(); ++t)
+  for (std::int32_t t = 0; t < complex.tetSlots(); ++t) {
+    if (t % 65536 == 0) throwIfCancelled();
     if (complex.tetAlive(t))
       for (std::int32_t v : complex.tet(t)) ++vt.start[std::size_t(v) + 1];
+  }
   for (std::size_t v = 1; v < vt.start.size(); ++v) vt.start[v] += vt.start[v - 1];
   vt.tets.resize(std::size_t(vt.start.back()));
   std::vector<std::int64_t> fill(vt.start.begin(), vt.start.end() - 1);
-  for (std::int32_t t = 0; t < complex.tetSlots(); ++t)
+  for (std::int32_t t = 0; t < complex.tetSlots(); ++t) {
+    if (t % 65536 == 0) throwIfCancelled();
     if (complex.tetAlive(t))
       for (std::int32_t v : complex.tet(t)) vt.tets[std::size_t(fill[std::size_t(v)]++)] = t;
+  }
   return vt;
 }
 
@@ -325,6 +329,7 @@ std::size_t applyMoves(RemeshComplex& complex, const Smoother& smoother, const V
     parallelRanges(n, threads, [&](std::int64_t b, std::int64_t e) {
       std::vector<std::int32_t> tets, found;
       for (std::int64_t i = b; i < e; ++i) {
+        if ((i - b) % 4096 == 0) throwIfCancelled();
         if (!moves[std::size_t(i)]) continue;
         vt.of(level[std::size_t(i)], tets);
         // Filtered by move index, not by vertex, then sorted once (the star's
@@ -343,6 +348,7 @@ std::size_t applyMoves(RemeshComplex& complex, const Smoother& smoother, const V
           std::copy(found.begin(), found.end(), later.begin() + start[std::size_t(i)]);
       }
     });
+    throwIfCancelled();
     if (pass == 0) {
       for (std::int64_t i = 0; i < n; ++i) start[std::size_t(i) + 1] += start[std::size_t(i)];
       later.resize(std::size_t(start.back()));
@@ -362,18 +368,29 @@ std::size_t applyMoves(RemeshComplex& complex, const Smoother& smoother, const V
   std::mutex mutex;
   std::condition_variable wake;
   const int workers = std::max(1, threads);
+  bool stopped = false;  // a worker failed (or was cancelled): the others leave too
   parallelRanges(workers, workers, [&](std::int64_t, std::int64_t) {
     std::vector<std::int32_t> tets, freed;
     for (;;) {
       std::int32_t i;
       {
         std::unique_lock lock(mutex);
-        wake.wait(lock, [&] { return !ready.empty() || remaining == 0; });
-        if (ready.empty()) return;
+        wake.wait(lock, [&] { return !ready.empty() || remaining == 0 || stopped; });
+        if (stopped || ready.empty()) return;
         i = ready.back();
         ready.pop_back();
       }
-      moved[std::size_t(i)] = smoother.moveTowards(level[std::size_t(i)], targets[std::size_t(i)], tets);
+      try {
+        throwIfCancelled();
+        moved[std::size_t(i)] = smoother.moveTowards(level[std::size_t(i)], targets[std::size_t(i)], tets);
+      } catch (...) {
+        {
+          std::lock_guard lock(mutex);
+          stopped = true;
+        }
+        wake.notify_all();
+        throw;
+      }
       freed.clear();
       for (std::int64_t x = start[std::size_t(i)]; x < start[std::size_t(i) + 1]; ++x) {
         const std::int32_t j = later[std::size_t(x)];
@@ -403,11 +420,13 @@ std::size_t polishPass(RemeshComplex& complex, const InterfaceSurfaces* surfaces
   for (auto& m : marks) m.store(0, std::memory_order_relaxed);
   parallelRanges(complex.tetSlots(), threads, [&](std::int64_t b, std::int64_t e) {
     for (std::int32_t t = std::int32_t(b); t < std::int32_t(e); ++t) {
+      if (t % 65536 == 0) throwIfCancelled();
       if (!complex.tetAlive(t) || complex.isDummyTet(t) || complex.label(t) <= 0) continue;
       if (complex.minDihedralCosineOf(t) > cosine)
         for (std::int32_t v : complex.tet(t)) marks[std::size_t(v)].store(1, std::memory_order_relaxed);
     }
   });
+  throwIfCancelled();
   std::vector<std::int32_t> vertices;
   for (std::int32_t v = 0; v < nv; ++v)
     if (marks[std::size_t(v)].load(std::memory_order_relaxed) && v != complex.dummyVertex()) vertices.push_back(v);
@@ -417,6 +436,7 @@ std::size_t polishPass(RemeshComplex& complex, const InterfaceSurfaces* surfaces
   VertexNeighborhood nb;
   std::size_t moved = 0;
   for (std::int32_t v : vertices) {
+    throwIfCancelled();
     vt.of(v, nb.tets);
     classifyNeighborhood(complex, v, nb);
     moved += smoother.polish(nb) ? 1 : 0;
@@ -465,6 +485,7 @@ SmoothCounts smoothVertices(RemeshComplex& complex, const InterfaceSurfaces* sur
   std::vector<Eigen::Vector3d> targets;
   std::vector<char> moves;
   for (VertexKind k : {VertexKind::Feature, VertexKind::Surface, VertexKind::Inside}) {
+    throwIfCancelled();
     level.clear();
     for (std::int32_t v = 0; v < nv; ++v)
       if (kind[std::size_t(v)] == std::uint8_t(k)) level.push_back(v);

@@ -86,7 +86,7 @@ std::size_t splitLongEdges(RemeshComplex& complex, const EdgeLengthBounds& bound
   auto longer = [](const WeightedEdge& x, const WeightedEdge& y) {
     return x.length2 > y.length2 || (x.length2 == y.length2 && std::tie(x.a, x.b) < std::tie(y.a, y.b));
   };
-  std::sort(edges.begin(), edges.end(), longer);
+  sortCancellable(edges.begin(), edges.end(), longer);
   auto later = [&](const WeightedEdge& x, const WeightedEdge& y) { return longer(y, x); };
   std::priority_queue<WeightedEdge, std::vector<WeightedEdge>, decltype(later)> queue(later);
   std::size_t next = 0, splits = 0;

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <mutex>
 #include <set>
@@ -94,6 +95,26 @@ TEST(Parallel, AScopedCancellationRestoresTheOuterFlag) {
     EXPECT_NO_THROW(throwIfCancelled());
   }
   EXPECT_EQ(&cancellationFlag(), &cancellationRequested());
+}
+
+// A sort of millions of items stops within its 65536 comparisons once
+// stopped; not stopped, it orders as std::sort does with the same comparator.
+TEST(Parallel, ASortOfAWholeMeshPollsTheCancellation) {
+  std::vector<std::pair<int, int>> items(1 << 20);
+  for (std::size_t i = 0; i < items.size(); ++i) items[i] = {int((i * 7919u) % 1009u), int(i % 3u)};
+  auto byFirst = [](const auto& a, const auto& b) { return a.first < b.first; };  // ties: the order std::sort leaves
+  std::vector<std::pair<int, int>> expected = items, sorted = items;
+  std::sort(expected.begin(), expected.end(), byFirst);
+  sortCancellable(sorted.begin(), sorted.end(), byFirst);
+  EXPECT_EQ(sorted, expected);
+
+  std::atomic<bool> stop{true};
+  const ScopedCancellation scope(stop);
+  sorted = items;
+  EXPECT_THROW(sortCancellable(sorted.begin(), sorted.end(), byFirst), OperationCancelled);
+  std::vector<int> few{3, 1, 2};
+  EXPECT_NO_THROW(sortCancellable(few.begin(), few.end()));  // under 65536 comparisons: no poll
+  EXPECT_EQ(few, (std::vector<int>{1, 2, 3}));
 }
 
 }  // namespace

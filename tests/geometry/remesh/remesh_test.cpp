@@ -2,6 +2,7 @@
 // junction topology, no inverted or flat tet, determinism, sizes near the
 // target, volumes kept.
 
+#include "geometry/cancellation.h"
 #include "geometry/error.h"
 #include "geometry/mesh_quality.h"
 #include "geometry/remesh/adaptive_voxel_tetrahedralization.h"
@@ -18,8 +19,11 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstring>
+#include <thread>
 #include <tuple>
 
 namespace vox::remesh {
@@ -147,6 +151,32 @@ TEST(Remesh, DeterministicAndIndependentOfThreads) {
                           a.output.positions.size() * sizeof(Eigen::Vector3d)),
               0);
   }
+}
+
+// Stopped at any point of a run on two threads (split, collapse, flip, the
+// scheduled moves of the smoothing, polish, insertion), the remesher throws
+// OperationCancelled and leaves no worker waiting on another.
+TEST(Remesh, StopsOnTwoThreadsWhereverItIsCancelled) {
+  const LabelGrid grid = synthesize(SynthKind::JunctionSphere, 20);
+  const auto start = std::chrono::steady_clock::now();
+  meshGrid(grid, 2.0, 2, 3);
+  const auto whole = std::chrono::steady_clock::now() - start;
+  int stopped = 0;
+  for (int k = 1; k < 16; ++k) {
+    std::atomic<bool> stop{false};
+    const ScopedCancellation scope(stop);
+    std::thread watchdog([&] {
+      std::this_thread::sleep_for(whole * k / 16);
+      stop = true;
+    });
+    try {
+      meshGrid(grid, 2.0, 2, 3);
+    } catch (const OperationCancelled&) {
+      ++stopped;
+    }
+    watchdog.join();
+  }
+  EXPECT_GE(stopped, 8);
 }
 
 double smallestDihedral(const TetMesh& m) {
