@@ -404,6 +404,7 @@ BodyParts bodyParts(const LabelGrid& grid, const OrganTable& organs, const std::
   const auto mark = [&]() {
     std::int64_t open = 0;
     for (std::int64_t v = 0; v < g.voxelCount(); ++v) {
+      if (v % 65536 == 0) throwIfCancelled();
       if (std::isfinite(distance[std::size_t(v)])) owner[std::size_t(v)] |= GeodesicFront::kFinal;
       else open += foreground(v);
     }
@@ -412,8 +413,10 @@ BodyParts bodyParts(const LabelGrid& grid, const OrganTable& organs, const std::
   const auto notFinal = [&](std::int64_t n) { return (owner[std::size_t(n)] & GeodesicFront::kFinal) == 0; };
   std::int64_t open = mark();
   if (open > 0) {
-    for (std::int64_t v = 0; v < g.voxelCount(); ++v)
+    for (std::int64_t v = 0; v < g.voxelCount(); ++v) {
+      if (v % 65536 == 0) throwIfCancelled();
       if (skin[labels[std::size_t(v)]] && std::isfinite(distance[std::size_t(v)])) front.push(v);
+    }
     front.run([](std::int64_t) { return true; }, [&](std::int64_t n) { return foreground(n) && notFinal(n); });
     const std::int64_t left = mark();
     out.reachedThroughSkin = open - left;
@@ -421,16 +424,21 @@ BodyParts bodyParts(const LabelGrid& grid, const OrganTable& organs, const std::
   }
   // Pass 3: foreground pieces without a bone, through the background.
   if (open > 0) {
-    for (std::int64_t v = 0; v < g.voxelCount(); ++v)
+    for (std::int64_t v = 0; v < g.voxelCount(); ++v) {
+      if (v % 65536 == 0) throwIfCancelled();
       if (std::isfinite(distance[std::size_t(v)])) front.push(v);
+    }
     front.run([](std::int64_t) { return true; }, notFinal);
     out.reachedThroughBackground = open;
   }
   reportProgress("body parts", 1.0);
 
   out.parts = LabelGrid(g, 0);
-  for (std::int64_t v = 0; v < g.voxelCount(); ++v)
+  for (std::int64_t v = 0; v < g.voxelCount(); ++v) {
+    if (v % 65536 == 0) throwIfCancelled();
     if (foreground(v)) out.parts.labels()[std::size_t(v)] = Label(owner[std::size_t(v)] & GeodesicFront::kPartMask);
+  }
+  throwIfCancelled();
   countParts(out);
   return out;
 }

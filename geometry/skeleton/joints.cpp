@@ -1,6 +1,7 @@
 #include "geometry/skeleton/joints.h"
 
 #include "geometry/ascii_text.h"
+#include "geometry/cancellation.h"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
@@ -86,6 +87,7 @@ std::vector<Eigen::Vector3d> centres(const GridGeometry& g, const std::vector<st
 }
 
 BoneShape shapeOf(const GridGeometry& g, const std::vector<std::int64_t>& voxels) {
+  throwIfCancelled();  // a bone of millions of voxels
   BoneShape s;
   s.points = centres(g, voxels);
   s.centroid = mean(s.points);
@@ -355,6 +357,7 @@ std::vector<Eigen::Vector3d> partBonePoints(const GridGeometry& g, const BodyPar
   std::vector<Eigen::Vector3d> out;
   for (const BoneVoxels& b : bones.bones)
     if (bonePart(b.bone, b.side) == part) {
+      throwIfCancelled();
       const std::vector<Eigen::Vector3d> p = centres(g, b.voxels);
       out.insert(out.end(), p.begin(), p.end());
     }
