@@ -10,8 +10,10 @@
 
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
 
 #include <cstring>
+#include <filesystem>
 #include <limits>
 
 namespace vox::python {
@@ -197,7 +199,11 @@ in the format of the ICRP 110 "organs.dat" files (ID, name words, tissue, densit
 
 OrganTable(path) reads one; a malformed table raises ValueError naming the file
 and line, a missing one FileNotFoundError.)doc")
-      .def(py::init([](const std::string& path) { return Organs{OrganTable::read(path), path}; }), py::arg("path"),
+      .def(py::init([](const std::filesystem::path& file) {
+             const std::string path = file.string();
+             return Organs{OrganTable::read(path), path};
+           }),
+           py::arg("path"),
            "Reads an organ table file.")
       .def("__len__", [](const Organs& o) { return o.table.organs().size(); })
       .def("__contains__", [](const Organs& o, int id) { return o.table.find(id) != nullptr; })
@@ -251,11 +257,17 @@ copy; writes go to the grid; read-only when the borrowed array is), shape
           py::arg("shape"), py::arg("spacing") = py::none(), py::arg("affine") = py::none(),
           "A grid of label 0 of the given shape (nx, ny, nz), to fill through .labels in place.")
       .def_static(
-          "read", [](const std::string& path) { return makeGrid(interruptible([&] { return readGrid(path); }), path); }, py::arg("path"),
+          "read",
+          [](const std::filesystem::path& file) {
+            const std::string path = file.string();
+            return makeGrid(interruptible([&] { return readGrid(path); }), path);
+          },
+          py::arg("path"),
           "Reads a label grid file (NIfTI, MetaImage, NRRD, INR). Corrupt or refused files raise ValueError naming the file "
           "and the fault; unreadable ones OSError.")
       .def(
-          "write", [](const Grid& g, const std::string& path) { runInterruptible([&] { writeGrid(path, g.grid); }); }, py::arg("path"),
+          "write", [](const Grid& g, const std::filesystem::path& path) { runInterruptible([&] { writeGrid(path.string(), g.grid); }); },
+          py::arg("path"),
           "Writes the grid (format from the extension), atomically: an interrupted write leaves no file.")
       .def_property_readonly(
           "labels", [](const GridHandle& g) { return labelView(g); },

@@ -327,6 +327,34 @@ def test_mesh_and_remesh_round_trip_through_meshio(am_crop, tmp_path):
     assert len(t2) > 0 and set(np.unique(l2)) <= set(np.unique(labels))
 
 
+def test_mesh_takes_the_clis_sizing_bound_and_sliver_options(am_crop, tmp_path):
+    data, affine = am_crop
+    nib.save(nib.Nifti1Image(data[48:80, 24:52, :], affine), tmp_path / "small.nii.gz")
+    small = voxmorph.Grid.read(tmp_path / "small.nii.gz")  # the CLI's grid to the last bit of its affine
+    args = dict(size_boundary=4.0, size_interior=12.0, hausdorff=0.3, steiner_angle=10.0, distances=False)
+    points, tets, labels, report = voxmorph.mesh(small, **args)
+    cli_report = json.loads(cli("mesh", str(tmp_path / "small.nii.gz"), "--size-boundary", "4", "--size-interior", "12",
+                                "--hausdorff", "0.3", "--steiner-angle", "10", "--no-distance", "-o",
+                                str(tmp_path / "small.mesh"), "--report", "-").stdout)
+    assert report["tets"]["output"] == cli_report["tets"]["output"] == len(tets)
+    assert report["sizing_field_mm"] == cli_report["sizing_field_mm"] and report["sizing_field_mm"]["min"] == 4.0
+    assert report["target_edge_length_mm"] == 4.0 and report["topology"]["preserved"]
+    uniform = voxmorph.mesh(small, 4.0, distances=False)[3]
+    assert report["tets"]["output"] < uniform["tets"]["output"]
+    # The remesher of a mesh takes them too; sizing from its interfaces.
+    coarser = voxmorph.remesh(points, tets, labels, size_boundary=5.0, size_interior=15.0, hausdorff=0.0, steiner_angle=0.0,
+                              distances=False)[3]
+    assert coarser["sizing_field_mm"]["max"] <= 15.0 and coarser["steiner_points"]["inserted"] == 0
+    for kwargs, message in [(dict(size_boundary=4.0), "size_interior: adaptive sizing takes both"),
+                            (dict(l=4.0, size_boundary=4.0, size_interior=8.0), "l: is not taken with adaptive sizing"),
+                            (dict(size_boundary=8.0, size_interior=4.0), r"size_interior: l_I = 4 mm is shorter than size_boundary l_B = 8 mm"),
+                            (dict(), "l: a target edge length is required"),
+                            (dict(l=4.0, hausdorff=11.0), r"hausdorff: must be a number of l in \[0, 10\]; got 11"),
+                            (dict(l=4.0, steiner_angle=-1.0), r"steiner_angle: must be a number of degrees in \[0, 60\]")]:
+        with pytest.raises(ValueError, match=message):
+            voxmorph.mesh(small, **kwargs)
+
+
 def test_render_gives_an_rgb_array(figure, tmp_path):
     grid = voxmorph.Grid.read(figure["grid"])
     image = voxmorph.render(grid, organs=figure["organs"], camera="azimuth=20,elevation=10", size=(64, 48), cpu=True)
