@@ -20,24 +20,31 @@ void finish(MeshingEstimate& e, double targetLength) {
 
 MeshingEstimate estimateMeshing(const LabelGrid& grid, double targetLength) {
   const GridGeometry& g = grid.geometry();
-  std::int64_t labelled = 0;
+  std::int64_t labelled = 0, faces = 0;
   Index3 lo = g.dims, hi{-1, -1, -1};
   for (std::int64_t k = 0; k < g.dims[2]; ++k)
     for (std::int64_t j = 0; j < g.dims[1]; ++j)
-      for (std::int64_t i = 0; i < g.dims[0]; ++i)
-        if (grid.at(i, j, k) != 0) {
-          ++labelled;
-          const Index3 c{i, j, k};
-          for (int a = 0; a < 3; ++a) {
-            lo[a] = std::min(lo[a], c[a]);
-            hi[a] = std::max(hi[a], c[a]);
-          }
+      for (std::int64_t i = 0; i < g.dims[0]; ++i) {
+        const Label l = grid.at(i, j, k);
+        // Faces towards +x, +y, +z, and towards -x, -y, -z on the grid's border.
+        faces += (l != grid.atOr(i + 1, j, k, 0)) + (l != grid.atOr(i, j + 1, k, 0)) + (l != grid.atOr(i, j, k + 1, 0));
+        if (l == 0) continue;
+        faces += (i == 0) + (j == 0) + (k == 0);
+        ++labelled;
+        const Index3 c{i, j, k};
+        for (int a = 0; a < 3; ++a) {
+          lo[a] = std::min(lo[a], c[a]);
+          hi[a] = std::max(hi[a], c[a]);
         }
+      }
   MeshingEstimate e;
   e.domainVolumeMm3 = double(labelled) * g.voxelVolume();
   for (int a = 0; a < 3; ++a)
     if (hi[a] >= lo[a]) e.extentMm = std::max(e.extentMm, double(hi[a] - lo[a] + 1) * g.spacing[a]);
   finish(e, targetLength);
+  e.startTets = std::int64_t(std::ceil(kDecompositionTetsPerInterfaceFace * double(faces)));
+  e.fromGrid = true;
+  e.bytes = std::max(e.bytes, std::int64_t(std::ceil(double(e.startTets) * kRemeshBytesPerDecompositionTet)));
   return e;
 }
 
@@ -46,6 +53,7 @@ MeshingEstimate estimateMeshing(const TetMesh& mesh, double targetLength) {
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::max()), hi = -lo;
   for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
     if (mesh.labels[t] <= 0) continue;
+    ++e.startTets;
     e.domainVolumeMm3 += std::abs(signedVolume(mesh.positions, mesh.tets[t]));
     for (const auto v : mesh.tets[t]) {
       lo = lo.cwiseMin(mesh.positions[std::size_t(v)]);
@@ -73,16 +81,21 @@ MeshingEstimate estimateMeshing(const TetMesh& mesh, double targetLength) {
     e.tets = std::int64_t(std::min(cap, added));
     e.bytes = std::int64_t(std::min(cap, added * kRemeshBytesPerTet));
   }
+  e.bytes = std::max(e.bytes, std::int64_t(std::ceil(double(e.startTets) * kRemeshBytesPerDecompositionTet)));
   return e;
 }
 
 std::string describeEstimate(const MeshingEstimate& e) {
-  char text[96];
+  char tets[48], decomposition[64] = "", memory[32];
+  if (e.tets >= 1000000) std::snprintf(tets, sizeof tets, "%.3g M tets", double(e.tets) * 1e-6);
+  else std::snprintf(tets, sizeof tets, "%lld tets", (long long)e.tets);
+  if (e.startTets > e.tets)
+    std::snprintf(decomposition, sizeof decomposition, " (%.3g M in the %s)", double(e.startTets) * 1e-6,
+                  e.fromGrid ? "voxel decomposition" : "input");
   const double mb = double(e.bytes) / double(1 << 20);
-  if (mb >= 10240.0) std::snprintf(text, sizeof text, "about %.3g M tets and %.1f GB", double(e.tets) * 1e-6, mb / 1024.0);
-  else if (e.tets >= 1000000) std::snprintf(text, sizeof text, "about %.3g M tets and %.0f MB", double(e.tets) * 1e-6, mb);
-  else std::snprintf(text, sizeof text, "about %lld tets and %.0f MB", (long long)e.tets, std::max(1.0, mb));
-  return text;
+  if (mb >= 10240.0) std::snprintf(memory, sizeof memory, "%.1f GB", mb / 1024.0);
+  else std::snprintf(memory, sizeof memory, "%.0f MB", std::max(1.0, mb));
+  return std::string("about ") + tets + decomposition + " and " + memory;
 }
 
 }  // namespace vox::remesh

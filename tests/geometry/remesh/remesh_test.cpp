@@ -7,6 +7,7 @@
 #include "geometry/mesh_quality.h"
 #include "geometry/remesh/adaptive_voxel_tetrahedralization.h"
 #include "geometry/remesh/interface_distance.h"
+#include "geometry/remesh/meshing_estimate.h"
 #include "geometry/remesh/mesh_topology.h"
 #include "geometry/remesh/remesh.h"
 #include "geometry/remesh/remesh_report.h"
@@ -288,6 +289,30 @@ TEST(Remesh, RemeshesAnExistingMeshAndRejectsABadLength) {
   EXPECT_EQ(summarizeTetQuality(output).inverted, 0u);
   options.targetLength = -1.0;
   EXPECT_THROW(remeshTetMesh(input, options), InputError);
+}
+
+// At a target far above the voxels the remesher's peak is its voxel
+// decomposition's, which refines to the voxels along every interface: the
+// estimate counts at least its tets and their memory.
+TEST(MeshingEstimate, CountsTheVoxelDecompositionAtACoarseTarget) {
+  for (SynthKind kind : {SynthKind::NestedSpheres, SynthKind::JunctionSphere, SynthKind::StickFigure}) {
+    const LabelGrid grid = synthesize(kind, 40);
+    const double l = 16.0 * grid.spacing().maxCoeff();
+    const MeshingEstimate e = estimateMeshing(grid, l);
+    const TetMesh decomposition = tetrahedralizeVoxelsAdaptive(grid, adaptiveOptionsForTarget(grid.geometry(), l));
+    std::int64_t domain = 0;
+    for (std::int32_t label : decomposition.labels) domain += label > 0;
+    EXPECT_GE(e.startTets, domain) << synthKindName(kind);
+    EXPECT_LT(e.startTets, 4 * domain) << synthKindName(kind);  // not a bound so loose that it refuses good runs
+    EXPECT_GT(e.startTets, e.tets) << synthKindName(kind);
+    EXPECT_GE(double(e.bytes), kRemeshBytesPerDecompositionTet * double(e.startTets)) << synthKindName(kind);
+    EXPECT_NE(describeEstimate(e).find("in the voxel decomposition"), std::string::npos) << describeEstimate(e);
+    // A mesh remeshed coarser starts from the mesh itself.
+    const MeshingEstimate m = estimateMeshing(decomposition, l);
+    EXPECT_EQ(m.startTets, domain) << synthKindName(kind);
+    EXPECT_GE(double(m.bytes), kRemeshBytesPerDecompositionTet * double(domain)) << synthKindName(kind);
+    EXPECT_NE(describeEstimate(m).find("in the input"), std::string::npos) << describeEstimate(m);
+  }
 }
 
 TEST(AdaptiveTetrahedralization, ConformingExactAndCoarser) {
