@@ -86,16 +86,16 @@ MeshingEstimate estimateMeshing(const TetMesh& mesh, double targetLength) {
 }
 
 std::string describeEstimate(const MeshingEstimate& e) {
-  char tets[48], decomposition[64] = "", memory[32];
+  char tets[48], start[64] = "", memory[32];
   if (e.tets >= 1000000) std::snprintf(tets, sizeof tets, "%.3g M tets", double(e.tets) * 1e-6);
   else std::snprintf(tets, sizeof tets, "%lld tets", (long long)e.tets);
   if (e.startTets > e.tets)
-    std::snprintf(decomposition, sizeof decomposition, " (%.3g M in the %s)", double(e.startTets) * 1e-6,
+    std::snprintf(start, sizeof start, " (%.3g M in the %s)", double(e.startTets) * 1e-6,
                   e.fromGrid ? "voxel decomposition" : "input");
   const double mb = double(e.bytes) / double(1 << 20);
   if (mb >= 10240.0) std::snprintf(memory, sizeof memory, "%.1f GB", mb / 1024.0);
   else std::snprintf(memory, sizeof memory, "%.0f MB", std::max(1.0, mb));
-  return std::string("about ") + tets + decomposition + " and " + memory;
+  return std::string("about ") + tets + start + " and " + memory;
 }
 
 }  // namespace vox::remesh
