@@ -29,12 +29,9 @@ void addMeshCommand(CLI::App& app) {
     checkRemeshEstimate(*o, remesh::estimateMeshing(grid, o->remesh.targetLength));
     setSizing(*o, grid.geometry().direction,
               [&](double boundary, double interior) { return remesh::interfaceSizingField(grid, boundary, interior); });
-    remesh::AdaptiveTetrahedralizationOptions decomposition =
-        remesh::adaptiveOptionsForTarget(grid.geometry(), o->remesh.targetLength);
-    // Adaptive: the coarsest cubes follow the longest target; splits refine
-    // them towards the interfaces (the imaginary layer stays l_B thick).
-    if (o->sizing)
-      decomposition.coarsestLevel = remesh::adaptiveOptionsForTarget(grid.geometry(), o->sizing->maximum()).coarsestLevel;
+    const remesh::AdaptiveTetrahedralizationOptions decomposition =
+        o->sizing ? remesh::adaptiveOptionsForSizing(grid.geometry(), o->remesh.targetLength, o->sizing->maximum())
+                  : remesh::adaptiveOptionsForTarget(grid.geometry(), o->remesh.targetLength);
     const TetMesh initial = remesh::tetrahedralizeVoxelsAdaptive(grid, decomposition);
     const double setupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     runRemesh(*o, initial, [&] { return remesh::computeGridTopology(grid); }, setupSeconds, provenance, &grid.geometry());

@@ -181,15 +181,11 @@ meshio.Mesh(points, [("tetra", tets)], cell_data={"label": [labels]}) writes it.
         RemeshArguments a = remeshArguments(l, sizeBoundary, sizeInterior, organs, {iterations, flipSmooth, surface, hausdorff, steinerAngle},
                                             keepImaginary, distances, threads);
         const TetMesh initial = interruptible([&] {
-          remesh::AdaptiveTetrahedralizationOptions decomposition =
-              remesh::adaptiveOptionsForTarget(grid->grid.geometry(), a.options.targetLength);
-          if (a.sizeBoundary > 0.0) {
-            // As `voxmorph mesh`: the coarsest cubes follow the longest target.
-            a.sizing = std::make_shared<remesh::SizingField>(remesh::interfaceSizingField(grid->grid, a.sizeBoundary, a.sizeInterior));
-            a.options.sizing = a.sizing.get();
-            decomposition.coarsestLevel = remesh::adaptiveOptionsForTarget(grid->grid.geometry(), a.sizing->maximum()).coarsestLevel;
-          }
-          return remesh::tetrahedralizeVoxelsAdaptive(grid->grid, decomposition);
+          const GridGeometry& g = grid->grid.geometry();
+          if (a.sizeBoundary == 0.0) return remesh::tetrahedralizeVoxelsAdaptive(grid->grid, remesh::adaptiveOptionsForTarget(g, a.options.targetLength));
+          a.sizing = std::make_shared<remesh::SizingField>(remesh::interfaceSizingField(grid->grid, a.sizeBoundary, a.sizeInterior));
+          a.options.sizing = a.sizing.get();
+          return remesh::tetrahedralizeVoxelsAdaptive(grid->grid, remesh::adaptiveOptionsForSizing(g, a.options.targetLength, a.sizing->maximum()));
         });
         return runRemesh(initial, [&] { return remesh::computeGridTopology(grid->grid); }, a, grid->source, &grid->grid.geometry());
       },

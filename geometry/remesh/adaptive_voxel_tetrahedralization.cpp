@@ -398,6 +398,12 @@ AdaptiveTetrahedralizationOptions adaptiveOptionsForTarget(const GridGeometry& g
   return o;
 }
 
+AdaptiveTetrahedralizationOptions adaptiveOptionsForSizing(const GridGeometry& geometry, double shortest, double longest) {
+  AdaptiveTetrahedralizationOptions o = adaptiveOptionsForTarget(geometry, shortest);
+  o.coarsestLevel = adaptiveOptionsForTarget(geometry, longest).coarsestLevel;
+  return o;
+}
+
 TetMesh tetrahedralizeVoxelsAdaptive(const LabelGrid& grid, const AdaptiveTetrahedralizationOptions& options) {
   KuhnBisection bisection(grid, options);
   return bisection.run(options.includeBackground);

@@ -32,6 +32,10 @@ struct AdaptiveTetrahedralizationOptions {
 // along the finest voxel axis, and an imaginary layer at least l (and two
 // voxels) thick.
 AdaptiveTetrahedralizationOptions adaptiveOptionsForTarget(const GridGeometry& geometry, double targetLength);
+// For adaptive sizing, target lengths from `shortest` (l_B) to `longest`:
+// the coarsest cubes follow the longest (the first splits refine them
+// towards the interfaces), the imaginary layer stays l_B thick.
+AdaptiveTetrahedralizationOptions adaptiveOptionsForSizing(const GridGeometry& geometry, double shortest, double longest);
 
 // Throws InputError("grid", ...) when the grid has no labelled voxel.
 TetMesh tetrahedralizeVoxelsAdaptive(const LabelGrid& grid, const AdaptiveTetrahedralizationOptions& options = {});

@@ -282,7 +282,6 @@ void checkLocalEmbedding(const std::vector<Eigen::Vector3d>& positions, const st
     throw InputError(source, describeTet(std::size_t(named), tets[std::size_t(named)]) + " overlaps " +
                                  describeTet(std::size_t(other), tets[std::size_t(other)]) + " around vertex " + std::to_string(v));
   };
-  throwIfCancelled();
   for (std::size_t v = 0; v < nv; ++v) {
     if (v % 4096 == 0) throwIfCancelled();
     if (arcsFirst[v] == arcsFirst[v + 1]) continue;
