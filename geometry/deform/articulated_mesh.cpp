@@ -302,17 +302,30 @@ Eigen::Isometry3d patellaMotion(const skeleton::Joint& joint, const ArticulatedM
     }
   if (n == 0) return leg;
   pc /= double(n);
-  // The ligament's tibial end and length.
-  Eigen::Vector3d tibia = pc;
-  double nearest = std::numeric_limits<double>::infinity();
+  // The ligament: from the patella's lowest rigid vertex (its apex) to the
+  // tibial tuberosity, the lower leg's most anterior rigid vertex between
+  // 20 and 70 mm below the knee's centre within the patella's width.
+  Eigen::Vector3d apex = pc;
+  double lowest = -std::numeric_limits<double>::infinity();
   for (std::size_t v = 0; v < rest.size(); ++v)
-    if (mesh.role[v] == VertexRole::Rigid && mesh.vertexPart[v] == legPart && (rest[v] - c).dot(joint.longAxis) > 0.0 &&
-        (rest[v] - pc).norm() < nearest) {
-      nearest = (rest[v] - pc).norm();
+    if (mesh.role[v] == VertexRole::Rigid && int(mesh.vertexPart[v]) == patella && (rest[v] - c).dot(joint.longAxis) > lowest) {
+      lowest = (rest[v] - c).dot(joint.longAxis);
+      apex = rest[v];
+    }
+  Eigen::Vector3d tibia = pc;
+  double front = -std::numeric_limits<double>::infinity();
+  for (std::size_t v = 0; v < rest.size(); ++v) {
+    if (mesh.role[v] != VertexRole::Rigid || mesh.vertexPart[v] != legPart) continue;
+    const Eigen::Vector3d d = rest[v] - c;
+    const double below = d.dot(joint.longAxis), a = d.dot(axis);
+    if (below < 20.0 || below > 70.0 || a < lo || a > hi) continue;
+    if (d.dot(joint.anterior) > front) {
+      front = d.dot(joint.anterior);
       tibia = rest[v];
     }
-  if (!std::isfinite(nearest)) return leg;
-  const double ligament = nearest;
+  }
+  if (!std::isfinite(front)) return leg;
+  const double ligament = (apex - tibia).norm();
   const Eigen::Vector3d tibiaNow = rel * tibia;
   // The femur's profile: per 2 degrees about the axis, the farthest rigid
   // vertex of the thigh across the patella's width.
@@ -352,7 +365,8 @@ Eigen::Isometry3d patellaMotion(const skeleton::Joint& joint, const ArticulatedM
     if (h < 0.0) continue;
     const Eigen::Vector3d place =
         c + axial * axis + (h + gap) * (std::cos(phi0 + psi) * e1 + std::sin(phi0 + psi) * e2);
-    const double cost = std::abs((place - tibiaNow).norm() - ligament);
+    const Eigen::Vector3d apexNow = place + Eigen::AngleAxisd(psi, axis) * (apex - pc);
+    const double cost = std::abs((apexNow - tibiaNow).norm() - ligament);
     if (cost < bestCost) {
       bestCost = cost;
       bestPsi = psi;

@@ -245,11 +245,12 @@ struct ScapularRhythm {
 // resolved in `mesh` turned by its shoulder's rhythm, the parts below that
 // shoulder carried with it; each patella resolved in `mesh` slid along the
 // femur: relative to the thigh it turns about the knee's axis by the angle
-// that keeps its centre's distance to the tibia where its ligament holds
-// (the lower leg's rigid vertex nearest it below the knee's centre), at
-// its rest height above the femur's profile (the thigh's rigid vertices
-// farthest from the axis in each direction about it, across the patella's
-// width).
+// that keeps its ligament at its rest length, from its apex (its lowest
+// rigid vertex) to the tibial tuberosity (the lower leg's most anterior
+// rigid vertex 20 to 70 mm below the knee's centre, across the patella's
+// width), at its rest height above the femur's profile (the thigh's rigid
+// vertices farthest from the axis in each direction about it, across the
+// patella's width).
 std::vector<Eigen::Isometry3d> segmentMotions(std::span<const Eigen::Isometry3d> partMotions, const skeleton::Skeleton& skeleton,
                                               const ArticulatedMesh& mesh, const ScapularRhythm& rhythm = {});
 

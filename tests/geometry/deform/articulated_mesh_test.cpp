@@ -376,8 +376,8 @@ TEST(ArticulatedPose, AnElbowAt90PartsTheForearmFromTheTrunk) {
 
 // A patella slides along the femur's profile as its knee bends: relative
 // to the thigh it keeps its height above the profile and its ligament's
-// length to the tibia; where the profile is round about the knee's axis it
-// turns with the lower leg.
+// length, from its apex (its lowest vertex) to the tibial tuberosity; where
+// the profile is round about the knee's axis it turns with the lower leg.
 TEST(ArticulatedPose, APatellaSlidesAlongTheFemurKeepingItsLigament) {
   const Figure& f = figure();
   const skeleton::Joint& knee = *f.skeleton.joint(JointId::RightKnee);
@@ -406,7 +406,9 @@ TEST(ArticulatedPose, APatellaSlidesAlongTheFemurKeepingItsLigament) {
     for (const double d : {-10.0, 0.0, 10.0})
       for (const double r : {3.0, 10.0})
         for (const double a : {-8.0, 0.0, 8.0}) add(at(profile(0.0) + r, d, a), kRightPatella);
-    add(c + 30.0 * e1 + 45.0 * down, int(Part::RightLowerLeg));
+    // The plateau's front rim, nearer the patella than the tuberosity.
+    add(c + 25.0 * e1 + 12.0 * down, int(Part::RightLowerLeg));
+    add(c + 30.0 * e1 + 45.0 * down, int(Part::RightLowerLeg));  // the tuberosity
     return m;
   };
   const skeleton::PartMotions motions = figureMotions(f.skeleton, {jointAngles(JointId::RightKnee, 60.0)});
@@ -425,9 +427,16 @@ TEST(ArticulatedPose, APatellaSlidesAlongTheFemurKeepingItsLigament) {
       ++n;
     }
   pc /= double(n);
+  Eigen::Vector3d apex = pc;
+  for (std::size_t v = 0; v < m.role.size(); ++v)
+    if (int(m.vertexPart[v]) == kRightPatella && (m.mesh.positions[v] - c).dot(knee.longAxis) > (apex - c).dot(knee.longAxis))
+      apex = m.mesh.positions[v];
   const Eigen::Vector3d tibia = m.mesh.positions.back();
   const Eigen::Vector3d moved = thigh.inverse() * patella * pc, tibiaMoved = thigh.inverse() * leg * tibia;
-  EXPECT_NEAR((moved - tibiaMoved).norm(), (pc - tibia).norm(), 1.0);
+  EXPECT_NEAR((thigh.inverse() * patella * apex - tibiaMoved).norm(), (apex - tibia).norm(), 1.0);
+  // Its ligament keeps the patella off the tibia: the centre no nearer to
+  // the tuberosity than at rest.
+  EXPECT_GE((moved - tibiaMoved).norm(), (pc - tibia).norm() - 1.0);
   const Eigen::Vector3d d = moved - c;
   const double degrees = std::atan2(d.dot(e2), d.dot(e1)) * 180.0 / std::numbers::pi;
   EXPECT_GT(std::abs(degrees), 5.0);  // it turned
