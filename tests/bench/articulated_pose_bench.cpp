@@ -18,7 +18,10 @@
 // thick; default none), --yielding-hips (the hips' shell too),
 // --dump PREFIX (the mesh's arrays for numpy, rest and posed: dumpMesh),
 // --mesh-only (build the mesh, dump it, stop), --squeezed F (per step, the tets under F of their rest volume, by nearest
-// joint and by what holds their vertices: where the tissue locks).
+// joint and by what holds their vertices: where the tissue locks),
+// --knee-forward MM (both knees' centres moved MM along the body's front
+// before the mesh is built: how the hinge's axis, which the skeleton clears
+// of the bones over the knee's range, serves the tissue).
 // Prints a table, then one JSON line (prefix "json ") for scripts.
 
 #include "geometry/deform/articulated_mesh.h"
@@ -52,7 +55,8 @@ double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>
 int usage() {
   std::fprintf(stderr,
                "usage: articulated_pose_bench GRID ORGANS POSE [--steps N] [--bone-weight W] [--sliding-weight W] [--max-iterations N] "
-               "[--volume-weight L] [--direct-limit N] [--scapulae] [--yielding-shell V] [--yielding-hips] [--squeezed F] [--dump PREFIX] [--mesh-only]\n"
+               "[--volume-weight L] [--direct-limit N] [--scapulae] [--yielding-shell V] [--yielding-hips] [--squeezed F] [--dump PREFIX] [--mesh-only] "
+               "[--knee-forward MM]\n"
                "       articulated_pose_bench --figure POSE [options]\n");
   return 2;
 }
@@ -159,6 +163,7 @@ int main(int argc, char** argv) {
   double squeezedBelow = 0.0;
   std::string dumpPrefix;
   bool meshOnly = false;
+  double kneeForwardMm = 0.0;
   for (int a = 1; a < argc; ++a) {
     const std::string arg = argv[a];
     const auto value = [&]() -> std::string {
@@ -179,6 +184,7 @@ int main(int argc, char** argv) {
     else if (arg == "--squeezed") squeezedBelow = std::stod(value());
     else if (arg == "--dump") dumpPrefix = value();
     else if (arg == "--mesh-only") meshOnly = true;
+    else if (arg == "--knee-forward") kneeForwardMm = std::stod(value());
     else if (arg == "--scapulae") meshOptions.movingScapulae = true;
     else if (arg == "--yielding-shell") meshOptions.yieldingShellVoxels = std::stod(value());
     else if (arg.starts_with("--")) return usage();
@@ -192,8 +198,14 @@ int main(int argc, char** argv) {
     const std::string posePath = positional.back();
     const Pose pose = readPose(posePath);
     if (pose.joints.empty()) throw InputError(posePath, "the pose has no \"joints\"");
-    const skeleton::Skeleton sk = skeleton::buildSkeleton(
+    skeleton::Skeleton sk = skeleton::buildSkeleton(
         grid, organs, figure ? skeleton::SkeletonSources{"figure", "figure organs", "figure parts"} : skeleton::SkeletonSources{});
+    if (kneeForwardMm != 0.0)
+      for (skeleton::Joint& j : sk.joints)
+        if (j.id == skeleton::JointId::RightKnee || j.id == skeleton::JointId::LeftKnee) {
+          j.centre += kneeForwardMm * j.anterior;
+          std::printf("%s: centre moved %.1f mm to the front\n", j.kind().name, kneeForwardMm);
+        }
     const std::vector<skeleton::Joint> joints = skeleton::posedJoints(sk, pose.joints, posePath);
     const double skeletonSeconds = secondsSince(t0);
 
