@@ -352,6 +352,14 @@ ArticulatedPoseReport ArticulatedPoser::pose(const MotionPath& path) {
   return report;
 }
 
+int articulatedPoseSteps(std::span<const PoseJoint> angles, const ArticulatedPoseOptions& options) {
+  double largest = 0.0;
+  for (const PoseJoint& j : angles)
+    for (const double d : j.degrees) largest = std::max(largest, std::abs(d));
+  const double perTurn = std::ceil(double(std::max(0, options.stepsPerQuarterTurn)) * largest / 90.0 - 1e-9);
+  return std::max(options.steps, int(std::min(perTurn, 1000.0)));
+}
+
 ArticulatedPoser::MotionPath jointMotionPath(const skeleton::Skeleton& skeleton, const std::vector<skeleton::Joint>& joints,
                                              const std::vector<PoseJoint>& angles, const ArticulatedMesh& mesh) {
   return [&skeleton, joints, angles, &mesh](double fraction) {

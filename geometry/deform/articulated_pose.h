@@ -35,7 +35,13 @@
 namespace vox {
 
 struct ArticulatedPoseOptions {
-  int steps = 8;               // pose steps from rest to the full motions
+  // Pose steps from rest to the full motions: at least `steps`, and for a
+  // joint pose stepsPerQuarterTurn per 90 degrees of its largest joint angle
+  // (articulatedPoseSteps): the tissue in a crease follows a turn of a few
+  // degrees a step, while a larger step leaves the bones behind and the
+  // last step's jump folds the tets around them.
+  int steps = 8;
+  int stepsPerQuarterTurn = 16;
   // The prediction blends a vertex's nearest part's step motion (nearest
   // along the mesh's edges) with the second nearest part's where that is
   // within blendMm of it too.
@@ -141,6 +147,10 @@ private:
   std::vector<std::array<skeleton::Part, 2>> nearPart_;
   std::vector<double> nearWeight_;  // weight of the nearest; 1 - it of the second
 };
+
+// The steps for a joint pose: options.steps, or more, stepsPerQuarterTurn
+// per 90 degrees of the largest angle of any joint's degree of freedom.
+int articulatedPoseSteps(std::span<const PoseJoint> angles, const ArticulatedPoseOptions& options);
 
 // A joint pose's path: at each fraction the forward kinematics of every
 // joint's angles times the fraction (skeleton::partMotions of `joints`, the

@@ -9,7 +9,8 @@
 //       assets/icrp110_am_organs.dat assets/poses/hard/am_phone_call_joints.json [options]
 //   build/release/bench/articulated_pose_bench --figure POSE [options]   # the synthetic figure (96)
 //
-// Options: --steps N (pose steps, default the poser's), --bone-weight W,
+// Options: --steps N (pose steps; default the run's, articulatedPoseSteps),
+// --bone-weight W,
 // --sliding-weight W (the sliding vertices' pull onto their bodies),
 // --max-iterations N (SLIM iterations per step), --volume-weight L (lambda),
 // --direct-limit N (unknowns up to which CHOLMOD factorizes every
@@ -164,6 +165,7 @@ int main(int argc, char** argv) {
   std::string dumpPrefix;
   bool meshOnly = false;
   double kneeForwardMm = 0.0;
+  int stepsGiven = 0;
   for (int a = 1; a < argc; ++a) {
     const std::string arg = argv[a];
     const auto value = [&]() -> std::string {
@@ -171,7 +173,7 @@ int main(int argc, char** argv) {
       return argv[++a];
     };
     if (arg == "--figure") figure = true;
-    else if (arg == "--steps") poseOptions.steps = std::stoi(value());
+    else if (arg == "--steps") stepsGiven = std::stoi(value());
     else if (arg == "--bone-weight") poseOptions.boneWeight = std::stod(value());
     else if (arg == "--sliding-weight") poseOptions.slidingWeight = std::stod(value());
     else if (arg == "--max-iterations") poseOptions.solve.maxIterations = std::stoi(value());
@@ -221,6 +223,7 @@ int main(int argc, char** argv) {
     if (squeezedBelow > 0.0) poseOptions.onStep = [&](int step, std::span<const Eigen::Vector3d> posed) {
       squeezedTets(mesh, sk, step, posed, squeezedBelow);
     };
+    poseOptions.steps = stepsGiven > 0 ? stepsGiven : articulatedPoseSteps(pose.joints, poseOptions);
     ArticulatedPoser poser(mesh, poseOptions);
     const ArticulatedPoseReport r = poser.pose(jointMotionPath(sk, joints, pose.joints, mesh));
     std::printf("pose: %d steps, %d iterations, %.1f s; solved %zu vertices, %zu tets\n", r.steps, r.iterations, r.seconds,

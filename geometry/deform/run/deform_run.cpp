@@ -374,7 +374,9 @@ PosedMesh poseArticulated(const DeformGridRequest& o, const Source& source, Defo
   const std::vector<Eigen::Isometry3d> motions = segmentMotions(partMotions, sk, mesh);
   report.stages.push_back(meshTimer.stop());
   StageTimer poseTimer("articulated pose");
-  ArticulatedPoser poser(mesh);
+  ArticulatedPoseOptions poseOptions;
+  poseOptions.steps = articulatedPoseSteps(o.pose.joints, poseOptions);
+  ArticulatedPoser poser(mesh, poseOptions);
   const ArticulatedPoseReport r = poser.pose(jointMotionPath(sk, joints, o.pose.joints, mesh));
   report.stages.push_back(poseTimer.stop());
   DeformationReport::Articulated a;

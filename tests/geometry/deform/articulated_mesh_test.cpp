@@ -448,5 +448,26 @@ TEST(ArticulatedPose, APatellaSlidesAlongTheFemurKeepingItsLigament) {
   EXPECT_TRUE(segmentMotions(motions, f.skeleton, round)[std::size_t(kRightPatella)].isApprox(leg, 1e-6));
 }
 
+// A large turn takes more pose steps: 16 per quarter turn of the largest
+// joint angle, never fewer than the options' steps.
+TEST(ArticulatedPose, ALargeTurnTakesMoreSteps) {
+  const auto joint = [](const char* name, double flexion, double abduction = 0.0) {
+    PoseJoint j;
+    j.name = name;
+    j.degrees = {flexion, abduction, 0.0};
+    return j;
+  };
+  const ArticulatedPoseOptions options;
+  EXPECT_EQ(articulatedPoseSteps(std::vector<PoseJoint>{}, options), 8);
+  EXPECT_EQ(articulatedPoseSteps(std::vector<PoseJoint>{joint("left_knee", 30.0)}, options), 8);
+  EXPECT_EQ(articulatedPoseSteps(std::vector<PoseJoint>{joint("right_hip", 90.0), joint("right_knee", 90.0)}, options), 16);
+  EXPECT_EQ(articulatedPoseSteps(std::vector<PoseJoint>{joint("right_shoulder", 115.0, 10.0), joint("right_elbow", 120.0)}, options), 22);
+  EXPECT_EQ(articulatedPoseSteps(std::vector<PoseJoint>{joint("left_hip", -100.0)}, options), 18);
+  ArticulatedPoseOptions fixed;
+  fixed.stepsPerQuarterTurn = 0;
+  fixed.steps = 5;
+  EXPECT_EQ(articulatedPoseSteps(std::vector<PoseJoint>{joint("right_elbow", 120.0)}, fixed), 5);
+}
+
 }  // namespace
 }  // namespace vox
