@@ -289,29 +289,27 @@ Eigen::Isometry3d patellaMotion(const skeleton::Joint& joint, const ArticulatedM
   const Eigen::Vector3d e2 = axis.cross(e1);
   const Eigen::Vector3d& c = joint.centre;
   const std::vector<Eigen::Vector3d>& rest = mesh.mesh.positions;
-  // The patella's centre and width along the axis.
-  Eigen::Vector3d pc = Eigen::Vector3d::Zero();
+  // The patella's centre, width along the axis, and apex (its lowest rigid
+  // vertex: the ligament's upper end).
+  Eigen::Vector3d pc = Eigen::Vector3d::Zero(), apex = Eigen::Vector3d::Zero();
   std::size_t n = 0;
-  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo, lowest = -lo;
   for (std::size_t v = 0; v < rest.size(); ++v)
     if (mesh.role[v] == VertexRole::Rigid && int(mesh.vertexPart[v]) == patella) {
       pc += rest[v];
       ++n;
       lo = std::min(lo, (rest[v] - c).dot(axis));
       hi = std::max(hi, (rest[v] - c).dot(axis));
+      if ((rest[v] - c).dot(joint.longAxis) > lowest) {
+        lowest = (rest[v] - c).dot(joint.longAxis);
+        apex = rest[v];
+      }
     }
   if (n == 0) return leg;
   pc /= double(n);
-  // The ligament: from the patella's lowest rigid vertex (its apex) to the
-  // tibial tuberosity, the lower leg's most anterior rigid vertex between
-  // 20 and 70 mm below the knee's centre within the patella's width.
-  Eigen::Vector3d apex = pc;
-  double lowest = -std::numeric_limits<double>::infinity();
-  for (std::size_t v = 0; v < rest.size(); ++v)
-    if (mesh.role[v] == VertexRole::Rigid && int(mesh.vertexPart[v]) == patella && (rest[v] - c).dot(joint.longAxis) > lowest) {
-      lowest = (rest[v] - c).dot(joint.longAxis);
-      apex = rest[v];
-    }
+  // Its lower end: the tibial tuberosity, the lower leg's most anterior
+  // rigid vertex between 20 and 70 mm below the knee's centre within the
+  // patella's width.
   Eigen::Vector3d tibia = pc;
   double front = -std::numeric_limits<double>::infinity();
   for (std::size_t v = 0; v < rest.size(); ++v) {

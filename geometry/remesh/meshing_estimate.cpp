@@ -16,6 +16,11 @@ void finish(MeshingEstimate& e, double targetLength) {
   e.bytes = std::int64_t(std::min(cap, std::ceil(tets * kRemeshBytesPerTet)));
 }
 
+// The peak is at least the starting mesh's.
+void boundByStart(MeshingEstimate& e) {
+  e.bytes = std::max(e.bytes, std::int64_t(std::ceil(double(e.startTets) * kRemeshBytesPerDecompositionTet)));
+}
+
 }  // namespace
 
 MeshingEstimate estimateMeshing(const LabelGrid& grid, double targetLength) {
@@ -44,7 +49,7 @@ MeshingEstimate estimateMeshing(const LabelGrid& grid, double targetLength) {
   finish(e, targetLength);
   e.startTets = std::int64_t(std::ceil(kDecompositionTetsPerInterfaceFace * double(faces)));
   e.fromGrid = true;
-  e.bytes = std::max(e.bytes, std::int64_t(std::ceil(double(e.startTets) * kRemeshBytesPerDecompositionTet)));
+  boundByStart(e);
   return e;
 }
 
@@ -81,7 +86,7 @@ MeshingEstimate estimateMeshing(const TetMesh& mesh, double targetLength) {
     e.tets = std::int64_t(std::min(cap, added));
     e.bytes = std::int64_t(std::min(cap, added * kRemeshBytesPerTet));
   }
-  e.bytes = std::max(e.bytes, std::int64_t(std::ceil(double(e.startTets) * kRemeshBytesPerDecompositionTet)));
+  boundByStart(e);
   return e;
 }
 
