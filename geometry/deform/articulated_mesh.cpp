@@ -628,7 +628,8 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
   // Tags: the bones that move against each other resolved, the rest soft;
   // the distal parts (head, hands, feet) rigid whole but near their joint.
   LabelGrid tags(g, 0);
-  const double reach2 = options.trunkBoneReachMm * options.trunkBoneReachMm;
+  const double trunkReach2 = options.trunkBoneReachMm * options.trunkBoneReachMm;
+  const double pelvisReach2 = options.pelvisBoneReachMm * options.pelvisBoneReachMm;
   const double clear2 = options.jointClearanceMm * options.jointClearanceMm;
   const LabelGrid& parts = skeleton.parts.parts;
   const bool scapula = options.movingScapulae;
@@ -670,8 +671,10 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
             if (d > b.radius && d < b.radius + shell) part = Part::None;
           }
         bool resolved = part != Part::None && part != Part::Trunk && part != Part::Pelvis;
-        if (part == Part::Trunk || part == Part::Pelvis)
+        if (part == Part::Trunk || part == Part::Pelvis) {
+          const double reach2 = part == Part::Trunk ? trunkReach2 : pelvisReach2;
           for (const skeleton::Joint& joint : skeleton.joints) resolved = resolved || (p - joint.centre).squaredNorm() < reach2;
+        }
         tags.labels()[std::size_t(v)] = Label(resolved ? kBoneTag + std::int32_t(part) : kSoftTissueTag);
         out.resolvedBoneVoxels += resolved && boneParts.labels()[std::size_t(v)] != 0;
       }

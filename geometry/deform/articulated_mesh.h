@@ -117,7 +117,8 @@ struct ArticulatedMeshOptions {
   double fineSizeVoxels = 3.0;   // tet size near resolved bones and bodies, in the grid's finest spacing
   double coarseSizeMm = 40.0;    // tet size far from them
   double gradingMm = 60.0;       // the size grows from fine to coarse over this distance
-  double trunkBoneReachMm = 90.0;  // trunk and pelvis bones this near a joint centre are resolved
+  double trunkBoneReachMm = 90.0;   // trunk bones this near a joint centre are resolved
+  double pelvisBoneReachMm = 90.0;  // pelvis bones (hip bones, sacrum) this near a joint centre are resolved
   // Parts held rigid whole, bone and tissue (no pose bends them), except
   // within jointClearanceMm of the joint that moves them, whose tissue the
   // joint's turn bends.

@@ -31,12 +31,82 @@ Eigen::Isometry3d rigidFit(std::span<const std::int32_t> ids, From&& from, To&& 
 ArticulatedPoser::ArticulatedPoser(const ArticulatedMesh& mesh, const ArticulatedPoseOptions& options)
     : mesh_(mesh), options_(options), positions_(mesh.mesh.positions) {
   const TetMesh& m = mesh.mesh;
-  std::vector<std::int32_t> index(m.vertexCount(), -1);
+  edges_.resize(m.vertexCount());
+  for (const Tet& t : m.tets)
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) {
+        const std::int32_t a = t[std::size_t(i)], b = t[std::size_t(j)];
+        const double l = (m.positions[std::size_t(a)] - m.positions[std::size_t(b)]).norm();
+        edges_[std::size_t(a)].emplace_back(b, l);
+        edges_[std::size_t(b)].emplace_back(a, l);
+      }
+  nearestParts();
+}
+
+namespace {
+
+// Dijkstra along `edges` from the vertices where dist is 0: dist filled in.
+void edgeDistances(const std::vector<std::vector<std::pair<std::int32_t, double>>>& edges, std::vector<double>& dist) {
+  using Item = std::pair<double, std::int32_t>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
+  for (std::size_t v = 0; v < dist.size(); ++v)
+    if (dist[v] == 0.0) queue.emplace(0.0, std::int32_t(v));
+  while (!queue.empty()) {
+    const auto [d, v] = queue.top();
+    queue.pop();
+    if (d > dist[std::size_t(v)]) continue;
+    for (const auto& [w, l] : edges[std::size_t(v)])
+      if (d + l < dist[std::size_t(w)]) {
+        dist[std::size_t(w)] = d + l;
+        queue.emplace(d + l, w);
+      }
+  }
+}
+
+}  // namespace
+
+void ArticulatedPoser::prepare(std::span<const Eigen::Isometry3d> motions) {
+  const TetMesh& m = mesh_.mesh;
+  const std::size_t nv = m.vertexCount();
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  solved_.clear();
+  constrained_.clear();
+  sliding_.clear();
+  still_.clear();
+  approachSoftBones_.clear();
+  for (std::vector<std::int32_t>& owned : partConstrained_) owned.clear();
+  bridgingTets_ = stillTets_ = 0;
+  // Still vertices: the bones of segments the pose does not move, and the
+  // tissue farther than stillBeyondMm from every moved segment's bone.
+  const bool stillOn = options_.stillBeyondMm > 0.0;
+  std::array<bool, kSegmentCount + 1> moving{};
+  for (int p = 1; p <= kSegmentCount; ++p) {
+    const Eigen::Isometry3d mp = partMotionAt(motions, skeleton::Part(p), 1.0);
+    moving[std::size_t(p)] = !stillOn || (mp.linear() - Eigen::Matrix3d::Identity()).norm() > 1e-12 || mp.translation().norm() > 1e-9;
+  }
+  std::vector<std::uint8_t> still(nv, 0);
+  if (stillOn) {
+    std::vector<double> dist(nv, kInf);
+    for (std::size_t v = 0; v < nv; ++v)
+      if (mesh_.role[v] == VertexRole::Rigid && moving[std::size_t(mesh_.vertexPart[v])]) dist[v] = 0.0;
+    edgeDistances(edges_, dist);
+    for (std::size_t v = 0; v < nv; ++v)
+      still[v] = mesh_.role[v] == VertexRole::Rigid ? !moving[std::size_t(mesh_.vertexPart[v])] : dist[v] > options_.stillBeyondMm;
+  }
+
+  std::vector<std::int32_t> index(nv, -1);
   std::vector<Tet> tets;
   for (const Tet& t : m.tets) {
-    if (rigidWithOneSegment(mesh, t)) continue;
-    bool allRigid = true;
-    for (const std::int32_t v : t) allRigid = allRigid && mesh.role[std::size_t(v)] == VertexRole::Rigid;
+    if (rigidWithOneSegment(mesh_, t)) continue;
+    bool allRigid = true, allStill = true;
+    for (const std::int32_t v : t) {
+      allRigid = allRigid && mesh_.role[std::size_t(v)] == VertexRole::Rigid;
+      allStill = allStill && still[std::size_t(v)];
+    }
+    if (allStill) {
+      ++stillTets_;
+      continue;
+    }
     if (allRigid) ++bridgingTets_;
     Tet local;
     for (int k = 0; k < 4; ++k) {
@@ -53,82 +123,42 @@ ArticulatedPoser::ArticulatedPoser(const ArticulatedMesh& mesh, const Articulate
   solveTets_ = tets;
   std::vector<Eigen::Vector3d> rest;
   std::vector<double> weights;
+  stillSolve_.assign(solved_.size(), 0);
   for (std::size_t i = 0; i < solved_.size(); ++i) {
     const auto v = std::size_t(solved_[i]);
     rest.push_back(m.positions[v]);
-    if (mesh.role[v] == VertexRole::Rigid) {
+    stillSolve_[i] = still[v];
+    if (mesh_.role[v] == VertexRole::Rigid) {
       constrained_.push_back(std::int32_t(i));
-      partConstrained_[std::size_t(mesh.vertexPart[v])].push_back(std::int32_t(i));
-    }
-    if (mesh.role[v] == VertexRole::Sliding) {
+      partConstrained_[std::size_t(mesh_.vertexPart[v])].push_back(std::int32_t(i));
+    } else if (still[v]) {
+      still_.push_back(std::int32_t(i));
+    } else if (mesh_.role[v] == VertexRole::Sliding) {
       sliding_.push_back(std::int32_t(i));
-      weights.push_back(options.slidingWeight);
+      weights.push_back(options_.slidingWeight);
     }
   }
   constrainedTargets_.resize(constrained_.size());
   slidingTargets_.resize(sliding_.size());
+  approachHard_ = still_;
+  for (std::size_t c = 0; c < constrained_.size(); ++c)
+    if (stillSolve_[std::size_t(constrained_[c])] && options_.holdUnmovedBones) approachHard_.push_back(constrained_[c]);
+    else approachSoftBones_.push_back(c);
   if (!tets.empty()) {
-    solver_.precompute(rest, tets, constrained_, sliding_, weights, options.solve, "articulated transfer mesh");
-    // The approach: the bones as stiff soft targets beside the sliding ones.
+    std::vector<std::int32_t> hard = constrained_;
+    hard.insert(hard.end(), still_.begin(), still_.end());
+    solver_.precompute(rest, tets, hard, sliding_, weights, options_.solve, "articulated transfer mesh");
+    // The approach: the moved bones as stiff soft targets beside the
+    // sliding ones; the still vertices hard at rest.
     std::vector<std::int32_t> soft = sliding_;
-    soft.insert(soft.end(), constrained_.begin(), constrained_.end());
-    weights.resize(soft.size(), options.boneWeight);
-    approach_.precompute(rest, tets, {}, soft, weights, options.solve, "articulated transfer mesh");
-  }
-  nearestParts();
-}
-
-void ArticulatedPoser::nearestParts() {
-  // Dijkstra along the mesh's edges from each part's rigid vertices: per
-  // vertex the two nearest parts.
-  const TetMesh& m = mesh_.mesh;
-  const std::size_t nv = m.vertexCount();
-  std::vector<std::vector<std::pair<std::int32_t, double>>> edges(nv);
-  for (const Tet& t : m.tets)
-    for (int i = 0; i < 4; ++i)
-      for (int j = i + 1; j < 4; ++j) {
-        const std::int32_t a = t[std::size_t(i)], b = t[std::size_t(j)];
-        const double l = (m.positions[std::size_t(a)] - m.positions[std::size_t(b)]).norm();
-        edges[std::size_t(a)].emplace_back(b, l);
-        edges[std::size_t(b)].emplace_back(a, l);
-      }
-  constexpr double kInf = std::numeric_limits<double>::infinity();
-  std::vector<std::array<std::pair<double, skeleton::Part>, 2>> best(nv, {{{kInf, skeleton::Part::None}, {kInf, skeleton::Part::None}}});
-  std::vector<double> dist(nv);
-  using Item = std::pair<double, std::int32_t>;
-  for (int p = 1; p <= kSegmentCount; ++p) {
-    std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
-    std::fill(dist.begin(), dist.end(), kInf);
-    for (std::size_t v = 0; v < nv; ++v)
-      if (mesh_.role[v] == VertexRole::Rigid && int(mesh_.vertexPart[v]) == p) {
-        dist[v] = 0.0;
-        queue.emplace(0.0, std::int32_t(v));
-      }
-    while (!queue.empty()) {
-      const auto [d, v] = queue.top();
-      queue.pop();
-      if (d > dist[std::size_t(v)]) continue;
-      for (const auto& [w, l] : edges[std::size_t(v)])
-        if (d + l < dist[std::size_t(w)]) {
-          dist[std::size_t(w)] = d + l;
-          queue.emplace(d + l, w);
-        }
-    }
-    for (std::size_t v = 0; v < nv; ++v) {
-      auto& b = best[v];
-      const std::pair<double, skeleton::Part> c{dist[v], skeleton::Part(p)};
-      if (c.first < b[0].first) {
-        b[1] = b[0];
-        b[0] = c;
-      } else if (c.first < b[1].first) {
-        b[1] = c;
-      }
-    }
+    for (const std::size_t c : approachSoftBones_) soft.push_back(constrained_[c]);
+    weights.resize(soft.size(), options_.boneWeight);
+    approach_.precompute(rest, tets, approachHard_, soft, weights, options_.solve, "articulated transfer mesh");
   }
   nearPart_.resize(solved_.size());
   nearWeight_.resize(solved_.size());
   for (std::size_t i = 0; i < solved_.size(); ++i) {
-    const auto& b = best[std::size_t(solved_[i])];
+    const auto& b = nearest_[std::size_t(solved_[i])];
     nearPart_[i] = {b[0].second, b[1].second};
     const double d0 = b[0].first, d1 = b[1].first;
     // Full weight to the nearest part unless the second is within blendMm
@@ -138,6 +168,31 @@ void ArticulatedPoser::nearestParts() {
     if (mesh_.role[std::size_t(solved_[i])] == VertexRole::Rigid) {
       nearPart_[i][0] = mesh_.vertexPart[std::size_t(solved_[i])];
       nearWeight_[i] = 1.0;
+    }
+  }
+}
+
+void ArticulatedPoser::nearestParts() {
+  // Dijkstra along the mesh's edges from each part's rigid vertices: per
+  // vertex the two nearest parts.
+  const std::size_t nv = mesh_.mesh.vertexCount();
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  nearest_.assign(nv, {{{kInf, skeleton::Part::None}, {kInf, skeleton::Part::None}}});
+  std::vector<double> dist(nv);
+  for (int p = 1; p <= kSegmentCount; ++p) {
+    std::fill(dist.begin(), dist.end(), kInf);
+    for (std::size_t v = 0; v < nv; ++v)
+      if (mesh_.role[v] == VertexRole::Rigid && int(mesh_.vertexPart[v]) == p) dist[v] = 0.0;
+    edgeDistances(edges_, dist);
+    for (std::size_t v = 0; v < nv; ++v) {
+      auto& b = nearest_[v];
+      const std::pair<double, skeleton::Part> c{dist[v], skeleton::Part(p)};
+      if (c.first < b[0].first) {
+        b[1] = b[0];
+        b[0] = c;
+      } else if (c.first < b[1].first) {
+        b[1] = c;
+      }
     }
   }
 }
@@ -153,6 +208,8 @@ void ArticulatedPoser::predict(InjectiveSolver& solver, std::span<const Eigen::I
   // the prediction would squeeze go half as far, again until none is (a
   // squeezed tet at the shoulder does not hold back the hand).
   std::vector<double> share(current.size(), 1.0);
+  for (std::size_t i = 0; i < current.size(); ++i)
+    if (stillSolve_[i]) share[i] = 0.0;
   std::vector<Eigen::Vector3d> trial(current.size());
   std::vector<double> floor = solver.relativeVolumes(current);
   for (double& f : floor) f = std::min(0.05, 0.5 * f);
@@ -273,13 +330,26 @@ ArticulatedPoseReport ArticulatedPoser::pose(std::span<const Eigen::Isometry3d> 
 ArticulatedPoseReport ArticulatedPoser::pose(const MotionPath& path) {
   const auto start = std::chrono::steady_clock::now();
   const std::vector<Eigen::Isometry3d> motions = path(1.0);
+  prepare(motions);
   ArticulatedPoseReport report;
+  report.stillVertices = still_.size();
+  report.stillTets = stillTets_;
   report.solvedVertices = solved_.size();
   report.solvedTets = solvedTets_;
   report.constrainedVertices = constrained_.size();
   report.slidingVertices = sliding_.size();
   report.bridgingTets = bridgingTets_;
   positions_ = mesh_.mesh.positions;
+  // Where the still vertices stay: the approach's hard ones, the last
+  // step's after the bones.
+  std::vector<Eigen::Vector3d> approachHeld, stillHeld;
+  for (const std::int32_t i : approachHard_) approachHeld.push_back(mesh_.mesh.positions[std::size_t(solved_[std::size_t(i)])]);
+  for (const std::int32_t i : still_) stillHeld.push_back(mesh_.mesh.positions[std::size_t(solved_[std::size_t(i)])]);
+  const auto approachSoft = [&] {
+    std::vector<Eigen::Vector3d> soft = slidingTargets_;
+    for (const std::size_t c : approachSoftBones_) soft.push_back(constrainedTargets_[c]);
+    return soft;
+  };
   if (solvedTets_ > 0) {
     // The approach: the pose in steps with the bones as stiff soft targets,
     // so that one squeezed tet slows the bones near it, not every bone.
@@ -291,9 +361,7 @@ ArticulatedPoseReport ArticulatedPoser::pose(const MotionPath& path) {
       predict(approach_, previous, step);
       targets(approach_, step);
       previous = step;
-      std::vector<Eigen::Vector3d> soft = slidingTargets_;
-      soft.insert(soft.end(), constrainedTargets_.begin(), constrainedTargets_.end());
-      const InjectiveStepReport r = approach_.solveStep({}, soft);
+      const InjectiveStepReport r = approach_.solveStep(approachHeld, approachSoft());
       report.iterations += r.iterations;
       report.minRelativeVolume = std::min(report.minRelativeVolume, r.minRelativeVolume);
       report.stepMinRelativeVolume.push_back(r.minRelativeVolume);
@@ -310,13 +378,12 @@ ArticulatedPoseReport ArticulatedPoser::pose(const MotionPath& path) {
     // 1000): they close on their motions as far as the tissue lets them.
     {
       targets(approach_, motions);
-      std::vector<Eigen::Vector3d> soft = slidingTargets_;
-      soft.insert(soft.end(), constrainedTargets_.begin(), constrainedTargets_.end());
+      const std::vector<Eigen::Vector3d> soft = approachSoft();
       std::vector<double> scale(soft.size(), 1.0);
       for (int round = 1; round <= options_.stiffeningRounds; ++round) {
         std::fill(scale.begin() + std::ptrdiff_t(slidingTargets_.size()), scale.end(), std::pow(10.0, round));
         approach_.scaleSoftWeights(scale);
-        const InjectiveStepReport r = approach_.solveStep({}, soft);
+        const InjectiveStepReport r = approach_.solveStep(approachHeld, soft);
         report.iterations += r.iterations;
         report.minRelativeVolume = std::min(report.minRelativeVolume, r.minRelativeVolume);
       }
@@ -330,9 +397,12 @@ ArticulatedPoseReport ArticulatedPoser::pose(const MotionPath& path) {
     report.segmentLagMm = boneLag(approach_);
     std::vector<Eigen::Vector3d> placed = corrected(approach_.positions(), motions);
     for (std::size_t c = 0; c < constrained_.size(); ++c) placed[std::size_t(constrained_[c])] = constrainedTargets_[c];
+    for (std::size_t k = 0; k < still_.size(); ++k) placed[std::size_t(still_[k])] = stillHeld[k];
     const std::vector<double> volumes = solver_.relativeVolumes(placed);
     solver_.setPositions(*std::min_element(volumes.begin(), volumes.end()) > 0.0 ? placed : approach_.positions());
-    const InjectiveStepReport r = solver_.solveStep(constrainedTargets_, slidingTargets_);
+    std::vector<Eigen::Vector3d> hard = constrainedTargets_;
+    hard.insert(hard.end(), stillHeld.begin(), stillHeld.end());
+    const InjectiveStepReport r = solver_.solveStep(hard, slidingTargets_);
     report.iterations += r.iterations;
     report.minRelativeVolume = std::min(report.minRelativeVolume, r.minRelativeVolume);
     report.stepMinRelativeVolume.push_back(r.minRelativeVolume);

@@ -53,6 +53,20 @@ struct ArticulatedPoseOptions {
   // Then, at the full pose, rounds with the bones' weight times 10, 100, ...
   // before they are put on their motions exactly.
   int stiffeningRounds = 3;
+  // Still tissue: a tissue vertex farther than this (mm, along the mesh's
+  // edges) from every bone of a segment the pose moves stays at rest (a
+  // hard constraint in every step), and a tet of such vertices and of
+  // unmoved parts' bones only is left out of the solve. The solve is then
+  // the tissue around the moved limbs, and tissue far from them (with the
+  // trunk's bones the mesh leaves to it) is not dragged by them. <= 0:
+  // every tet but the rigid ones is solved.
+  double stillBeyondMm = 150.0;
+  // The bones of unmoved parts in the steps: true, held at rest; false,
+  // soft targets as the moved bones are, so that a pelvis gives way to
+  // the thighs on the way (the last step puts them back). Held, the seated
+  // pose's thighs fall behind their motions and far more tets invert
+  // (docs/BENCHMARKS.md, "Still tissue").
+  bool holdUnmovedBones = false;
   InjectiveSolveOptions solve;
   // Called after each step of the approach (1-based) and after the last,
   // hard step (steps + 1) with every vertex of the mesh where that step left
@@ -63,6 +77,9 @@ struct ArticulatedPoseOptions {
 struct ArticulatedPoseReport {
   int steps = 0, iterations = 0;
   std::size_t solvedVertices = 0, solvedTets = 0, constrainedVertices = 0, slidingVertices = 0;
+  // Solved vertices held at rest as still tissue (stillBeyondMm), and the
+  // tets left out of the solve because every vertex of theirs is still.
+  std::size_t stillVertices = 0, stillTets = 0;
   // Tets whose four vertices are prescribed by two or more parts: the solve
   // cannot change them (reported: they deform with their bones).
   std::size_t bridgingTets = 0;
@@ -106,6 +123,10 @@ public:
   const std::vector<Eigen::Vector3d>& positions() const { return positions_; }
 
 private:
+  // The solve for a pose whose segments at the full pose are `motions`:
+  // the still vertices and tets (stillBeyondMm), the solved tets and their
+  // vertices' roles, both solvers' precomputation.
+  void prepare(std::span<const Eigen::Isometry3d> motions);
   // The bones' and sliding vertices' targets with the segments at `motions`.
   void targets(const InjectiveSolver& solver, std::span<const Eigen::Isometry3d> motions);
   // Moves the solve's positions towards the blended step motion that takes
@@ -137,12 +158,20 @@ private:
   std::vector<std::int32_t> solved_;      // solve index -> mesh vertex
   std::vector<Tet> solveTets_;            // the solved tets (solve indices)
   std::vector<std::int32_t> constrained_, sliding_;  // solve indices
+  // Solve indices: the still free and sliding vertices (hard at rest in
+  // both solvers), the approach's hard vertices (those and the bones of
+  // unmoved segments) and its soft ones (sliding, then the moved bones).
+  std::vector<std::int32_t> still_, approachHard_;
+  std::vector<std::size_t> approachSoftBones_;  // indices into constrained_
+  std::vector<std::uint8_t> stillSolve_;      // per solve index: held at rest in the approach
+  std::vector<std::vector<std::pair<std::int32_t, double>>> edges_;  // per mesh vertex: neighbours and lengths
+  std::vector<std::array<std::pair<double, skeleton::Part>, 2>> nearest_;  // per mesh vertex: two nearest parts
   std::array<std::vector<std::int32_t>, kSegmentCount + 1> partConstrained_;  // per part: its constrained solve indices
   std::vector<Eigen::Vector3d> constrainedTargets_, slidingTargets_;
   std::vector<Eigen::Vector3d> positions_;
   InjectiveSolver solver_;    // bones hard (the last step)
   InjectiveSolver approach_;  // bones soft (the steps)
-  std::size_t bridgingTets_ = 0, solvedTets_ = 0;
+  std::size_t bridgingTets_ = 0, solvedTets_ = 0, stillTets_ = 0;
   // Per solved vertex: its two nearest parts and their weights.
   std::vector<std::array<skeleton::Part, 2>> nearPart_;
   std::vector<double> nearWeight_;  // weight of the nearest; 1 - it of the second

@@ -20,7 +20,12 @@
 // --dump PREFIX (the mesh's arrays for numpy, rest and posed: dumpMesh),
 // --mesh-only (build the mesh, dump it, stop), --squeezed F (per step, the tets under F of their rest volume, by nearest
 // joint and by what holds their vertices: where the tissue locks),
-// --knee-forward MM (both knees' centres moved MM along the body's front
+// --trunk-reach MM, --pelvis-reach MM (trunk or pelvis bones this near a
+// joint centre resolved; default the mesh's), --joint-clearance MM (the head's, hands'
+// and feet's tissue this near their joint bends; beyond, rigid whole),
+// --still-beyond MM (tissue this far from every moved bone held at rest;
+// 0: none; default the pose's), --hold-unmoved-bones (the unmoved parts'
+// bones held at rest in the steps, not soft targets), --knee-forward MM (both knees' centres moved MM along the body's front
 // before the mesh is built: how the hinge's axis, which the skeleton clears
 // of the bones over the knee's range, serves the tissue).
 // Prints a table, then one JSON line (prefix "json ") for scripts.
@@ -57,7 +62,7 @@ int usage() {
   std::fprintf(stderr,
                "usage: articulated_pose_bench GRID ORGANS POSE [--steps N] [--bone-weight W] [--sliding-weight W] [--max-iterations N] "
                "[--volume-weight L] [--direct-limit N] [--scapulae] [--yielding-shell V] [--yielding-hips] [--squeezed F] [--dump PREFIX] [--mesh-only] "
-               "[--knee-forward MM]\n"
+               "[--knee-forward MM] [--trunk-reach MM] [--pelvis-reach MM] [--joint-clearance MM] [--still-beyond MM] [--hold-unmoved-bones]\n"
                "       articulated_pose_bench --figure POSE [options]\n");
   return 2;
 }
@@ -189,6 +194,11 @@ int main(int argc, char** argv) {
     else if (arg == "--knee-forward") kneeForwardMm = std::stod(value());
     else if (arg == "--scapulae") meshOptions.movingScapulae = true;
     else if (arg == "--yielding-shell") meshOptions.yieldingShellVoxels = std::stod(value());
+    else if (arg == "--trunk-reach") meshOptions.trunkBoneReachMm = std::stod(value());
+    else if (arg == "--pelvis-reach") meshOptions.pelvisBoneReachMm = std::stod(value());
+    else if (arg == "--still-beyond") poseOptions.stillBeyondMm = std::stod(value());
+    else if (arg == "--hold-unmoved-bones") poseOptions.holdUnmovedBones = true;
+    else if (arg == "--joint-clearance") meshOptions.jointClearanceMm = std::stod(value());
     else if (arg.starts_with("--")) return usage();
     else positional.push_back(arg);
   }
@@ -217,6 +227,9 @@ int main(int argc, char** argv) {
     std::printf("mesh: %zu vertices, %zu tets, %zu bodies, built in %.1f s (skeleton %.1f s)\n", mesh.mesh.vertexCount(),
                 mesh.mesh.tetCount(), mesh.bodies.size(), meshSeconds, skeletonSeconds);
 
+    for (const ArticularBody& b : mesh.bodies)
+      std::printf("  body %s: %s radius %.1f mm%s\n", skeleton::jointKind(b.joint).name, b.shape == ArticularShape::Sphere ? "sphere" : "cylinder",
+                  b.radius, b.shape == ArticularShape::Cylinder ? (", half length " + std::to_string(b.halfLength)).c_str() : "");
     if (!dumpPrefix.empty()) dumpMesh(dumpPrefix, mesh, mesh.mesh.positions, "rest");
     if (meshOnly) return 0;
 
@@ -226,8 +239,8 @@ int main(int argc, char** argv) {
     poseOptions.steps = stepsGiven > 0 ? stepsGiven : articulatedPoseSteps(pose.joints, poseOptions);
     ArticulatedPoser poser(mesh, poseOptions);
     const ArticulatedPoseReport r = poser.pose(jointMotionPath(sk, joints, pose.joints, mesh));
-    std::printf("pose: %d steps, %d iterations, %.1f s; solved %zu vertices, %zu tets\n", r.steps, r.iterations, r.seconds,
-                r.solvedVertices, r.solvedTets);
+    std::printf("pose: %d steps, %d iterations, %.1f s; solved %zu vertices, %zu tets (still: %zu vertices held, %zu tets left out)\n",
+                r.steps, r.iterations, r.seconds, r.solvedVertices, r.solvedTets, r.stillVertices, r.stillTets);
     std::printf("step  min det J  bones' lag (mm)\n");
     for (std::size_t s = 0; s < r.stepMinRelativeVolume.size(); ++s)
       std::printf("%4zu  %9.4f  %s\n", s + 1, r.stepMinRelativeVolume[s],

@@ -115,6 +115,7 @@ struct DeformationReport {
   struct Articulated {
     std::size_t vertices = 0, tets = 0, bodies = 0, bodyCutFaces = 0, limbCutFaces = 0;
     std::size_t rigidVertices = 0, slidingVertices = 0, solvedVertices = 0, solvedTets = 0;
+    std::size_t stillVertices = 0, stillTets = 0;  // held at rest: far from every moved bone (ArticulatedPoseOptions::stillBeyondMm)
     int steps = 0, iterations = 0;
     double minRelativeVolume = 1.0;  // smallest det J over every step
     std::size_t invertedTets = 0;    // in the final positions

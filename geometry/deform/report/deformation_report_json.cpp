@@ -186,6 +186,8 @@ std::string deformationReportJson(const DeformationReport& r) {
                            {"rigid_vertices", a->rigidVertices},
                            {"sliding_vertices", a->slidingVertices},
                            {"solved_vertices", a->solvedVertices},
+                           {"still_vertices", a->stillVertices},
+                           {"still_tets", a->stillTets},
                            {"solved_tets", a->solvedTets},
                            {"steps", a->steps},
                            {"iterations", a->iterations},

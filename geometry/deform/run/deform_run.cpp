@@ -389,6 +389,8 @@ PosedMesh poseArticulated(const DeformGridRequest& o, const Source& source, Defo
   a.slidingVertices = r.slidingVertices;
   a.solvedVertices = r.solvedVertices;
   a.solvedTets = r.solvedTets;
+  a.stillVertices = r.stillVertices;
+  a.stillTets = r.stillTets;
   a.steps = r.steps;
   a.iterations = r.iterations;
   a.minRelativeVolume = r.minRelativeVolume;

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <numbers>
 #include <set>
 
@@ -372,6 +373,48 @@ TEST(ArticulatedPose, AnElbowAt90PartsTheForearmFromTheTrunk) {
     if (f.mesh.role[v] == VertexRole::Rigid) {
       EXPECT_LT((p[v] - motions[std::size_t(f.mesh.vertexPart[v])] * f.mesh.mesh.positions[v]).norm(), 1e-6);
     }
+}
+
+// Tissue far from every moved bone is held at rest (stillBeyondMm): an
+// elbow's turn leaves the legs' and the other arm's vertices exactly where
+// they were, bones of unmoved parts included, with every tet positive and
+// the bones on their motions; with the option off nothing is held.
+TEST(ArticulatedPose, TissueFarFromTheMovedBonesStaysAtRest) {
+  const Figure& f = figure();
+  const skeleton::PartMotions motions = figureMotions(f.skeleton, {jointAngles(JointId::RightElbow, 90.0)});
+  double low = std::numeric_limits<double>::infinity(), high = -low;
+  for (const Eigen::Vector3d& p : f.mesh.mesh.positions) {
+    low = std::min(low, p.z());
+    high = std::max(high, p.z());
+  }
+  ArticulatedPoseOptions options;
+  options.stillBeyondMm = 0.15 * (high - low);
+  ArticulatedPoser poser(f.mesh, options);
+  const ArticulatedPoseReport r = poser.pose(motions);
+  EXPECT_GT(r.stillVertices, 0u);
+  EXPECT_GT(r.stillTets, 0u);
+  EXPECT_EQ(r.invertedTets, 0u);
+  EXPECT_TRUE(r.reachedTargets);
+  const std::vector<Eigen::Vector3d>& p = poser.positions();
+  std::size_t legs = 0;
+  for (std::size_t v = 0; v < p.size(); ++v) {
+    const Eigen::Vector3d& rest = f.mesh.mesh.positions[v];
+    if (f.mesh.role[v] == VertexRole::Rigid) {
+      EXPECT_LT((p[v] - motions[std::size_t(f.mesh.vertexPart[v])] * rest).norm(), 1e-6);
+    }
+    // The lowest quarter of the figure: the legs, far from the elbow.
+    if (rest.z() < low + 0.25 * (high - low)) {
+      ++legs;
+      EXPECT_EQ(p[v], rest) << "vertex " << v;
+    }
+  }
+  EXPECT_GT(legs, 100u);
+  options.stillBeyondMm = 0.0;
+  ArticulatedPoser all(f.mesh, options);
+  const ArticulatedPoseReport every = all.pose(motions);
+  EXPECT_EQ(every.stillVertices, 0u);
+  EXPECT_EQ(every.stillTets, 0u);
+  EXPECT_GT(every.solvedTets, r.solvedTets);
 }
 
 // A patella slides along the femur's profile as its knee bends: relative
