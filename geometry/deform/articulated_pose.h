@@ -159,11 +159,14 @@ private:
   std::vector<Tet> solveTets_;            // the solved tets (solve indices)
   std::vector<std::int32_t> constrained_, sliding_;  // solve indices
   // Solve indices: the still free and sliding vertices (hard at rest in
-  // both solvers), the approach's hard vertices (those and the bones of
-  // unmoved segments) and its soft ones (sliding, then the moved bones).
+  // both solvers), the approach's hard vertices (those, and with
+  // holdUnmovedBones the bones of unmoved segments) and its soft ones
+  // (sliding, then the other bones).
   std::vector<std::int32_t> still_, approachHard_;
   std::vector<std::size_t> approachSoftBones_;  // indices into constrained_
-  std::vector<std::uint8_t> stillSolve_;      // per solve index: held at rest in the approach
+  // Per solve index: still (still tissue, or a bone of an unmoved segment);
+  // the prediction leaves it where it is.
+  std::vector<std::uint8_t> stillSolve_;
   std::vector<std::vector<std::pair<std::int32_t, double>>> edges_;  // per mesh vertex: neighbours and lengths
   std::vector<std::array<std::pair<double, skeleton::Part>, 2>> nearest_;  // per mesh vertex: two nearest parts
   std::array<std::vector<std::int32_t>, kSegmentCount + 1> partConstrained_;  // per part: its constrained solve indices
