@@ -227,9 +227,12 @@ int main(int argc, char** argv) {
     std::printf("mesh: %zu vertices, %zu tets, %zu bodies, built in %.1f s (skeleton %.1f s)\n", mesh.mesh.vertexCount(),
                 mesh.mesh.tetCount(), mesh.bodies.size(), meshSeconds, skeletonSeconds);
 
-    for (const ArticularBody& b : mesh.bodies)
-      std::printf("  body %s: %s radius %.1f mm%s\n", skeleton::jointKind(b.joint).name, b.shape == ArticularShape::Sphere ? "sphere" : "cylinder",
-                  b.radius, b.shape == ArticularShape::Cylinder ? (", half length " + std::to_string(b.halfLength)).c_str() : "");
+    for (const ArticularBody& b : mesh.bodies) {
+      std::printf("  body %s: %s radius %.1f mm", skeleton::jointKind(b.joint).name,
+                  b.shape == ArticularShape::Sphere ? "sphere" : "cylinder", b.radius);
+      if (b.shape == ArticularShape::Cylinder) std::printf(", half length %.1f mm", b.halfLength);
+      std::printf("\n");
+    }
     if (!dumpPrefix.empty()) dumpMesh(dumpPrefix, mesh, mesh.mesh.positions, "rest");
     if (meshOnly) return 0;
 

@@ -56,10 +56,6 @@ def exposure(labels, skin):
     return per_axis, int(np.count_nonzero(bare)), int(np.count_nonzero(is_skin))
 
 
-def exposed_faces(labels, skin):
-    return sum(exposure(labels, skin)[0])
-
-
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("organs", help="organ table (ID name tissue density)")
