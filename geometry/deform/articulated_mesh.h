@@ -167,7 +167,12 @@ struct ArticulatedMeshOptions {
   // the femur's trochlea as its knee bends (segmentMotions); false: the
   // lower leg's.
   bool movingPatellae = true;
-  TransferMeshOptions transferMesh;
+  // The mesher's options; the articulated mesh rebuilds the mesh for every
+  // uncovered centre (no caps): the hard postures' solves were measured on
+  // that mesh, and a mesh with caps instead changes them (the seated pose
+  // then inverts several times as many tets: docs/BENCHMARKS.md, "Caps
+  // instead of meshing again").
+  TransferMeshOptions transferMesh = {.coverageCaps = false};
 };
 
 enum class VertexRole : std::uint8_t { Free, Rigid, Sliding };

@@ -343,7 +343,7 @@ std::string envelopeOptionsKey(const EnvelopeOptions& o) {
 
 std::string transferMeshOptionsKey(const TransferMeshOptions& o) {
   return "offset " + exact(o.boundaryOffsetVoxels) + " facet " + exact(o.facetDistanceVoxels) + " " + exact(o.facetAngleDeg) + " ratio " +
-         exact(o.radiusEdgeRatio);
+         exact(o.radiusEdgeRatio) + (o.coverageCaps ? " caps" : "");
 }
 
 std::string separationsText(const std::vector<LimbSeparation>& separations, const GridGeometry& grid) {

@@ -12,6 +12,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <unordered_map>
 
 namespace vox {
 
@@ -188,8 +189,222 @@ std::vector<std::int64_t> uncoveredVoxels(const TetMesh& mesh, const LabelGrid& 
   return uncovered;
 }
 
+// Coverage caps: a foreground voxel centre that the mesh leaves out lies
+// just outside its boundary, where a Delaunay facet's chord cuts inside the
+// domain at a convex feature. A tet on that facet whose apex lies beyond
+// the centre (a cap) covers it where the cap meets no other part of the
+// mesh: a few tets instead of meshing the whole domain again.
+class CoverageCaps {
+public:
+  CoverageCaps(TetMesh& mesh, double reachMm) : mesh_(mesh), reach_(reachMm), cell_(4.0 * reachMm) {
+    const std::vector<std::array<std::int32_t, 4>> neighbours = faceNeighbors(mesh, "transfer mesh");
+    for (std::size_t t = 0; t < mesh.tets.size(); ++t)
+      for (int k = 0; k < 4; ++k)
+        if (neighbours[t][std::size_t(k)] < 0) addFacet(tetFace(mesh.tets[t], k), mesh.labels[t]);
+  }
+
+  // Covers the point c (outside the mesh) by a cap on the nearest boundary
+  // facet it lies above, the best shaped cap that meets no other boundary
+  // facet; false when no such cap exists within reach.
+  bool cover(const Eigen::Vector3d& c) {
+    for (const std::size_t t : caps_)
+      if (contains(mesh_.tets[t], c)) return true;
+    struct Candidate {
+      double height;
+      std::int32_t facet;
+    };
+    std::vector<Candidate> candidates;
+    forFacetsNear(c - Eigen::Vector3d::Constant(reach_), c + Eigen::Vector3d::Constant(reach_), [&](std::int32_t f) {
+      const Tri& v = facets_[std::size_t(f)].vertices;
+      const Eigen::Vector3d &a = mesh_.positions[std::size_t(v[0])], &b = mesh_.positions[std::size_t(v[1])], &e = mesh_.positions[std::size_t(v[2])];
+      const Eigen::Vector3d n = (b - a).cross(e - a).normalized();
+      const double d = n.dot(c - a);
+      if (!(d > 0.0 && d <= reach_)) return;
+      const Eigen::Vector3d beta = barycentric(a, b, e, c - d * n);
+      if (beta.minCoeff() < 0.0) return;
+      candidates.push_back({d, f});
+    });
+    std::sort(candidates.begin(), candidates.end(), [](const Candidate& x, const Candidate& y) {
+      return x.height < y.height || (x.height == y.height && x.facet < y.facet);
+    });
+    for (const Candidate& candidate : candidates)
+      if (capOn(candidate.facet, candidate.height, c)) return true;
+    return false;
+  }
+
+private:
+  struct Facet {
+    Tri vertices;
+    std::int32_t label;
+    bool open;  // still on the boundary
+  };
+
+  static Eigen::Vector3d barycentric(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& e, const Eigen::Vector3d& p) {
+    const Eigen::Vector3d u = b - a, w = e - a, r = p - a;
+    const double uu = u.dot(u), uw = u.dot(w), ww = w.dot(w), ru = r.dot(u), rw = r.dot(w);
+    const double det = uu * ww - uw * uw;
+    const double y = (ww * ru - uw * rw) / det, z = (uu * rw - uw * ru) / det;
+    return {1.0 - y - z, y, z};
+  }
+
+  // p inside the tet (a margin within its faces, where markCoveredVoxels
+  // counts a margin beyond them).
+  static bool contains(const std::array<Eigen::Vector3d, 4>& t, const Eigen::Vector3d& p) {
+    Eigen::Matrix3d m;
+    m << t[1] - t[0], t[2] - t[0], t[3] - t[0];
+    const Eigen::Vector3d l = m.inverse() * (p - t[0]);
+    constexpr double kMargin = 1e-7;
+    return l.allFinite() && l.minCoeff() >= kMargin && l.sum() <= 1.0 - kMargin;
+  }
+  bool contains(const Tet& t, const Eigen::Vector3d& p) const {
+    return contains({mesh_.positions[std::size_t(t[0])], mesh_.positions[std::size_t(t[1])], mesh_.positions[std::size_t(t[2])],
+                     mesh_.positions[std::size_t(t[3])]},
+                    p);
+  }
+
+  // Mean ratio of a tet (1 for the regular tet, 0 for a flat one).
+  static double shape(const std::array<Eigen::Vector3d, 4>& p) {
+    const double v = std::abs(signedVolume(p[0], p[1], p[2], p[3]));
+    double squares = 0.0;
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) squares += (p[std::size_t(i)] - p[std::size_t(j)]).squaredNorm();
+    return 12.0 * std::pow(3.0 * v, 2.0 / 3.0) / squares;
+  }
+
+  // Separating axes of a triangle and a tet (both convex): true when no
+  // axis separates them.
+  static bool overlaps(const std::array<Eigen::Vector3d, 3>& tri, const std::array<Eigen::Vector3d, 4>& tet) {
+    std::array<Eigen::Vector3d, 6> tetEdges;
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < 4; ++i)
+      for (std::size_t j = i + 1; j < 4; ++j) tetEdges[n++] = tet[j] - tet[i];
+    const std::array<Eigen::Vector3d, 3> triEdges{tri[1] - tri[0], tri[2] - tri[1], tri[0] - tri[2]};
+    const auto separates = [&](const Eigen::Vector3d& axis) {
+      if (axis.squaredNorm() < 1e-24) return false;
+      double lo0 = std::numeric_limits<double>::infinity(), hi0 = -lo0, lo1 = lo0, hi1 = hi0;
+      for (const Eigen::Vector3d& p : tri) lo0 = std::min(lo0, axis.dot(p)), hi0 = std::max(hi0, axis.dot(p));
+      for (const Eigen::Vector3d& p : tet) lo1 = std::min(lo1, axis.dot(p)), hi1 = std::max(hi1, axis.dot(p));
+      return hi0 <= lo1 || hi1 <= lo0;
+    };
+    if (separates(triEdges[0].cross(triEdges[1]))) return false;
+    for (std::size_t f = 0; f < 4; ++f) {
+      const Eigen::Vector3d& a = tet[(f + 1) % 4];
+      if (separates((tet[(f + 2) % 4] - a).cross(tet[(f + 3) % 4] - a))) return false;
+    }
+    for (const Eigen::Vector3d& e : tetEdges)
+      for (const Eigen::Vector3d& t : triEdges)
+        if (separates(e.cross(t))) return false;
+    return true;
+  }
+
+  // Caps facet f towards c (height d above it): of a few apexes above the
+  // facet's centroid, above c's foot and between, at heights from a regular
+  // tet's down to just beyond c, the best shaped cap that holds c inside and
+  // meets no open facet but f. Adds it and returns true, or false.
+  bool capOn(std::int32_t f, double d, const Eigen::Vector3d& c) {
+    const Tri v = facets_[std::size_t(f)].vertices;
+    const std::array<Eigen::Vector3d, 3> base{mesh_.positions[std::size_t(v[0])], mesh_.positions[std::size_t(v[1])],
+                                               mesh_.positions[std::size_t(v[2])]};
+    const Eigen::Vector3d n = (base[1] - base[0]).cross(base[2] - base[0]).normalized();
+    const Eigen::Vector3d centroid = (base[0] + base[1] + base[2]) / 3.0, foot = c - d * n;
+    const double edge = ((base[1] - base[0]).norm() + (base[2] - base[1]).norm() + (base[0] - base[2]).norm()) / 3.0;
+    struct Apex {
+      double shape;
+      Eigen::Vector3d p;
+    };
+    std::vector<Apex> apexes;
+    for (const Eigen::Vector3d& under : {centroid, Eigen::Vector3d(0.5 * (centroid + foot)), foot})
+      for (const double h : {0.8165 * edge, 0.5 * edge, 0.3 * edge, 2.0 * d, 1.25 * d}) {
+        if (!(h > 1.01 * d)) continue;
+        const std::array<Eigen::Vector3d, 4> tet{base[0], base[1], base[2], under + h * n};
+        if (signedVolume(tet[0], tet[1], tet[2], tet[3]) > 0.0 && contains(tet, c)) apexes.push_back({shape(tet), tet[3]});
+      }
+    std::stable_sort(apexes.begin(), apexes.end(), [](const Apex& x, const Apex& y) { return x.shape > y.shape; });
+    for (const Apex& apex : apexes) {
+      // The cap shrunk a little about its centroid, so the facets that share
+      // its base's edges and corners touch it nowhere.
+      std::array<Eigen::Vector3d, 4> tet{base[0], base[1], base[2], apex.p};
+      const Eigen::Vector3d middle = (tet[0] + tet[1] + tet[2] + tet[3]) / 4.0;
+      Eigen::Vector3d lo = middle, hi = middle;
+      for (Eigen::Vector3d& p : tet) {
+        p = middle + (1.0 - 1e-4) * (p - middle);
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+      }
+      bool meets = false;
+      forFacetsNear(lo, hi, [&](std::int32_t other) {
+        if (meets || other == f) return;
+        const Tri& o = facets_[std::size_t(other)].vertices;
+        meets = overlaps({mesh_.positions[std::size_t(o[0])], mesh_.positions[std::size_t(o[1])], mesh_.positions[std::size_t(o[2])]}, tet);
+      });
+      if (meets) continue;
+      const std::int32_t apexIndex = std::int32_t(mesh_.positions.size());
+      mesh_.positions.push_back(apex.p);
+      const Tet cap{v[0], v[1], v[2], apexIndex};
+      caps_.push_back(mesh_.tets.size());
+      mesh_.tets.push_back(cap);
+      mesh_.labels.push_back(facets_[std::size_t(f)].label);
+      facets_[std::size_t(f)].open = false;
+      for (int k = 0; k < 3; ++k) addFacet(tetFace(cap, k), facets_[std::size_t(f)].label);
+      return true;
+    }
+    return false;
+  }
+
+  std::int64_t cellKey(const Eigen::Vector3d& p) const {
+    constexpr std::int64_t kBias = std::int64_t(1) << 20;
+    std::int64_t key = 0;
+    for (int a = 0; a < 3; ++a) key = (key << 21) | (std::int64_t(std::floor(p[a] / cell_)) + kBias);
+    return key;
+  }
+
+  template <class Visit>
+  void forCells(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, Visit&& visit) const {
+    const Eigen::Vector3d l = (lo / cell_).array().floor(), h = (hi / cell_).array().floor();
+    for (double z = l.z(); z <= h.z(); ++z)
+      for (double y = l.y(); y <= h.y(); ++y)
+        for (double x = l.x(); x <= h.x(); ++x) visit(cellKey(Eigen::Vector3d((x + 0.5) * cell_, (y + 0.5) * cell_, (z + 0.5) * cell_)));
+  }
+
+  // Calls visit(f) once for each open facet whose cells meet the box.
+  template <class Visit>
+  void forFacetsNear(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, Visit&& visit) {
+    ++stamp_;
+    forCells(lo, hi, [&](std::int64_t key) {
+      const auto found = cells_.find(key);
+      if (found == cells_.end()) return;
+      for (const std::int32_t f : found->second)
+        if (facets_[std::size_t(f)].open && seen_[std::size_t(f)] != stamp_) {
+          seen_[std::size_t(f)] = stamp_;
+          visit(f);
+        }
+    });
+  }
+
+  void addFacet(const Tri& t, std::int32_t label) {
+    const std::int32_t f = std::int32_t(facets_.size());
+    facets_.push_back({t, label, true});
+    seen_.push_back(0);
+    Eigen::Vector3d lo = mesh_.positions[std::size_t(t[0])], hi = lo;
+    for (int k = 1; k < 3; ++k) {
+      lo = lo.cwiseMin(mesh_.positions[std::size_t(t[std::size_t(k)])]);
+      hi = hi.cwiseMax(mesh_.positions[std::size_t(t[std::size_t(k)])]);
+    }
+    forCells(lo, hi, [&](std::int64_t key) { cells_[key].push_back(f); });
+  }
+
+  TetMesh& mesh_;
+  double reach_, cell_;
+  std::vector<Facet> facets_;
+  std::vector<std::uint32_t> seen_;
+  std::uint32_t stamp_ = 0;
+  std::unordered_map<std::int64_t, std::vector<std::int32_t>> cells_;
+  std::vector<std::size_t> caps_;
+};
+
 // Coverage repair: at most this many extra meshing passes, each pushing the
-// boundary out by half the offset around the voxels still uncovered, within
+// boundary out by half the offset around the voxels still uncovered (that
+// no cap covers, with TransferMeshOptions::coverageCaps), within
 // a radius of four of the coarsest voxel spacing (chords of Delaunay facets
 // cut inside at sharp convex features: finger tips, a body cut flat by the
 // grid's border).
@@ -258,7 +473,8 @@ TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, con
     reportProgress("transfer mesh", 0.1);
     TetMesh mesh = restrictedDelaunayVolume(domain, criteria);
     orientPositively(mesh);
-    const std::vector<std::int64_t> uncovered = vox::uncoveredVoxels(mesh, groups);
+    std::vector<std::int64_t> uncovered = vox::uncoveredVoxels(mesh, groups);
+    if (!uncovered.empty() && options.coverageCaps) uncovered = capUncoveredVoxels(mesh, g, uncovered);
     if (uncovered.empty() || pass == kCoveragePasses) {
       if (uncoveredVoxels) *uncoveredVoxels = std::int64_t(uncovered.size());
       reportProgress("transfer mesh", 1.0);
@@ -288,6 +504,17 @@ TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, con
     }
     for (std::size_t v = 0; v < bump.values.size(); ++v) dt.distance.values[v] -= bump.values[v];
   }
+}
+
+std::vector<std::int64_t> capUncoveredVoxels(TetMesh& mesh, const GridGeometry& g, std::span<const std::int64_t> uncovered) {
+  CoverageCaps caps(mesh, 2.5 * g.spacing.maxCoeff());
+  std::vector<std::int64_t> left;
+  for (const std::int64_t u : uncovered) {
+    throwIfCancelled();
+    const Index3 c = g.ijk(u);
+    if (!caps.cover(g.voxelCenter(c[0], c[1], c[2]))) left.push_back(u);
+  }
+  return left;
 }
 
 std::int64_t countUncoveredVoxels(const TetMesh& mesh, const LabelGrid& grid) {

@@ -13,6 +13,7 @@
 #include <Eigen/Geometry>
 #include <functional>
 #include <optional>
+#include <span>
 #include <vector>
 
 namespace vox {
@@ -24,9 +25,14 @@ struct TransferMeshOptions {
   // foreground's voxel centres, so every foreground voxel centre lies in a
   // tet (the rasterizer needs that) while the volume stays within a few %
   // of the voxels' volume on a body. Where Delaunay facets still cut a
-  // centre off (sharp convex features), the offset is raised locally and
-  // the mesh rebuilt, at most three times.
+  // centre off (sharp convex features), a cap covers it (coverageCaps);
+  // for the centres no cap covers, the offset is raised locally and the
+  // mesh rebuilt, at most three times.
   double boundaryOffsetVoxels = 1.4;
+  // Caps (capUncoveredVoxels) before any rebuild: one tet on the boundary
+  // facet beyond which a centre lies, where that tet meets no other part of
+  // the mesh. false: every uncovered centre rebuilds the mesh.
+  bool coverageCaps = true;
   double facetDistanceVoxels = 0.5;  // upper bound on boundary/interface facet to surface distance
   double facetAngleDeg = 25.0;   // lower bound on boundary/interface facet angles
   double radiusEdgeRatio = 3.0;  // upper bound on tet circumradius / shortest edge
@@ -55,6 +61,15 @@ TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, con
 
 // Foreground voxels (label != 0) of `grid` whose centres lie in no tet.
 std::int64_t countUncoveredVoxels(const TetMesh& mesh, const LabelGrid& grid);
+
+// Covers the voxel centres `uncovered` (linear indices of `geometry`, each
+// outside `mesh`) by caps: for a centre at most 2.5 voxels beyond a
+// boundary facet (one that the centre projects into), a tet on that facet
+// whose apex lies beyond the centre, the best shaped of a few, added when
+// it meets no other boundary facet (so no two tets overlap) and labelled as
+// the facet's tet. The nearest such facet is tried first; a cap covers the
+// later centres it holds too. Returns the centres no cap covers.
+std::vector<std::int64_t> capUncoveredVoxels(TetMesh& mesh, const GridGeometry& geometry, std::span<const std::int64_t> uncovered);
 
 struct CutReport {
   std::size_t cutFaces = 0;            // faces between a groupA and a groupB tet inside the region

@@ -263,6 +263,114 @@ TEST(TransferMesh, BadInput) {
   EXPECT_THROW(buildTransferMesh(one, ScalarGrid(g, 0.0f)), InputError);
 }
 
+// A block of 4^3 voxels (i, j, k in [2, 5], spacing 1 mm) tetrahedralized,
+// moved by `shift` (mm), as a transfer mesh.
+TetMesh voxelBlock(const Eigen::Vector3d& shift) {
+  GridGeometry g;
+  g.dims = {8, 8, 8};
+  LabelGrid grid(g, 0);
+  for (std::int64_t k = 2; k <= 5; ++k)
+    for (std::int64_t j = 2; j <= 5; ++j)
+      for (std::int64_t i = 2; i <= 5; ++i) grid.at(i, j, k) = 1;
+  VoxelTetrahedralizationOptions options;
+  options.includeBackground = false;
+  TetMesh mesh = tetrahedralizeVoxels(grid, options);
+  for (Eigen::Vector3d& p : mesh.positions) p += shift;
+  return mesh;
+}
+
+bool inTet(const TetMesh& mesh, const Tet& t, const Eigen::Vector3d& p) {
+  Eigen::Matrix3d m;
+  m << mesh.positions[std::size_t(t[1])] - mesh.positions[std::size_t(t[0])], mesh.positions[std::size_t(t[2])] - mesh.positions[std::size_t(t[0])],
+      mesh.positions[std::size_t(t[3])] - mesh.positions[std::size_t(t[0])];
+  const Eigen::Vector3d l = m.inverse() * (p - mesh.positions[std::size_t(t[0])]);
+  return l.minCoeff() > 0.0 && l.sum() < 1.0;
+}
+
+TEST(TransferMesh, CapCoversACentreJustBeyondABoundaryFacet) {
+  // The block's face at x = 5.5; a centre half a voxel beyond it, off the
+  // faces' diagonals.
+  GridGeometry g;
+  g.dims = {8, 8, 8};
+  g.origin = {0.0, 0.3, 0.2};
+  const std::int64_t centre = g.index(6, 3, 3);
+  const Eigen::Vector3d c = g.voxelCenter(6, 3, 3);
+
+  TetMesh mesh = voxelBlock(Eigen::Vector3d::Zero());
+  const std::size_t tets = mesh.tetCount();
+  const std::vector<std::int64_t> one{centre};
+  EXPECT_TRUE(capUncoveredVoxels(mesh, g, one).empty());
+  ASSERT_EQ(mesh.tetCount(), tets + 1);
+  ASSERT_EQ(mesh.labels.size(), tets + 1);
+  EXPECT_EQ(mesh.labels.back(), 1);
+  EXPECT_GT(signedVolume(mesh.positions, mesh.tets.back()), 0.0);
+  EXPECT_TRUE(inTet(mesh, mesh.tets.back(), c));
+  LabelGrid voxel(g, 0);
+  voxel.labels()[std::size_t(centre)] = 1;
+  EXPECT_EQ(countUncoveredVoxels(mesh, voxel), 0);
+  // The cap rests on the block: its base is a boundary face, nothing else
+  // of it is inside the block (x > 5.5 but the base).
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(mesh.positions[std::size_t(mesh.tets.back()[std::size_t(k)])].x(), 5.5, 1e-12);
+  EXPECT_GT(mesh.positions[std::size_t(mesh.tets.back()[3])].x(), c.x());
+
+}
+
+TEST(TransferMesh, CapNeverEntersAnotherPartOfTheMesh) {
+  // A second block whose face lies 0.35 mm beyond the centre (0.2 mm beyond
+  // the first block's face): the best shaped caps on the first block would
+  // reach into it, so a flatter one is taken, and no point of it lies in a
+  // tet of either block.
+  GridGeometry g;
+  g.dims = {8, 8, 8};
+  g.origin = {-0.3, 0.3, 0.2};
+  const std::int64_t centre = g.index(6, 3, 3);
+  const Eigen::Vector3d c = g.voxelCenter(6, 3, 3);
+  TetMesh mesh = voxelBlock(Eigen::Vector3d::Zero());
+  const TetMesh other = voxelBlock(Eigen::Vector3d(6.05 - 1.5, 0.0, 0.0));
+  const std::int32_t offset = std::int32_t(mesh.positions.size());
+  mesh.positions.insert(mesh.positions.end(), other.positions.begin(), other.positions.end());
+  for (Tet t : other.tets) {
+    for (std::int32_t& v : t) v += offset;
+    mesh.tets.push_back(t);
+    mesh.labels.push_back(2);
+  }
+  const std::size_t tets = mesh.tetCount();
+  const std::vector<std::int64_t> one{centre};
+  EXPECT_TRUE(capUncoveredVoxels(mesh, g, one).empty());
+  ASSERT_EQ(mesh.tetCount(), tets + 1);
+  const Tet cap = mesh.tets.back();
+  EXPECT_EQ(mesh.labels.back(), 1);
+  EXPECT_TRUE(inTet(mesh, cap, c));
+  const double apex = mesh.positions[std::size_t(cap[3])].x();
+  EXPECT_GT(apex, c.x());
+  EXPECT_LT(apex, 6.05);
+  // Points all through the cap lie in no other tet.
+  int inside = 0;
+  for (int a = 1; a < 8; ++a)
+    for (int b = 1; a + b < 8; ++b)
+      for (int d = 1; a + b + d < 8; ++d) {
+        const Eigen::Vector3d p = (a * mesh.positions[std::size_t(cap[0])] + b * mesh.positions[std::size_t(cap[1])] +
+                                   d * mesh.positions[std::size_t(cap[2])] + (8 - a - b - d) * mesh.positions[std::size_t(cap[3])]) / 8.0;
+        for (std::size_t t = 0; t < tets; ++t) inside += inTet(mesh, mesh.tets[t], p);
+      }
+  EXPECT_EQ(inside, 0);
+}
+
+TEST(TransferMesh, CapLeavesACentreBeyondAnEdge) {
+  // A centre beyond the block's edge (x and y past its faces) projects into
+  // no boundary facet: no cap, the centre is returned, the mesh unchanged.
+  GridGeometry g;
+  g.dims = {8, 8, 8};
+  g.origin = {0.0, 0.0, 0.2};
+  const std::int64_t centre = g.index(6, 6, 3);
+  TetMesh mesh = voxelBlock(Eigen::Vector3d::Zero());
+  const TetMesh before = mesh;
+  const std::vector<std::int64_t> one{centre};
+  EXPECT_EQ(capUncoveredVoxels(mesh, g, one), one);
+  EXPECT_EQ(mesh.tets, before.tets);
+  EXPECT_EQ(mesh.positions.size(), before.positions.size());
+}
+
 TEST(TransferMesh, AdultMalePhantom) {
   const LabelGrid grid = readGrid(test::assetPath("icrp110_am.nii.gz"));
   const TetMesh tm = buildTransferMesh(binaryGroupGrid(grid), defaultSizingField(grid.geometry()));
