@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <functional>
 #include <stdexcept>
+#include <vector>
 
 namespace vox {
 
@@ -37,6 +38,34 @@ void sortCancellable(It first, It last, Less less = {}) {
     if ((++compared & 0xFFFFu) == 0) throwIfCancelled();
     return less(a, b);
   });
+}
+
+// Large arrays written in chunks that poll for cancellation between them:
+// filling a gigabyte (its pages faulted in) takes a second and more.
+inline constexpr std::size_t kCancellableChunk = std::size_t(1) << 22;  // elements
+
+// n copies of value.
+template <typename T>
+std::vector<T> filledCancellable(std::size_t n, const T& value) {
+  std::vector<T> v;
+  v.reserve(n);
+  while (v.size() < n) {
+    throwIfCancelled();
+    v.insert(v.end(), std::min(kCancellableChunk, n - v.size()), value);
+  }
+  return v;
+}
+
+// Appends [first, last) to v.
+template <typename T, typename It>
+void appendCancellable(std::vector<T>& v, It first, It last) {
+  v.reserve(v.size() + std::size_t(last - first));
+  while (first != last) {
+    throwIfCancelled();
+    const It end = first + std::min<std::ptrdiff_t>(std::ptrdiff_t(kCancellableChunk), last - first);
+    v.insert(v.end(), first, end);
+    first = end;
+  }
 }
 
 // The flag that stops the calling thread's work: a ScopedCancellation's

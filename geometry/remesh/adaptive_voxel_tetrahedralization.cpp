@@ -108,7 +108,7 @@ public:
       pending.swap(next);
       reportProgress("voxel decomposition", std::min(0.99, double(round + 1) / double(finest + 4)));
       if (!bisected) {
-        done.insert(done.end(), pending.begin(), pending.end());
+        appendCancellable(done, pending.begin(), pending.end());
         break;
       }
     }
@@ -329,8 +329,8 @@ private:
 
   TetMesh toMesh(const std::vector<Simplex>& simplices, bool includeBackground) const {
     TetMesh mesh;
-    std::vector<std::int32_t> remap(exists_.size(), -1);
-    std::vector<std::int32_t> labels(simplices.size());
+    std::vector<std::int32_t> remap = filledCancellable(exists_.size(), std::int32_t(-1));
+    std::vector<std::int32_t> labels = filledCancellable(simplices.size(), std::int32_t(0));
     for (std::size_t i = 0; i < simplices.size(); ++i) {
       if (i % 65536 == 0) throwIfCancelled();
       const Simplex& t = simplices[i];

@@ -15,7 +15,7 @@ std::string describeTet(std::size_t t, const Tet& q) {
 std::vector<std::array<std::int32_t, 4>> tetFaceAdjacency(const std::vector<Tet>& tets, std::int32_t vertexCount,
                                                            const std::string& source) {
   const std::size_t nt = tets.size();
-  std::vector<std::array<std::int32_t, 4>> adjacency(nt, {kNoFace, kNoFace, kNoFace, kNoFace});
+  std::vector<std::array<std::int32_t, 4>> adjacency = filledCancellable(nt, std::array<std::int32_t, 4>{kNoFace, kNoFace, kNoFace, kNoFace});
 
   // Counting sort of the 4 #T faces on their smallest vertex.
   std::vector<std::int64_t> start(std::size_t(vertexCount) + 1, 0);
@@ -37,7 +37,7 @@ std::vector<std::array<std::int32_t, 4>> tetFaceAdjacency(const std::vector<Tet>
     std::uint64_t key;  // the two larger vertices
     std::int32_t face;  // 4 * tet + k
   };
-  std::vector<Entry> entries(4 * nt);
+  std::vector<Entry> entries = filledCancellable(4 * nt, Entry{});
   std::vector<std::int64_t> fill(start.begin(), start.end() - 1);
   for (std::size_t t = 0; t < nt; ++t)
     for (int k = 0; k < 4; ++k) {
