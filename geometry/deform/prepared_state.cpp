@@ -424,11 +424,38 @@ void PreparedState::refuseCage(const PreparedCageQuery& q) const {
   throw InputError(source, "prepared with other label groups (" + best->groups + "), not this run's (" + q.groups + ")" + hint);
 }
 
+namespace {
+
+// A transfer mesh's key (PreparedMeshQuery::key): three digests (group
+// grid, label groups, sizing field), the mesh options' text, " cuts ", the
+// cuts. Its digests and its options.
+std::pair<std::string, std::string> meshKeyParts(const std::string& key) {
+  std::size_t at = 0;
+  for (int digest = 0; digest < 3 && at != std::string::npos; ++digest) at = key.find(' ', at == 0 ? 0 : at + 1);
+  const std::size_t cuts = key.rfind(" cuts ");
+  if (at == std::string::npos || cuts == std::string::npos || cuts < at) return {key, ""};
+  return {key.substr(0, at), key.substr(at + 1, cuts - at - 1)};
+}
+
+}  // namespace
+
 void PreparedState::refuseMesh(const PreparedMeshQuery& q) const {
+  const std::string hint = "; voxmorph prepare --pose POSE adds it";
   std::string held;
   for (const PreparedTransferMesh& m : meshes) held += std::string(held.empty() ? "" : "; ") + m.cuts;
-  throw InputError(source, "holds no transfer mesh cut as this run cuts it (" + q.cuts + "; it holds: " + (held.empty() ? "none" : held) +
-                               "); voxmorph prepare --pose POSE adds it");
+  // A mesh of this run's cuts that differs in its options or inputs.
+  const auto [digests, options] = meshKeyParts(q.key);
+  for (const PreparedTransferMesh& m : meshes) {
+    if (m.cuts != q.cuts) continue;
+    const auto [heldDigests, heldOptions] = meshKeyParts(m.key);
+    if (heldOptions != options)
+      throw InputError(source, "holds this run's transfer mesh built with other options (" + heldOptions + "), not this run's (" + options +
+                                   "); voxmorph prepare makes it again");
+    if (heldDigests != digests)
+      throw InputError(source, "holds this run's transfer mesh of other label groups or another sizing field" + hint);
+  }
+  throw InputError(source, "holds no transfer mesh cut as this run cuts it (" + q.cuts + "; it holds: " + (held.empty() ? "none" : held) + ")" +
+                               hint);
 }
 
 void PreparedState::refuseEnvelope() const {

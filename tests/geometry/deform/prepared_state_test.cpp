@@ -290,6 +290,17 @@ TEST(PreparedState, RefusesWhatItWasNotPreparedFor) {
   EXPECT_NE(e.find("--dilation 25 mm"), std::string::npos) << e;
   // The same pose still finds its own.
   EXPECT_EQ(errorOf([&] { run(runRequest(jointPose("right_shoulder", "abduction", 60))); }), "");
+  // Its transfer mesh built with other options (another version's): named.
+  e = errorOf([&] {
+    PipelineOptions options = deformPipelineOptions(runRequest(jointPose("right_shoulder", "abduction", 60)), grid, 1, state.get());
+    options.prepared = state;
+    options.transferMesh.coverageCaps = false;
+    DeformationPipeline pipeline(grid, options);
+  });
+  EXPECT_NE(e.find("figure.vxprep: holds this run's transfer mesh built with other options"), std::string::npos) << e;
+  EXPECT_NE(e.find(" caps), not this run's"), std::string::npos) << e;
+  EXPECT_NE(e.find("voxmorph prepare makes it again"), std::string::npos) << e;
+  EXPECT_EQ(e.find('\n'), std::string::npos);
 
   // Inputs: another organ table, another grid, none.
   OrganTable other = figure().organs;
