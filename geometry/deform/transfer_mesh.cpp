@@ -12,6 +12,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <tuple>
 #include <unordered_map>
 
 namespace vox {
@@ -203,13 +204,15 @@ public:
         if (neighbours[t][std::size_t(k)] < 0) addFacet(tetFace(mesh.tets[t], k), mesh.labels[t]);
   }
 
-  // Covers the point c (outside the mesh) by a cap on the nearest boundary
-  // facet it lies above, the best shaped cap that meets no other boundary
-  // facet; false when no such cap exists within reach.
-  bool cover(const Eigen::Vector3d& c) {
+  // Covers the point c (outside the mesh; of `group`) by a cap on the
+  // nearest boundary facet it lies above, of its group's tets first, the
+  // best shaped cap that meets no other boundary facet; false when no such
+  // cap exists within reach.
+  bool cover(const Eigen::Vector3d& c, std::int32_t group) {
     for (const std::size_t t : caps_)
       if (contains(mesh_.tets[t], c)) return true;
     struct Candidate {
+      bool otherGroup;
       double height;
       std::int32_t facet;
     };
@@ -222,10 +225,10 @@ public:
       if (!(d > 0.0 && d <= reach_)) return;
       const Eigen::Vector3d beta = barycentric(a, b, e, c - d * n);
       if (beta.minCoeff() < 0.0) return;
-      candidates.push_back({d, f});
+      candidates.push_back({facets_[std::size_t(f)].label != group, d, f});
     });
     std::sort(candidates.begin(), candidates.end(), [](const Candidate& x, const Candidate& y) {
-      return x.height < y.height || (x.height == y.height && x.facet < y.facet);
+      return std::tie(x.otherGroup, x.height, x.facet) < std::tie(y.otherGroup, y.height, y.facet);
     });
     for (const Candidate& candidate : candidates)
       if (capOn(candidate.facet, candidate.height, c)) return true;
@@ -474,7 +477,7 @@ TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, con
     TetMesh mesh = restrictedDelaunayVolume(domain, criteria);
     orientPositively(mesh);
     std::vector<std::int64_t> uncovered = vox::uncoveredVoxels(mesh, groups);
-    if (!uncovered.empty() && options.coverageCaps) uncovered = capUncoveredVoxels(mesh, g, uncovered);
+    if (!uncovered.empty() && options.coverageCaps) uncovered = capUncoveredVoxels(mesh, groups, uncovered);
     if (uncovered.empty() || pass == kCoveragePasses) {
       if (uncoveredVoxels) *uncoveredVoxels = std::int64_t(uncovered.size());
       reportProgress("transfer mesh", 1.0);
@@ -506,13 +509,14 @@ TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, con
   }
 }
 
-std::vector<std::int64_t> capUncoveredVoxels(TetMesh& mesh, const GridGeometry& g, std::span<const std::int64_t> uncovered) {
+std::vector<std::int64_t> capUncoveredVoxels(TetMesh& mesh, const LabelGrid& grid, std::span<const std::int64_t> uncovered) {
+  const GridGeometry& g = grid.geometry();
   CoverageCaps caps(mesh, 2.5 * g.spacing.maxCoeff());
   std::vector<std::int64_t> left;
   for (const std::int64_t u : uncovered) {
     throwIfCancelled();
     const Index3 c = g.ijk(u);
-    if (!caps.cover(g.voxelCenter(c[0], c[1], c[2]))) left.push_back(u);
+    if (!caps.cover(g.voxelCenter(c[0], c[1], c[2]), std::int32_t(grid.labels()[std::size_t(u)]))) left.push_back(u);
   }
   return left;
 }

@@ -62,14 +62,15 @@ TetMesh buildTransferMesh(const LabelGrid& groups, const ScalarGrid& sizing, con
 // Foreground voxels (label != 0) of `grid` whose centres lie in no tet.
 std::int64_t countUncoveredVoxels(const TetMesh& mesh, const LabelGrid& grid);
 
-// Covers the voxel centres `uncovered` (linear indices of `geometry`, each
+// Covers the voxel centres `uncovered` (linear indices of `grid`, each
 // outside `mesh`) by caps: for a centre at most 2.5 voxels beyond a
 // boundary facet (one that the centre projects into), a tet on that facet
 // whose apex lies beyond the centre, the best shaped of a few, added when
 // it meets no other boundary facet (so no two tets overlap) and labelled as
-// the facet's tet. The nearest such facet is tried first; a cap covers the
+// the facet's tet. The facets of tets labelled as the centre's voxel in
+// `grid` are tried first, nearest first, then the others; a cap covers the
 // later centres it holds too. Returns the centres no cap covers.
-std::vector<std::int64_t> capUncoveredVoxels(TetMesh& mesh, const GridGeometry& geometry, std::span<const std::int64_t> uncovered);
+std::vector<std::int64_t> capUncoveredVoxels(TetMesh& mesh, const LabelGrid& grid, std::span<const std::int64_t> uncovered);
 
 struct CutReport {
   std::size_t cutFaces = 0;            // faces between a groupA and a groupB tet inside the region

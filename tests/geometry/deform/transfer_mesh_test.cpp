@@ -299,14 +299,14 @@ TEST(TransferMesh, CapCoversACentreJustBeyondABoundaryFacet) {
   TetMesh mesh = voxelBlock(Eigen::Vector3d::Zero());
   const std::size_t tets = mesh.tetCount();
   const std::vector<std::int64_t> one{centre};
-  EXPECT_TRUE(capUncoveredVoxels(mesh, g, one).empty());
+  LabelGrid voxel(g, 0);
+  voxel.labels()[std::size_t(centre)] = 1;
+  EXPECT_TRUE(capUncoveredVoxels(mesh, voxel, one).empty());
   ASSERT_EQ(mesh.tetCount(), tets + 1);
   ASSERT_EQ(mesh.labels.size(), tets + 1);
   EXPECT_EQ(mesh.labels.back(), 1);
   EXPECT_GT(signedVolume(mesh.positions, mesh.tets.back()), 0.0);
   EXPECT_TRUE(inTet(mesh, mesh.tets.back(), c));
-  LabelGrid voxel(g, 0);
-  voxel.labels()[std::size_t(centre)] = 1;
   EXPECT_EQ(countUncoveredVoxels(mesh, voxel), 0);
   // The cap rests on the block: its base is a boundary face, nothing else
   // of it is inside the block (x > 5.5 but the base).
@@ -336,7 +336,10 @@ TEST(TransferMesh, CapNeverEntersAnotherPartOfTheMesh) {
   }
   const std::size_t tets = mesh.tetCount();
   const std::vector<std::int64_t> one{centre};
-  EXPECT_TRUE(capUncoveredVoxels(mesh, g, one).empty());
+  LabelGrid voxel(g, 0);
+  voxel.labels()[std::size_t(centre)] = 1;
+  const TetMesh blocks = mesh;
+  EXPECT_TRUE(capUncoveredVoxels(mesh, voxel, one).empty());
   ASSERT_EQ(mesh.tetCount(), tets + 1);
   const Tet cap = mesh.tets.back();
   EXPECT_EQ(mesh.labels.back(), 1);
@@ -354,6 +357,16 @@ TEST(TransferMesh, CapNeverEntersAnotherPartOfTheMesh) {
         for (std::size_t t = 0; t < tets; ++t) inside += inTet(mesh, mesh.tets[t], p);
       }
   EXPECT_EQ(inside, 0);
+
+  // A centre of the second block's label takes a cap on that block, though
+  // the first one's face is nearer.
+  TetMesh other2 = blocks;
+  voxel.labels()[std::size_t(centre)] = 2;
+  EXPECT_TRUE(capUncoveredVoxels(other2, voxel, one).empty());
+  ASSERT_EQ(other2.tetCount(), tets + 1);
+  EXPECT_EQ(other2.labels.back(), 2);
+  EXPECT_TRUE(inTet(other2, other2.tets.back(), c));
+  EXPECT_LT(other2.positions[std::size_t(other2.tets.back()[3])].x(), c.x());
 }
 
 TEST(TransferMesh, CapLeavesACentreBeyondAnEdge) {
@@ -366,7 +379,9 @@ TEST(TransferMesh, CapLeavesACentreBeyondAnEdge) {
   TetMesh mesh = voxelBlock(Eigen::Vector3d::Zero());
   const TetMesh before = mesh;
   const std::vector<std::int64_t> one{centre};
-  EXPECT_EQ(capUncoveredVoxels(mesh, g, one), one);
+  LabelGrid voxel(g, 0);
+  voxel.labels()[std::size_t(centre)] = 1;
+  EXPECT_EQ(capUncoveredVoxels(mesh, voxel, one), one);
   EXPECT_EQ(mesh.tets, before.tets);
   EXPECT_EQ(mesh.positions.size(), before.positions.size());
 }
