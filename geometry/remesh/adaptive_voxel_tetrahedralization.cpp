@@ -330,13 +330,14 @@ private:
   TetMesh toMesh(const std::vector<Simplex>& simplices, bool includeBackground) const {
     TetMesh mesh;
     std::vector<std::int32_t> remap = filledCancellable(exists_.size(), std::int32_t(-1));
-    std::vector<std::int32_t> labels = filledCancellable(simplices.size(), std::int32_t(0));
+    std::vector<std::int32_t> labels;  // every simplex's, in the polled loop below
+    labels.reserve(simplices.size());
     for (std::size_t i = 0; i < simplices.size(); ++i) {
       if (i % 65536 == 0) throwIfCancelled();
       const Simplex& t = simplices[i];
       const std::int32_t label = regionLabel(t);
       if (label == kMixed) throw RuntimeFailure("adaptive tetrahedralization: a final tet covers several labels");
-      labels[i] = label;
+      labels.push_back(label);
       if (label == 0 && !includeBackground) continue;
       for (Point p : t.v) remap[index(p)] = 0;
     }
