@@ -27,6 +27,11 @@ add_library(vox_cholmod INTERFACE)
 target_include_directories(vox_cholmod SYSTEM INTERFACE ${CHOLMOD_INCLUDE_DIR})
 target_link_libraries(vox_cholmod INTERFACE ${CHOLMOD_LIBRARY} ${SUITESPARSE_CONFIG_LIBRARY})
 
+# LBFGS++ (liblbfgspp-dev) is header-only and ships no CMake package.
+find_path(LBFGSPP_INCLUDE_DIR LBFGS.h REQUIRED)
+add_library(vox_lbfgspp INTERFACE)
+target_include_directories(vox_lbfgspp SYSTEM INTERFACE ${LBFGSPP_INCLUDE_DIR})
+
 # CGAL is header-only and slow to compile: only the few translation units that
 # link vox_cgal see it (see geometry/CMakeLists.txt).
 set(CGAL_DATA_DIR ".")

@@ -641,6 +641,16 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
   const auto wholePart = [&](Part part) {
     return std::find(options.rigidWholeParts.begin(), options.rigidWholeParts.end(), part) != options.rigidWholeParts.end();
   };
+  // Distance to the bones of the parts that are not rigid whole.
+  ScalarGrid otherBone;
+  if (options.wholePartBoneClearanceMm > 0.0) {
+    std::vector<std::uint8_t> seeds(std::size_t(g.voxelCount()), 0);
+    for (std::size_t v = 0; v < seeds.size(); ++v) {
+      const auto b = Part(boneParts.labels()[v]);
+      seeds[v] = b != Part::None && !wholePart(b);
+    }
+    otherBone = euclideanDistanceTransform(g, seeds).distance;
+  }
   for (std::int64_t k = 0; k < g.dims[2]; ++k)
     for (std::int64_t j = 0; j < g.dims[1]; ++j)
       for (std::int64_t i = 0; i < g.dims[0]; ++i) {
@@ -649,11 +659,19 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
         const Eigen::Vector3d p = g.voxelCenter(i, j, k);
         auto part = Part(boneParts.labels()[std::size_t(v)]);
         const auto region = Part(parts.labels()[std::size_t(v)]);
+        const bool nearOtherBone =
+            options.wholePartBoneClearanceMm > 0.0 && otherBone.values[std::size_t(v)] < options.wholePartBoneClearanceMm;
         if (wholePart(region)) {
           const auto id = skeleton::jointMoving(region);
           const skeleton::Joint* joint = id ? skeleton.joint(*id) : nullptr;
-          if (!joint || (p - joint->centre).squaredNorm() >= clear2) part = region;
+          if (!joint || ((p - joint->centre).squaredNorm() >= clear2 && !nearOtherBone)) part = region;
         }
+        // A whole part's own bone beside another part's (the carpals' face
+        // on the radius) is tissue too: resolved, the two rigid bones would
+        // crush the voxel of tissue between them as the joint turns.
+        if (part != Part::None && wholePart(part) && options.wholePartBoneClearanceMm > 0.0 &&
+            otherBone.values[std::size_t(v)] < std::min(options.wholePartOwnBoneClearanceMm, options.wholePartBoneClearanceMm))
+          part = Part::None;
         if (scapula && part == Part::Trunk) {
           const Label l = grid.labels()[std::size_t(v)];
           if (l < boneOf.size() && boneOf[l] == skeleton::Bone::Scapula) {

@@ -125,6 +125,16 @@ struct ArticulatedMeshOptions {
   std::vector<skeleton::Part> rigidWholeParts = {skeleton::Part::Head, skeleton::Part::RightHand, skeleton::Part::LeftHand,
                                                  skeleton::Part::RightFoot, skeleton::Part::LeftFoot};
   double jointClearanceMm = 30.0;
+  // ... and within this distance of another part's bone (the forearm's
+  // radius and ulna beside the hand's tissue across a wrist 60 mm wide,
+  // which the joint's sphere does not reach): a bone that turns against a
+  // rigid whole part needs soft tissue between them to bend.
+  double wholePartBoneClearanceMm = 20.0;
+  // The whole part's own bones this near another part's bone soft too (at
+  // most wholePartBoneClearanceMm; 0: none, the bones stay rigid). The
+  // carpals' face on the radius soft unbends the wrist's last folds but
+  // bends the hand's bones (docs/BENCHMARKS.md, "Untangling").
+  double wholePartOwnBoneClearanceMm = 0.0;
   double bodyMarginVoxels = 0.5;   // a body stops this far (finest spacing) short of the other part's bone
   double minBodyRadiusVoxels = 2.0;  // a smaller body is not built (the joint is not cut)
   double attachmentHalfAngleDeg = 50.0;

@@ -411,15 +411,61 @@ ArticulatedPoseReport ArticulatedPoser::pose(const MotionPath& path) {
     gather(solver_);
   }
   placeRigidVertices(mesh_, motions, 1.0, positions_);
-  if (options_.onStep) options_.onStep(report.steps, positions_);
   const TetMesh& m = mesh_.mesh;
   for (const Tet& t : m.tets) report.invertedTets += signedVolume(positions_, t) <= 0.0;
+  report.invertedBeforeUntangling = report.invertedTets;
+  if (report.invertedTets > 0 && solvedTets_ > 0) untangle(motions, report);
+  if (options_.onStep) options_.onStep(report.steps, positions_);
+  for (const Tet& t : m.tets)
+    if (!rigidWithOneSegment(mesh_, t))
+      report.finalMinRelativeVolume = std::min(report.finalMinRelativeVolume, signedVolume(positions_, t) / signedVolume(m.positions, t));
   std::vector<Eigen::Vector3d> projected = positions_;
   projectSlidingVertices(mesh_, motions, 1.0, projected);
   for (std::size_t v = 0; v < projected.size(); ++v)
     if (mesh_.role[v] == VertexRole::Sliding) report.maxSlidingGapMm = std::max(report.maxSlidingGapMm, (projected[v] - positions_[v]).norm());
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;
+}
+
+void ArticulatedPoser::untangle(std::span<const Eigen::Isometry3d> motions, ArticulatedPoseReport& report) {
+  const TetMesh& m = mesh_.mesh;
+  const std::size_t nv = m.vertexCount();
+  // What may move: the solved tissue that is not still.
+  std::vector<std::uint8_t> movable(nv, 0);
+  for (std::size_t i = 0; i < solved_.size(); ++i) {
+    const auto v = std::size_t(solved_[i]);
+    movable[v] = mesh_.role[v] != VertexRole::Rigid && !stillSolve_[i];
+  }
+  std::vector<Eigen::Vector3d> onBodies = positions_;
+  projectSlidingVertices(mesh_, motions, 1.0, onBodies);
+  const auto start = std::chrono::steady_clock::now();
+  for (const double radius : options_.untangleRadiiMm) {
+    std::vector<double> dist(nv, std::numeric_limits<double>::infinity());
+    std::size_t inverted = 0;
+    for (const Tet& t : m.tets)
+      if (signedVolume(positions_, t) <= 0.0) {
+        ++inverted;
+        for (const std::int32_t v : t) dist[std::size_t(v)] = 0.0;
+      }
+    if (inverted == 0) break;
+    edgeDistances(edges_, dist);
+    std::vector<std::uint8_t> free(nv, 0);
+    std::vector<UntangleAnchor> anchors;
+    std::size_t moved = 0;
+    for (std::size_t v = 0; v < nv; ++v) {
+      if (!movable[v] || dist[v] > radius) continue;
+      free[v] = 1;
+      ++moved;
+      if (mesh_.role[v] == VertexRole::Sliding) anchors.push_back({std::int32_t(v), onBodies[v], options_.slidingWeight});
+    }
+    if (moved == 0) continue;
+    untangleTets(m.positions, m.tets, free, anchors, positions_, options_.untangle);
+    report.untangleRadiusMm = radius;
+    report.untangledVertices = moved;
+  }
+  report.untangleSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  report.invertedTets = 0;
+  for (const Tet& t : m.tets) report.invertedTets += signedVolume(positions_, t) <= 0.0;
 }
 
 int articulatedPoseSteps(std::span<const PoseJoint> angles, const ArticulatedPoseOptions& options) {

@@ -17,7 +17,10 @@
 //    whether the bones lead or lag;
 //  - a last step puts the bones on their motions exactly: every vertex is
 //    moved by its parts' remaining corrections, and where that inverts a
-//    tet the bones are chased as hard constraints from where they are.
+//    tet the bones are chased as hard constraints from where they are;
+//  - where tets are still inverted with every bone on its motion, the
+//    tissue around them is untangled (solve/untangle.h) with the bones,
+//    the still tissue and everything farther away held, in growing regions.
 //
 // Only the tets that can change are solved: a tet whose four vertices move
 // with one part is moved rigidly and left out of the solve.
@@ -25,6 +28,7 @@
 #include "geometry/deform/articulated_mesh.h"
 #include "geometry/deform/pose/joint_pose.h"
 #include "geometry/deform/solve/injective_solve.h"
+#include "geometry/deform/solve/untangle.h"
 
 #include <Eigen/Geometry>
 #include <array>
@@ -68,6 +72,12 @@ struct ArticulatedPoseOptions {
   // (docs/BENCHMARKS.md, "Still tissue").
   bool holdUnmovedBones = false;
   InjectiveSolveOptions solve;
+  // Untangling after the last step: the free and sliding tissue within
+  // each radius (mm along the mesh's edges) of the inverted tets, in turn,
+  // until none is left (the sliding vertices held near their bodies by
+  // slidingWeight). Empty: none.
+  std::vector<double> untangleRadiiMm = {30.0};
+  UntangleOptions untangle;
   // Called after each step of the approach (1-based) and after the last,
   // hard step (steps + 1) with every vertex of the mesh where that step left
   // it: what a viewer shows of the way, or a benchmark inspects.
@@ -93,6 +103,13 @@ struct ArticulatedPoseReport {
   // after the stiffened approach, before the last step puts them there.
   std::vector<double> segmentLagMm;
   std::size_t invertedTets = 0;           // in the final positions (all tets)
+  // The untangling after the last step: the inverted tets it found, the
+  // last radius it took (0: none ran), the vertices it moved, its seconds;
+  // the smallest det J of the final positions (every tet but those rigid
+  // with one segment).
+  std::size_t invertedBeforeUntangling = 0, untangledVertices = 0;
+  double untangleRadiusMm = 0.0, untangleSeconds = 0.0;
+  double finalMinRelativeVolume = 1.0;
   bool reachedTargets = false;            // the bones reached their motions
   double maxSlidingGapMm = 0.0;           // largest distance of a sliding vertex from its body's surface
   double seconds = 0.0;
@@ -149,6 +166,9 @@ private:
   // placed by their part's best rigid fit of its bones in `solver`: the
   // mesh as the step left it.
   void placeUnsolved(const InjectiveSolver& solver);
+  // Untangles positions_ about its inverted tets (untangleRadiiMm),
+  // filling the report's untangling fields.
+  void untangle(std::span<const Eigen::Isometry3d> motions, ArticulatedPoseReport& report);
   // Per segment: the largest distance of its bone vertices in `solver`'s
   // positions from constrainedTargets_.
   std::vector<double> boneLag(const InjectiveSolver& solver) const;

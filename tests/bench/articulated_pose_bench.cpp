@@ -25,7 +25,11 @@
 // and feet's tissue this near their joint bends; beyond, rigid whole),
 // --still-beyond MM (tissue this far from every moved bone held at rest;
 // 0: none; default the pose's), --hold-unmoved-bones (the unmoved parts'
-// bones held at rest in the steps, not soft targets), --knee-forward MM (both knees' centres moved MM along the body's front
+// bones held at rest in the steps, not soft targets), --no-untangle (no
+// untangling after the last step), --whole-part-bone-clearance MM (the
+// hands', feet's and head's tissue this near another part's bone soft; 0:
+// only within the joint's clearance), --whole-part-own-bone-clearance MM
+// (their own bones this near another part's bone soft), --knee-forward MM (both knees' centres moved MM along the body's front
 // before the mesh is built: how the hinge's axis, which the skeleton clears
 // of the bones over the knee's range, serves the tissue).
 // Prints a table, then one JSON line (prefix "json ") for scripts.
@@ -62,7 +66,7 @@ int usage() {
   std::fprintf(stderr,
                "usage: articulated_pose_bench GRID ORGANS POSE [--steps N] [--bone-weight W] [--sliding-weight W] [--max-iterations N] "
                "[--volume-weight L] [--direct-limit N] [--scapulae] [--yielding-shell V] [--yielding-hips] [--squeezed F] [--dump PREFIX] [--mesh-only] "
-               "[--knee-forward MM] [--trunk-reach MM] [--pelvis-reach MM] [--joint-clearance MM] [--still-beyond MM] [--hold-unmoved-bones]\n"
+               "[--knee-forward MM] [--trunk-reach MM] [--pelvis-reach MM] [--joint-clearance MM] [--still-beyond MM] [--hold-unmoved-bones] [--no-untangle] [--whole-part-bone-clearance MM] [--whole-part-own-bone-clearance MM]\n"
                "       articulated_pose_bench --figure POSE [options]\n");
   return 2;
 }
@@ -198,6 +202,9 @@ int main(int argc, char** argv) {
     else if (arg == "--pelvis-reach") meshOptions.pelvisBoneReachMm = std::stod(value());
     else if (arg == "--still-beyond") poseOptions.stillBeyondMm = std::stod(value());
     else if (arg == "--hold-unmoved-bones") poseOptions.holdUnmovedBones = true;
+    else if (arg == "--no-untangle") poseOptions.untangleRadiiMm.clear();
+    else if (arg == "--whole-part-bone-clearance") meshOptions.wholePartBoneClearanceMm = std::stod(value());
+    else if (arg == "--whole-part-own-bone-clearance") meshOptions.wholePartOwnBoneClearanceMm = std::stod(value());
     else if (arg == "--joint-clearance") meshOptions.jointClearanceMm = std::stod(value());
     else if (arg.starts_with("--")) return usage();
     else positional.push_back(arg);
@@ -274,7 +281,9 @@ int main(int argc, char** argv) {
       ++byJoint[joint->kind().name];
       ++where[joint->kind().name][(d.dot(joint->anterior) >= 0.0 ? 0 : 2) + (d.norm() >= 30.0 ? 1 : 0)];
     }
-    std::printf("inverted tets: %zu (bones reached their motions: %s)\n", r.invertedTets, r.reachedTargets ? "yes" : "no");
+    std::printf("inverted tets: %zu (bones reached their motions: %s); before untangling %zu, untangled %zu vertices within %.0f mm in %.1f s; final smallest det J %.4f\n",
+                r.invertedTets, r.reachedTargets ? "yes" : "no", r.invertedBeforeUntangling, r.untangledVertices, r.untangleRadiusMm,
+                r.untangleSeconds, r.finalMinRelativeVolume);
     for (const auto& [name, n] : byJoint) {
       const auto& w = where[name];
       std::printf("  %-16s %6zu: in front %zu within 30 mm, %zu beyond; behind %zu within 30 mm, %zu beyond\n", name.c_str(), n,
@@ -288,6 +297,11 @@ int main(int argc, char** argv) {
                           {"steps", r.steps},
                           {"iterations", r.iterations},
                           {"inverted_tets", r.invertedTets},
+                          {"inverted_before_untangling", r.invertedBeforeUntangling},
+                          {"untangled_vertices", r.untangledVertices},
+                          {"untangle_radius_mm", r.untangleRadiusMm},
+                          {"untangle_seconds", r.untangleSeconds},
+                          {"final_min_relative_volume", r.finalMinRelativeVolume},
                           {"inverted_by_joint", byJoint},
                           {"reached_targets", r.reachedTargets},
                           {"min_relative_volume", r.minRelativeVolume},

@@ -121,6 +121,12 @@ struct DeformationReport {
     std::size_t invertedTets = 0;    // in the final positions
     bool reachedTargets = false;     // the bones sit on their parts' motions
     double maxSlidingGapMm = 0.0;
+    // The untangling after the last step (ArticulatedPoseReport): the
+    // inverted tets it found, the vertices it moved, its last radius (mm),
+    // its seconds; the final positions' smallest det J.
+    std::size_t invertedBeforeUntangling = 0, untangledVertices = 0;
+    double untangleRadiusMm = 0.0, untangleSeconds = 0.0;
+    double finalMinRelativeVolume = 1.0;
   };
   std::optional<Articulated> articulated;
   RefinementResult refinement;

@@ -194,7 +194,12 @@ std::string deformationReportJson(const DeformationReport& r) {
                            {"min_relative_volume", a->minRelativeVolume},
                            {"inverted_tets", a->invertedTets},
                            {"bones_on_their_motions", a->reachedTargets},
-                           {"max_sliding_gap_mm", a->maxSlidingGapMm}};
+                           {"max_sliding_gap_mm", a->maxSlidingGapMm},
+                           {"untangling", {{"inverted_tets_before", a->invertedBeforeUntangling},
+                                           {"moved_vertices", a->untangledVertices},
+                                           {"radius_mm", a->untangleRadiusMm},
+                                           {"seconds", a->untangleSeconds}}},
+                           {"final_min_relative_volume", a->finalMinRelativeVolume}};
   if (const auto& c = r.collisions) {
     json pairs = json::array();
     for (const CollisionPair& p : c->pairs)

@@ -397,6 +397,11 @@ PosedMesh poseArticulated(const DeformGridRequest& o, const Source& source, Defo
   a.invertedTets = r.invertedTets;
   a.reachedTargets = r.reachedTargets;
   a.maxSlidingGapMm = r.maxSlidingGapMm;
+  a.invertedBeforeUntangling = r.invertedBeforeUntangling;
+  a.untangledVertices = r.untangledVertices;
+  a.untangleRadiusMm = r.untangleRadiusMm;
+  a.untangleSeconds = r.untangleSeconds;
+  a.finalMinRelativeVolume = r.finalMinRelativeVolume;
   report.articulated = a;
   out.rest = std::move(mesh.mesh);
   out.deformed = poser.positions();

@@ -94,6 +94,50 @@ TEST(ArticulatedMesh, BonesAndBodiesAreResolvedAndTheirVerticesRigid) {
   EXPECT_TRUE(std::all_of(tissue, m.mesh.labels.end(), [](std::int32_t l) { return l == kSoftTissueTag; }));
 }
 
+// The hands', feet's and head's tissue within wholePartBoneClearanceMm of
+// another part's bone stays soft, so that a turn of the wrist, ankle or
+// neck has tissue between the two rigid bones to bend; without it the
+// hand's rigid tissue lies beside the forearm's bone.
+TEST(ArticulatedMesh, AWholePartStaysSoftBesideAnotherPartsBone) {
+  const Figure& f = figure();
+  const double spacing = f.grid.geometry().spacing.maxCoeff();
+  const auto nearestToOtherBone = [](const ArticulatedMesh& m, const std::vector<Part>& whole) {
+    std::vector<Eigen::Vector3d> wholeRigid, otherRigid;
+    for (std::size_t v = 0; v < m.role.size(); ++v) {
+      if (m.role[v] != VertexRole::Rigid) continue;
+      const auto part = Part(m.vertexPart[v]);
+      const bool isWhole = std::find(whole.begin(), whole.end(), part) != whole.end();
+      const bool isLimb = part != Part::Trunk && part != Part::Pelvis && part != Part::None;
+      if (isWhole) wholeRigid.push_back(m.mesh.positions[v]);
+      else if (isLimb) otherRigid.push_back(m.mesh.positions[v]);
+    }
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const Eigen::Vector3d& a : wholeRigid)
+      for (const Eigen::Vector3d& b : otherRigid) nearest = std::min(nearest, (a - b).norm());
+    return nearest;
+  };
+  // The figure's hands and feet are small: 20 mm (the default) leaves
+  // them no rigid vertex; five voxels do.
+  const std::vector<Part> hands = {Part::RightHand, Part::LeftHand, Part::RightFoot, Part::LeftFoot};
+  // Their own bones there too (wholePartOwnBoneClearanceMm), so that no
+  // rigid vertex of theirs is left within the distance.
+  ArticulatedMeshOptions options;
+  options.wholePartBoneClearanceMm = 5.0 * spacing;
+  options.wholePartOwnBoneClearanceMm = 5.0 * spacing;
+  const ArticulatedMesh cleared = buildArticulatedMesh(f.grid, f.organs, f.skeleton, options);
+  const double clear = nearestToOtherBone(cleared, hands);
+  EXPECT_LT(clear, 1e9);  // rigid vertices are left
+  EXPECT_GE(clear, options.wholePartBoneClearanceMm - spacing);
+  // The own bones rigid (the default): the tissue alone gives way, and
+  // rigid vertices of the hands' and feet's bones stay nearer.
+  options.wholePartOwnBoneClearanceMm = 0.0;
+  const ArticulatedMesh bonesRigid = buildArticulatedMesh(f.grid, f.organs, f.skeleton, options);
+  EXPECT_LT(nearestToOtherBone(bonesRigid, hands), clear);
+  options.wholePartBoneClearanceMm = 0.0;
+  const ArticulatedMesh beside = buildArticulatedMesh(f.grid, f.organs, f.skeleton, options);
+  EXPECT_LT(nearestToOtherBone(beside, hands), clear - 2.0 * spacing);
+}
+
 // Each scapula is its own segment; past 30 degrees of elevation it turns
 // upward by 0.4 of the further elevation, in the arm's plane, about its
 // acromion, and the arm keeps the orientation its joints give.
@@ -352,6 +396,35 @@ TEST(ArticulatedPose, AStrideKeepsBonesRigidAndEveryTetPositive) {
   for (std::size_t v = 0; v < p.size(); ++v)
     if (f.mesh.role[v] == VertexRole::Rigid) {
       EXPECT_LT((p[v] - motions[std::size_t(f.mesh.vertexPart[v])] * f.mesh.mesh.positions[v]).norm(), 1e-6);
+    }
+}
+
+// A pose hurried through two steps of three SLIM iterations each leaves the
+// bones behind, and the last step's jump onto their motions folds the
+// tissue around them; the untangling unfolds it with the bones held.
+TEST(ArticulatedPose, UntanglingUnfoldsWhatAHurriedApproachLeaves) {
+  const Figure& f = figure();
+  const std::vector<PoseJoint> angles = {jointAngles(JointId::RightShoulder, 110.0), jointAngles(JointId::RightElbow, 120.0),
+                                         jointAngles(JointId::RightWrist, 30.0)};
+  const std::vector<skeleton::Joint> joints = skeleton::posedJoints(f.skeleton, angles, "pose");
+  ArticulatedPoseOptions options;
+  options.steps = 2;
+  options.solve.maxIterations = 3;
+  ArticulatedPoser poser(f.mesh, options);
+  const ArticulatedPoseReport r = poser.pose(jointMotionPath(f.skeleton, joints, angles, f.mesh));
+  EXPECT_GT(r.invertedBeforeUntangling, 50u);
+  EXPECT_GT(r.untangledVertices, 0u);
+  EXPECT_EQ(r.untangleRadiusMm, options.untangleRadiiMm.back());
+  EXPECT_LE(r.invertedTets * 20, r.invertedBeforeUntangling);
+  const std::vector<Eigen::Vector3d>& p = poser.positions();
+  std::size_t inverted = 0;
+  for (const Tet& t : f.mesh.mesh.tets) inverted += signedVolume(p, t) <= 0.0;
+  EXPECT_EQ(inverted, r.invertedTets);
+  // The bones stay on their motions.
+  const std::vector<Eigen::Isometry3d> motions = jointMotionPath(f.skeleton, joints, angles, f.mesh)(1.0);
+  for (std::size_t v = 0; v < p.size(); ++v)
+    if (f.mesh.role[v] == VertexRole::Rigid) {
+      EXPECT_LT((p[v] - partMotionAt(motions, Part(f.mesh.vertexPart[v]), 1.0) * f.mesh.mesh.positions[v]).norm(), 1e-6);
     }
 }
 
