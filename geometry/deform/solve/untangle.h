@@ -33,7 +33,10 @@
 namespace vox {
 
 struct UntangleOptions {
-  double volumeWeight = 1.0;  // lambda
+  // lambda. At 1 the tissue about a tangle that cannot be undone swells
+  // (the phone call's and seated region by 4.5 to 4.7 %) to make room; at 10 it
+  // keeps its volume within a percent for a quarter more tets left folded.
+  double volumeWeight = 10.0;
   int rounds = 150;           // eps rounds at most
   int iterationsPerRound = 200;  // L-BFGS iterations per round at most
   // The first round's eps at most (it is taken from the smallest det J).

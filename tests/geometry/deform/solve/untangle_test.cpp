@@ -55,6 +55,13 @@ TEST(Untangle, UnfoldsTheTissueBetweenTurnedBones) {
   EXPECT_EQ(r.invertedAfter, 0u);
   EXPECT_EQ(inverted(bar.posed, bar.mesh.tets), 0u);
   EXPECT_GE(r.minRelativeVolumeAfter, UntangleOptions{}.minRelativeVolume);
+  // The volume term keeps the bent tissue's volume.
+  double restVolume = 0.0, posedVolume = 0.0;
+  for (const Tet& t : bar.mesh.tets) {
+    restVolume += signedVolume(bar.mesh.positions, t);
+    posedVolume += signedVolume(bar.posed, t);
+  }
+  EXPECT_NEAR(posedVolume / restVolume, 1.0, 0.02);
   // The bones stayed where they were put.
   TurnedBar again(90.0);
   for (std::size_t v = 0; v < bar.posed.size(); ++v) {
