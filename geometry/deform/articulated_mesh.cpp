@@ -659,18 +659,18 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
         const Eigen::Vector3d p = g.voxelCenter(i, j, k);
         auto part = Part(boneParts.labels()[std::size_t(v)]);
         const auto region = Part(parts.labels()[std::size_t(v)]);
-        const bool nearOtherBone =
-            options.wholePartBoneClearanceMm > 0.0 && otherBone.values[std::size_t(v)] < options.wholePartBoneClearanceMm;
+        const double toOtherBone =
+            options.wholePartBoneClearanceMm > 0.0 ? double(otherBone.values[std::size_t(v)]) : std::numeric_limits<double>::infinity();
         if (wholePart(region)) {
           const auto id = skeleton::jointMoving(region);
           const skeleton::Joint* joint = id ? skeleton.joint(*id) : nullptr;
-          if (!joint || ((p - joint->centre).squaredNorm() >= clear2 && !nearOtherBone)) part = region;
+          if (!joint || ((p - joint->centre).squaredNorm() >= clear2 && toOtherBone >= options.wholePartBoneClearanceMm)) part = region;
         }
         // A whole part's own bone beside another part's (the carpals' face
         // on the radius) is tissue too: resolved, the two rigid bones would
         // crush the voxel of tissue between them as the joint turns.
-        if (part != Part::None && wholePart(part) && options.wholePartBoneClearanceMm > 0.0 &&
-            otherBone.values[std::size_t(v)] < std::min(options.wholePartOwnBoneClearanceMm, options.wholePartBoneClearanceMm))
+        if (part != Part::None && wholePart(part) &&
+            toOtherBone < std::min(options.wholePartOwnBoneClearanceMm, options.wholePartBoneClearanceMm))
           part = Part::None;
         if (scapula && part == Part::Trunk) {
           const Label l = grid.labels()[std::size_t(v)];

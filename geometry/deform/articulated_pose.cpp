@@ -412,13 +412,14 @@ ArticulatedPoseReport ArticulatedPoser::pose(const MotionPath& path) {
   }
   placeRigidVertices(mesh_, motions, 1.0, positions_);
   const TetMesh& m = mesh_.mesh;
-  for (const Tet& t : m.tets) report.invertedTets += signedVolume(positions_, t) <= 0.0;
-  report.invertedBeforeUntangling = report.invertedTets;
-  if (report.invertedTets > 0 && solvedTets_ > 0) untangle(motions, report);
+  for (const Tet& t : m.tets) report.invertedBeforeUntangling += signedVolume(positions_, t) <= 0.0;
+  if (report.invertedBeforeUntangling > 0 && solvedTets_ > 0) untangle(motions, report);
   if (options_.onStep) options_.onStep(report.steps, positions_);
-  for (const Tet& t : m.tets)
-    if (!rigidWithOneSegment(mesh_, t))
-      report.finalMinRelativeVolume = std::min(report.finalMinRelativeVolume, signedVolume(positions_, t) / signedVolume(m.positions, t));
+  for (const Tet& t : m.tets) {
+    const double volume = signedVolume(positions_, t);
+    report.invertedTets += volume <= 0.0;
+    if (!rigidWithOneSegment(mesh_, t)) report.finalMinRelativeVolume = std::min(report.finalMinRelativeVolume, volume / signedVolume(m.positions, t));
+  }
   std::vector<Eigen::Vector3d> projected = positions_;
   projectSlidingVertices(mesh_, motions, 1.0, projected);
   for (std::size_t v = 0; v < projected.size(); ++v)
@@ -464,8 +465,6 @@ void ArticulatedPoser::untangle(std::span<const Eigen::Isometry3d> motions, Arti
     report.untangledVertices = moved;
   }
   report.untangleSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  report.invertedTets = 0;
-  for (const Tet& t : m.tets) report.invertedTets += signedVolume(positions_, t) <= 0.0;
 }
 
 int articulatedPoseSteps(std::span<const PoseJoint> angles, const ArticulatedPoseOptions& options) {

@@ -20,7 +20,8 @@
 //    tet the bones are chased as hard constraints from where they are;
 //  - where tets are still inverted with every bone on its motion, the
 //    tissue around them is untangled (solve/untangle.h) with the bones,
-//    the still tissue and everything farther away held, in growing regions.
+//    the still tissue and everything farther away held (in each of the
+//    regions untangleRadiiMm gives, while any is left).
 //
 // Only the tets that can change are solved: a tet whose four vertices move
 // with one part is moved rigidly and left out of the solve.
@@ -167,7 +168,7 @@ private:
   // mesh as the step left it.
   void placeUnsolved(const InjectiveSolver& solver);
   // Untangles positions_ about its inverted tets (untangleRadiiMm),
-  // filling the report's untangling fields.
+  // filling the report's untangling fields but the final count.
   void untangle(std::span<const Eigen::Isometry3d> motions, ArticulatedPoseReport& report);
   // Per segment: the largest distance of its bone vertices in `solver`'s
   // positions from constrainedTargets_.
