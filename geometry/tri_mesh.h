@@ -21,4 +21,9 @@ struct TriMesh {
   void validate(const std::string& source) const;
 };
 
+// The point of triangle abc nearest p (Ericson, Real-Time Collision
+// Detection, 5.1.5: by the Voronoi region of p); a for a degenerate triangle.
+Eigen::Vector3d nearestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                       const Eigen::Vector3d& c);
+
 }  // namespace vox

@@ -5,6 +5,7 @@
 #include "geometry/error.h"
 #include "geometry/scalar_grid.h"
 #include "geometry/skeleton/bones.h"
+#include "geometry/tri_mesh.h"
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -75,40 +76,13 @@ Eigen::Vector3d ArticularBody::slide(const Eigen::Vector3d& p, const Eigen::Vect
   return centre + ds * axis + rr * dir;
 }
 
-namespace {
-
-// The point of triangle abc nearest p (Ericson, Real-Time Collision
-// Detection, 5.1.5: by the Voronoi region of p).
-Eigen::Vector3d nearestOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
-  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) return a;
-  const Eigen::Vector3d bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) return b;
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + (d1 / (d1 - d3)) * ab;
-  const Eigen::Vector3d cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) return c;
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + (d2 / (d2 - d6)) * ac;
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
-  const double sum = va + vb + vc;
-  if (!(sum > 0)) return a;  // degenerate triangle
-  return a + ab * (vb / sum) + ac * (vc / sum);
-}
-
-}  // namespace
-
 Eigen::Vector3d slideOnBody(const ArticulatedMesh& mesh, std::size_t body, const Eigen::Vector3d& p, const Eigen::Vector3d& rest) {
   const ArticularBody& b = mesh.bodies[body];
   if (b.shape != ArticularShape::Cylinder || body >= mesh.bodySurfaces.size() || mesh.bodySurfaces[body].empty()) return b.slide(p, rest);
   Eigen::Vector3d best = p;
   double bestD2 = std::numeric_limits<double>::infinity();
   for (const auto& t : mesh.bodySurfaces[body]) {
-    const Eigen::Vector3d q = nearestOnTriangle(p, t[0], t[1], t[2]);
+    const Eigen::Vector3d q = nearestPointOnTriangle(p, t[0], t[1], t[2]);
     const double d2 = (q - p).squaredNorm();
     if (d2 < bestD2) {
       bestD2 = d2;
@@ -374,6 +348,29 @@ Eigen::Isometry3d patellaMotion(const skeleton::Joint& joint, const ArticulatedM
   Eigen::Isometry3d local = Eigen::Isometry3d::Identity();
   local.linear() = Eigen::AngleAxisd(bestPsi, axis).toRotationMatrix();
   local.translation() = bestPlace - local.linear() * pc;
+  // Every vertex of the patella at least its own rest clearance above the
+  // femur's profile (at most the centre's): where the profile under an end
+  // of the patella rises above the one under its centre, the patella is
+  // lifted off it along the radius, instead of pressing that end into the
+  // trochlea and crushing the tissue between.
+  const auto polar = [&](const Eigen::Vector3d& p) {
+    const Eigen::Vector3d q = p - c;
+    return std::pair{std::atan2(q.dot(e2), q.dot(e1)), std::hypot(q.dot(e1), q.dot(e2))};
+  };
+  const Eigen::Vector3d radial = std::cos(phi0 + bestPsi) * e1 + std::sin(phi0 + bestPsi) * e2;
+  for (int pass = 0; pass < 3; ++pass) {
+    double lift = 0.0;
+    for (std::size_t v = 0; v < rest.size(); ++v) {
+      if (mesh.role[v] != VertexRole::Rigid || int(mesh.vertexPart[v]) != patella) continue;
+      const auto [phiRest, rRest] = polar(rest[v]);
+      const auto [phiNow, rNow] = polar(local * rest[v]);
+      const double hRest = height(phiRest), hNow = height(phiNow);
+      if (hRest < 0.0 || hNow < 0.0) continue;
+      lift = std::max(lift, hNow + std::clamp(rRest - hRest, 0.0, std::max(gap, 0.0)) - rNow);
+    }
+    if (lift <= 1e-6) break;
+    local.translation() += lift * radial;
+  }
   return thigh * local;
 }
 

@@ -144,9 +144,13 @@ struct ArticulatedMeshOptions {
   // through it, so that the owner's bone end turns past the other side's
   // (the 8 mm slices' staircases of a femoral head and its acetabulum
   // cross as the hip turns) without tissue between them. Both stay rigid;
-  // where the staircases cross they overlap by less than a voxel. 0: the
-  // body is the sphere or cylinder alone.
-  double ownerShellVoxels = 1.0;
+  // where the staircases cross they overlap by less than a voxel. Two
+  // voxels take the femoral neck's base in as well: at one, the neck's
+  // staircase 9 to 16 mm outside the hip's sphere lay a tet or two from the
+  // acetabular rim, and the hips' turn crushed the tissue between
+  // (docs/BENCHMARKS.md, "The femoral neck in the hip's body"). 0: the body
+  // is the sphere or cylinder alone.
+  double ownerShellVoxels = 2.0;
   // At a hinge, the owner's bone up to hingeOwnerReachMm outside the
   // cylinder, away from the attachment, joins the body as well: the
   // sliding cut follows the owner's bone end all round, where the cylinder

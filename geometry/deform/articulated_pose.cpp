@@ -414,6 +414,7 @@ ArticulatedPoseReport ArticulatedPoser::pose(const MotionPath& path) {
   const TetMesh& m = mesh_.mesh;
   for (const Tet& t : m.tets) report.invertedBeforeUntangling += signedVolume(positions_, t) <= 0.0;
   if (report.invertedBeforeUntangling > 0 && solvedTets_ > 0) untangle(motions, report);
+  if (options_.contactRounds > 0 && solvedTets_ > 0) resolveContacts(motions, report);
   if (options_.onStep) options_.onStep(report.steps, positions_);
   for (const Tet& t : m.tets) {
     const double volume = signedVolume(positions_, t);
@@ -428,15 +429,19 @@ ArticulatedPoseReport ArticulatedPoser::pose(const MotionPath& path) {
   return report;
 }
 
-void ArticulatedPoser::untangle(std::span<const Eigen::Isometry3d> motions, ArticulatedPoseReport& report) {
-  const TetMesh& m = mesh_.mesh;
-  const std::size_t nv = m.vertexCount();
-  // What may move: the solved tissue that is not still.
-  std::vector<std::uint8_t> movable(nv, 0);
+std::vector<std::uint8_t> ArticulatedPoser::movableVertices() const {
+  std::vector<std::uint8_t> movable(mesh_.mesh.vertexCount(), 0);
   for (std::size_t i = 0; i < solved_.size(); ++i) {
     const auto v = std::size_t(solved_[i]);
     movable[v] = mesh_.role[v] != VertexRole::Rigid && !stillSolve_[i];
   }
+  return movable;
+}
+
+void ArticulatedPoser::untangle(std::span<const Eigen::Isometry3d> motions, ArticulatedPoseReport& report) {
+  const TetMesh& m = mesh_.mesh;
+  const std::size_t nv = m.vertexCount();
+  const std::vector<std::uint8_t> movable = movableVertices();
   std::vector<Eigen::Vector3d> onBodies = positions_;
   projectSlidingVertices(mesh_, motions, 1.0, onBodies);
   const auto start = std::chrono::steady_clock::now();
@@ -465,6 +470,91 @@ void ArticulatedPoser::untangle(std::span<const Eigen::Isometry3d> motions, Arti
     report.untangledVertices = moved;
   }
   report.untangleSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void ArticulatedPoser::resolveContacts(std::span<const Eigen::Isometry3d> motions, ArticulatedPoseReport& report) {
+  const TetMesh& m = mesh_.mesh;
+  const std::size_t nv = m.vertexCount();
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<std::uint8_t> movable = movableVertices();
+  // Not about a tangle the untangling left: a vertex there lies inside the
+  // tissue across because the tets fold, and a pull on it folds them more.
+  {
+    std::vector<double> toFold(nv, std::numeric_limits<double>::infinity());
+    bool any = false;
+    for (const Tet& t : m.tets)
+      if (signedVolume(positions_, t) <= 0.0) {
+        any = true;
+        for (const std::int32_t v : t) toFold[std::size_t(v)] = 0.0;
+      }
+    if (any) {
+      edgeDistances(edges_, toFold);
+      for (std::size_t v = 0; v < nv; ++v) movable[v] = movable[v] && toFold[v] > options_.contactRadiusMm;
+    }
+  }
+  // Candidates: the free tissue (a sliding vertex stays on its body, whose
+  // two sides overlap by design where the bones' staircases cross).
+  std::vector<std::uint8_t> candidate(nv, 0);
+  for (std::size_t v = 0; v < nv; ++v) candidate[v] = movable[v] && mesh_.role[v] == VertexRole::Free;
+  // Penetrable: every tet, the articular bodies' too (the tissue across a
+  // sliding cut that the turn pressed into the owner's bone end).
+  const std::vector<std::uint8_t> penetrable(m.tetCount(), 1);
+  std::vector<Eigen::Vector3d> onBodies = positions_;
+  projectSlidingVertices(mesh_, motions, 1.0, onBodies);
+  UntangleOptions solve = options_.untangle;
+  solve.lowestEnergy = true;
+  // Per vertex found in some round: where it is held. A vertex drawn out
+  // of the tissue across stays held where it got, or the tissue's
+  // elasticity presses it back in the next round.
+  std::vector<std::pair<std::int32_t, Eigen::Vector3d>> held;
+  std::vector<std::int32_t> heldIndex(nv, -1);
+  for (int round = 0; round <= options_.contactRounds; ++round) {
+    const std::vector<Penetration> found = findPenetrations(m.positions, m.tets, positions_, candidate, penetrable, options_.contact);
+    double deepest = 0.0;
+    for (const Penetration& p : found) deepest = std::max(deepest, p.depth);
+    if (round == 0) {
+      report.penetratingBeforeContact = found.size();
+      report.deepestPenetrationBeforeMm = deepest;
+    }
+    report.penetratingAfterContact = found.size();
+    report.deepestPenetrationAfterMm = deepest;
+    if (found.empty() || round == options_.contactRounds) break;
+    for (auto& [v, target] : held) target = positions_[std::size_t(v)];
+    std::vector<double> dist(nv, std::numeric_limits<double>::infinity());
+    for (const Penetration& p : found) dist[std::size_t(p.vertex)] = 0.0;
+    for (const auto& h : held) dist[std::size_t(h.first)] = 0.0;
+    edgeDistances(edges_, dist);
+    for (const Penetration& p : found) {
+      // Halfway where the crossed boundary moves too: its own vertices,
+      // inside this side, are drawn back the other half.
+      bool across = true;
+      for (const std::int32_t u : p.face) across = across && movable[std::size_t(u)] && dist[std::size_t(u)] <= options_.contactRadiusMm;
+      const Eigen::Vector3d& x = positions_[std::size_t(p.vertex)];
+      const Eigen::Vector3d out = (p.surface - x) / p.depth;
+      const Eigen::Vector3d target = x + ((across ? 0.5 : 1.0) * p.depth + options_.contactMarginMm) * out;
+      std::int32_t& k = heldIndex[std::size_t(p.vertex)];
+      if (k < 0) {
+        k = std::int32_t(held.size());
+        held.emplace_back(p.vertex, target);
+      } else {
+        held[std::size_t(k)].second = target;
+      }
+    }
+    std::vector<std::uint8_t> free(nv, 0);
+    std::vector<UntangleAnchor> anchors;
+    std::size_t moved = 0;
+    for (std::size_t v = 0; v < nv; ++v) {
+      if (!movable[v] || dist[v] > options_.contactRadiusMm) continue;
+      free[v] = 1;
+      ++moved;
+      if (mesh_.role[v] == VertexRole::Sliding) anchors.push_back({std::int32_t(v), onBodies[v], options_.slidingWeight});
+    }
+    for (const auto& [v, target] : held) anchors.push_back({v, target, options_.contactWeight});
+    untangleTets(m.positions, m.tets, free, anchors, positions_, solve);
+    report.contactVertices = moved;
+    ++report.contactRounds;
+  }
+  report.contactSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 int articulatedPoseSteps(std::span<const PoseJoint> angles, const ArticulatedPoseOptions& options) {

@@ -28,6 +28,7 @@
 
 #include "geometry/deform/articulated_mesh.h"
 #include "geometry/deform/pose/joint_pose.h"
+#include "geometry/deform/solve/contact.h"
 #include "geometry/deform/solve/injective_solve.h"
 #include "geometry/deform/solve/untangle.h"
 
@@ -79,6 +80,21 @@ struct ArticulatedPoseOptions {
   // slidingWeight). Empty: none.
   std::vector<double> untangleRadiiMm = {30.0};
   UntangleOptions untangle;
+  // Contact after the untangling: the free tissue's boundary vertices that
+  // the pose put into tissue they lay apart from at rest (contact.h: a
+  // crease's skin through the skin across it) are drawn to the boundary
+  // they crossed, halfway where that boundary's tissue may move too (the
+  // two sides meet on a contact surface), and contactMarginMm beyond, by
+  // anchors of weight contactWeight, the free and sliding tissue within
+  // contactRadiusMm of them solved by the untangling's energy (no tet
+  // inverts that was not); a vertex once drawn out stays held where it got.
+  // Tissue within contactRadiusMm of a tet the untangling left inverted is
+  // left as it is. Up to contactRounds rounds, while any is left; 0: none.
+  int contactRounds = 4;
+  double contactRadiusMm = 20.0;
+  double contactWeight = 100.0;
+  double contactMarginMm = 0.5;
+  ContactOptions contact;
   // Called after each step of the approach (1-based) and after the last,
   // hard step (steps + 1) with every vertex of the mesh where that step left
   // it: what a viewer shows of the way, or a benchmark inspects.
@@ -111,6 +127,14 @@ struct ArticulatedPoseReport {
   std::size_t invertedBeforeUntangling = 0, untangledVertices = 0;
   double untangleRadiusMm = 0.0, untangleSeconds = 0.0;
   double finalMinRelativeVolume = 1.0;
+  // Contact: the boundary vertices through the tissue across a crease
+  // before the first round and after the last, and the deepest of them
+  // (mm from the boundary they crossed), the rounds, the vertices moved
+  // (the last round's), the seconds.
+  std::size_t penetratingBeforeContact = 0, penetratingAfterContact = 0, contactVertices = 0;
+  double deepestPenetrationBeforeMm = 0.0, deepestPenetrationAfterMm = 0.0;
+  int contactRounds = 0;
+  double contactSeconds = 0.0;
   bool reachedTargets = false;            // the bones reached their motions
   double maxSlidingGapMm = 0.0;           // largest distance of a sliding vertex from its body's surface
   double seconds = 0.0;
@@ -170,6 +194,11 @@ private:
   // Untangles positions_ about its inverted tets (untangleRadiiMm),
   // filling the report's untangling fields but the final count.
   void untangle(std::span<const Eigen::Isometry3d> motions, ArticulatedPoseReport& report);
+  // The contact rounds (contactRounds) on positions_.
+  void resolveContacts(std::span<const Eigen::Isometry3d> motions, ArticulatedPoseReport& report);
+  // Per mesh vertex: solved, not rigid, not still (what the untangling and
+  // the contact may move).
+  std::vector<std::uint8_t> movableVertices() const;
   // Per segment: the largest distance of its bone vertices in `solver`'s
   // positions from constrainedTargets_.
   std::vector<double> boneLag(const InjectiveSolver& solver) const;

@@ -255,6 +255,10 @@ TEST(PartsCommand, ArticulatedJointPose) {
   EXPECT_GT(a["min_relative_volume"].get<double>(), 0.05);
   EXPECT_GT(a["limb_cut_faces"].get<int>(), 0);
   EXPECT_GT(a["articular_bodies"].get<int>(), 0);
+  // The contact after the pose: what it found and what it left.
+  ASSERT_TRUE(a.contains("contact"));
+  EXPECT_LE(a["contact"]["penetrating_vertices_after"].get<int>(), a["contact"]["penetrating_vertices_before"].get<int>());
+  EXPECT_LE(a["contact"]["deepest_mm_after"].get<double>(), a["contact"]["deepest_mm_before"].get<double>());
   EXPECT_EQ(j["transfer_mesh"]["tets_inverted_by_deformation"].get<int>(), 0);
   ASSERT_EQ(j["part_transforms"].size(), 16u);
   // Every bone keeps its volume through the mesh: its tets move rigidly.

@@ -26,7 +26,11 @@
 // --still-beyond MM (tissue this far from every moved bone held at rest;
 // 0: none; default the pose's), --hold-unmoved-bones (the unmoved parts'
 // bones held at rest in the steps, not soft targets), --no-untangle (no
-// untangling after the last step), --whole-part-bone-clearance MM (the
+// untangling after the last step), --contact-rounds N, --contact-radius
+// MM, --contact-weight W (the contact after it; 0 rounds: none),
+// --owner-shell V (ownerShellVoxels), --attachment-angle DEG (the bodies'
+// attachment half angle), --untangle-radius MM (one radius instead of the
+// pose's), --whole-part-bone-clearance MM (the
 // hands', feet's and head's tissue this near another part's bone soft; 0:
 // only within the joint's clearance), --whole-part-own-bone-clearance MM
 // (their own bones this near another part's bone soft), --knee-forward MM (both knees' centres moved MM along the body's front
@@ -66,7 +70,7 @@ int usage() {
   std::fprintf(stderr,
                "usage: articulated_pose_bench GRID ORGANS POSE [--steps N] [--bone-weight W] [--sliding-weight W] [--max-iterations N] "
                "[--volume-weight L] [--direct-limit N] [--scapulae] [--yielding-shell V] [--yielding-hips] [--squeezed F] [--dump PREFIX] [--mesh-only] "
-               "[--knee-forward MM] [--trunk-reach MM] [--pelvis-reach MM] [--joint-clearance MM] [--still-beyond MM] [--hold-unmoved-bones] [--no-untangle] [--whole-part-bone-clearance MM] [--whole-part-own-bone-clearance MM]\n"
+               "[--knee-forward MM] [--trunk-reach MM] [--pelvis-reach MM] [--joint-clearance MM] [--still-beyond MM] [--hold-unmoved-bones] [--no-untangle] [--contact-rounds N] [--contact-radius MM] [--contact-weight W] [--owner-shell V] [--attachment-angle DEG] [--untangle-radius MM] [--whole-part-bone-clearance MM] [--whole-part-own-bone-clearance MM]\n"
                "       articulated_pose_bench --figure POSE [options]\n");
   return 2;
 }
@@ -203,9 +207,16 @@ int main(int argc, char** argv) {
     else if (arg == "--still-beyond") poseOptions.stillBeyondMm = std::stod(value());
     else if (arg == "--hold-unmoved-bones") poseOptions.holdUnmovedBones = true;
     else if (arg == "--no-untangle") poseOptions.untangleRadiiMm.clear();
+    else if (arg == "--contact-rounds") poseOptions.contactRounds = std::stoi(value());
+    else if (arg == "--contact-radius") poseOptions.contactRadiusMm = std::stod(value());
+    else if (arg == "--contact-weight") poseOptions.contactWeight = std::stod(value());
+    else if (arg == "--contact-margin") poseOptions.contactMarginMm = std::stod(value());
     else if (arg == "--whole-part-bone-clearance") meshOptions.wholePartBoneClearanceMm = std::stod(value());
     else if (arg == "--whole-part-own-bone-clearance") meshOptions.wholePartOwnBoneClearanceMm = std::stod(value());
     else if (arg == "--joint-clearance") meshOptions.jointClearanceMm = std::stod(value());
+    else if (arg == "--owner-shell") meshOptions.ownerShellVoxels = std::stod(value());
+    else if (arg == "--attachment-angle") meshOptions.attachmentHalfAngleDeg = std::stod(value());
+    else if (arg == "--untangle-radius") poseOptions.untangleRadiiMm = {std::stod(value())};
     else if (arg.starts_with("--")) return usage();
     else positional.push_back(arg);
   }
@@ -284,6 +295,9 @@ int main(int argc, char** argv) {
     std::printf("inverted tets: %zu (bones reached their motions: %s); before untangling %zu, untangled %zu vertices within %.0f mm in %.1f s; final smallest det J %.4f\n",
                 r.invertedTets, r.reachedTargets ? "yes" : "no", r.invertedBeforeUntangling, r.untangledVertices, r.untangleRadiusMm,
                 r.untangleSeconds, r.finalMinRelativeVolume);
+    std::printf("contact: %zu boundary vertices through the tissue across before (deepest %.2f mm), %zu after %d rounds (%.2f mm; %zu vertices moved) in %.1f s\n",
+                r.penetratingBeforeContact, r.deepestPenetrationBeforeMm, r.penetratingAfterContact, r.contactRounds,
+                r.deepestPenetrationAfterMm, r.contactVertices, r.contactSeconds);
     for (const auto& [name, n] : byJoint) {
       const auto& w = where[name];
       std::printf("  %-16s %6zu: in front %zu within 30 mm, %zu beyond; behind %zu within 30 mm, %zu beyond\n", name.c_str(), n,
@@ -301,6 +315,11 @@ int main(int argc, char** argv) {
                           {"untangled_vertices", r.untangledVertices},
                           {"untangle_radius_mm", r.untangleRadiusMm},
                           {"untangle_seconds", r.untangleSeconds},
+                          {"penetrating_before_contact", r.penetratingBeforeContact},
+                          {"penetrating_after_contact", r.penetratingAfterContact},
+                          {"deepest_penetration_before_mm", r.deepestPenetrationBeforeMm},
+                          {"deepest_penetration_after_mm", r.deepestPenetrationAfterMm},
+                          {"contact_seconds", r.contactSeconds},
                           {"final_min_relative_volume", r.finalMinRelativeVolume},
                           {"inverted_by_joint", byJoint},
                           {"reached_targets", r.reachedTargets},

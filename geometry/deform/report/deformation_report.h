@@ -126,6 +126,13 @@ struct DeformationReport {
     // its seconds; the final positions' smallest det J.
     std::size_t invertedBeforeUntangling = 0, untangledVertices = 0;
     double untangleRadiusMm = 0.0, untangleSeconds = 0.0;
+    // The contact after it: the boundary vertices through the tissue
+    // across a crease before and after, the deepest of them (mm), its
+    // rounds, the vertices the last round moved, its seconds.
+    std::size_t penetratingBeforeContact = 0, penetratingAfterContact = 0, contactVertices = 0;
+    double deepestPenetrationBeforeMm = 0.0, deepestPenetrationAfterMm = 0.0;
+    int contactRounds = 0;
+    double contactSeconds = 0.0;
     double finalMinRelativeVolume = 1.0;
   };
   std::optional<Articulated> articulated;

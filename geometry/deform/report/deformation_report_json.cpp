@@ -199,6 +199,13 @@ std::string deformationReportJson(const DeformationReport& r) {
                                            {"moved_vertices", a->untangledVertices},
                                            {"radius_mm", a->untangleRadiusMm},
                                            {"seconds", a->untangleSeconds}}},
+                           {"contact", {{"penetrating_vertices_before", a->penetratingBeforeContact},
+                                        {"penetrating_vertices_after", a->penetratingAfterContact},
+                                        {"deepest_mm_before", a->deepestPenetrationBeforeMm},
+                                        {"deepest_mm_after", a->deepestPenetrationAfterMm},
+                                        {"rounds", a->contactRounds},
+                                        {"moved_vertices", a->contactVertices},
+                                        {"seconds", a->contactSeconds}}},
                            {"final_min_relative_volume", a->finalMinRelativeVolume}};
   if (const auto& c = r.collisions) {
     json pairs = json::array();

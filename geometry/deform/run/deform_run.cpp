@@ -401,6 +401,13 @@ PosedMesh poseArticulated(const DeformGridRequest& o, const Source& source, Defo
   a.untangledVertices = r.untangledVertices;
   a.untangleRadiusMm = r.untangleRadiusMm;
   a.untangleSeconds = r.untangleSeconds;
+  a.penetratingBeforeContact = r.penetratingBeforeContact;
+  a.penetratingAfterContact = r.penetratingAfterContact;
+  a.deepestPenetrationBeforeMm = r.deepestPenetrationBeforeMm;
+  a.deepestPenetrationAfterMm = r.deepestPenetrationAfterMm;
+  a.contactRounds = r.contactRounds;
+  a.contactVertices = r.contactVertices;
+  a.contactSeconds = r.contactSeconds;
   a.finalMinRelativeVolume = r.finalMinRelativeVolume;
   report.articulated = a;
   out.rest = std::move(mesh.mesh);

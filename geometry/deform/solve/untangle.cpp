@@ -204,7 +204,7 @@ UntangleReport untangleTets(std::span<const Eigen::Vector3d> rest, std::span<con
   // too close), a smaller eps only spreads the fold.
   Eigen::VectorXd bestX = x;
   std::size_t bestInverted = invertedBefore;
-  double bestDet = detMin;
+  double bestDet = detMin, bestEnergy = energyPrevious;
   int sinceBest = 0;
   for (int round = 0; round < options.rounds; ++round) {
     // The round's lowest point: a line search that fails leaves x where it tried last.
@@ -230,11 +230,13 @@ UntangleReport untangleTets(std::span<const Eigen::Vector3d> rest, std::span<con
     const double energy = pb.evaluate(x, grad, eps);
     std::size_t inverted = 0;
     detMin = pb.smallestDet(x, &inverted, below);
-    if (inverted < bestInverted || (inverted == bestInverted && detMin > bestDet)) {
+    const bool better = options.lowestEnergy ? energy < bestEnergy : detMin > bestDet;
+    if (inverted < bestInverted || (inverted == bestInverted && better)) {
       sinceBest = inverted < bestInverted ? 0 : sinceBest + 1;
       bestX = x;
       bestInverted = inverted;
       bestDet = detMin;
+      bestEnergy = energy;
     } else {
       ++sinceBest;
     }
@@ -245,12 +247,17 @@ UntangleReport untangleTets(std::span<const Eigen::Vector3d> rest, std::span<con
     const double mu = (1.0 - sigma) * chi(detMin, eps);
     eps = detMin < mu ? 2.0 * std::sqrt(mu * (mu - detMin)) : 1e-10;
     energyPrevious = pb.evaluate(x, grad, eps);
+    // Energies at another eps do not compare.
+    if (options.lowestEnergy) bestEnergy = bestX == x ? energyPrevious : pb.evaluate(bestX, grad, eps);
   }
   x = bestX;
   detMin = pb.smallestDet(x, &report.invertedAfter, below);
   report.minRelativeVolumeAfter = detMin;
   report.untangled = report.invertedAfter == 0;
-  if (report.invertedAfter < invertedBefore || (report.invertedAfter == invertedBefore && detMin > report.minRelativeVolumeBefore)) {
+  const bool taken = options.lowestEnergy ? report.invertedAfter <= invertedBefore
+                                          : report.invertedAfter < invertedBefore ||
+                                                (report.invertedAfter == invertedBefore && detMin > report.minRelativeVolumeBefore);
+  if (taken) {
     for (std::size_t k = 0; k < pb.freeVertices.size(); ++k)
       positions[std::size_t(pb.freeVertices[k])] = pb.point(x, pb.freeVertices[k]);
   } else {

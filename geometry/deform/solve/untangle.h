@@ -50,6 +50,11 @@ struct UntangleOptions {
   // Every tet must end at least this relative volume (det J) to count as
   // untangled.
   double minRelativeVolume = 1e-3;
+  // Among the rounds with the fewest inverted tets, keep the one of the
+  // lowest energy (not the largest smallest det J), and take the result
+  // whenever it has no more inverted tets than the input: the anchors are
+  // then what the solve is for (contact targets), not only the unfolding.
+  bool lowestEnergy = false;
   int threads = 0;  // workerThreads
 };
 
@@ -73,7 +78,8 @@ struct UntangleAnchor {
 // Throws InputError on a rest tet that is flat or inverted, or an index out
 // of range. The positions are changed only where the result has fewer
 // inverted tets than the input had, or as many with a larger smallest
-// det J; otherwise they are left as given (report.untangled false).
+// det J (with options.lowestEnergy: no more inverted tets); otherwise they
+// are left as given (report.untangled false).
 UntangleReport untangleTets(std::span<const Eigen::Vector3d> rest, std::span<const Tet> tets,
                             std::span<const std::uint8_t> free, std::span<const UntangleAnchor> anchors,
                             std::vector<Eigen::Vector3d>& positions, const UntangleOptions& options = {});

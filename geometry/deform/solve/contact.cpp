@@ -1,0 +1,218 @@
+#include "geometry/deform/solve/contact.h"
+
+#include "geometry/error.h"
+#include "geometry/parallel.h"
+#include "geometry/tri_mesh.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+
+namespace vox {
+namespace {
+
+// Items (tets or faces) by the cells of a uniform grid their boxes overlap:
+// sorted (cell, item) pairs.
+class CellIndex {
+ public:
+  CellIndex(double cell, const Eigen::Vector3d& origin) : cell_(cell), origin_(origin) {}
+
+  void add(std::int32_t item, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+    const auto a = cellOf(lo), b = cellOf(hi);
+    for (std::int64_t k = a[2]; k <= b[2]; ++k)
+      for (std::int64_t j = a[1]; j <= b[1]; ++j)
+        for (std::int64_t i = a[0]; i <= b[0]; ++i) pairs_.emplace_back(key(i, j, k), item);
+  }
+  void finish() { std::sort(pairs_.begin(), pairs_.end()); }
+
+  // Calls fn(item) for every item in a cell that the box [lo, hi] overlaps
+  // (an item may come more than once).
+  template <class Fn>
+  void forEachIn(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, Fn&& fn) const {
+    const auto a = cellOf(lo), b = cellOf(hi);
+    for (std::int64_t k = a[2]; k <= b[2]; ++k)
+      for (std::int64_t j = a[1]; j <= b[1]; ++j)
+        for (std::int64_t i = a[0]; i <= b[0]; ++i) {
+          const std::uint64_t c = key(i, j, k);
+          auto it = std::lower_bound(pairs_.begin(), pairs_.end(), std::pair<std::uint64_t, std::int32_t>(c, std::numeric_limits<std::int32_t>::min()));
+          for (; it != pairs_.end() && it->first == c; ++it) fn(it->second);
+        }
+  }
+
+ private:
+  std::array<std::int64_t, 3> cellOf(const Eigen::Vector3d& p) const {
+    std::array<std::int64_t, 3> c{};
+    for (int a = 0; a < 3; ++a) c[std::size_t(a)] = std::clamp<std::int64_t>(std::int64_t(std::floor((p[a] - origin_[a]) / cell_)), 0, (1 << 20) - 1);
+    return c;
+  }
+  static std::uint64_t key(std::int64_t i, std::int64_t j, std::int64_t k) {
+    return (std::uint64_t(k) << 40) | (std::uint64_t(j) << 20) | std::uint64_t(i);
+  }
+  double cell_;
+  Eigen::Vector3d origin_;
+  std::vector<std::pair<std::uint64_t, std::int32_t>> pairs_;
+};
+
+// How far p lies inside the tet (a, b, c, d) of positive volume: the
+// smallest distance to its four faces' planes, negative outside.
+double depthInside(const Eigen::Vector3d& p, const std::array<Eigen::Vector3d, 4>& x) {
+  const double volume = (x[1] - x[0]).cross(x[2] - x[0]).dot(x[3] - x[0]);
+  if (!(volume > 0.0)) return -std::numeric_limits<double>::infinity();
+  static constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+  double depth = std::numeric_limits<double>::infinity();
+  for (const auto& f : kFace) {
+    const Eigen::Vector3d n = (x[std::size_t(f[1])] - x[std::size_t(f[0])]).cross(x[std::size_t(f[2])] - x[std::size_t(f[0])]);
+    const double area2 = n.norm();
+    if (!(area2 > 0.0)) return -std::numeric_limits<double>::infinity();
+    depth = std::min(depth, -(p - x[std::size_t(f[0])]).dot(n) / area2);  // outward normal: inside is negative
+  }
+  return depth;
+}
+
+}  // namespace
+
+std::vector<std::array<std::int32_t, 3>> boundaryFaces(std::span<const Tet> tets, std::size_t vertexCount) {
+  struct Entry {
+    std::array<std::int32_t, 3> sorted;
+    std::int32_t tet;
+    std::int8_t face;
+  };
+  std::vector<Entry> entries;
+  entries.reserve(4 * tets.size());
+  for (std::size_t t = 0; t < tets.size(); ++t)
+    for (int k = 0; k < 4; ++k) {
+      const Tri f = tetFace(tets[t], k);
+      std::array<std::int32_t, 3> s{f[0], f[1], f[2]};
+      for (const std::int32_t v : s)
+        if (v < 0 || std::size_t(v) >= vertexCount) throw InputError("contact", "tet " + std::to_string(t) + " has a vertex index out of range");
+      std::sort(s.begin(), s.end());
+      entries.push_back({s, std::int32_t(t), std::int8_t(k)});
+    }
+  std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) {
+    return a.sorted < b.sorted || (a.sorted == b.sorted && a.tet < b.tet);
+  });
+  std::vector<std::array<std::int32_t, 3>> out;
+  for (std::size_t i = 0; i < entries.size();) {
+    std::size_t j = i + 1;
+    while (j < entries.size() && entries[j].sorted == entries[i].sorted) ++j;
+    if (j == i + 1) {
+      const Tri f = tetFace(tets[std::size_t(entries[i].tet)], entries[i].face);
+      out.push_back({f[0], f[1], f[2]});
+    }
+    i = j;
+  }
+  return out;
+}
+
+std::vector<Penetration> findPenetrations(std::span<const Eigen::Vector3d> rest, std::span<const Tet> tets,
+                                          std::span<const Eigen::Vector3d> positions, std::span<const std::uint8_t> candidate,
+                                          std::span<const std::uint8_t> penetrable, const ContactOptions& options) {
+  const std::size_t nv = rest.size();
+  if (positions.size() != nv || candidate.size() != nv || penetrable.size() != tets.size())
+    throw InputError("contact", "the positions, candidates or penetrable flags do not match the mesh");
+  if (tets.empty()) return {};
+  const double apart2 = options.restSeparationMm * options.restSeparationMm;
+
+  // The penetrable tets' boundary faces and the candidates on the boundary.
+  std::vector<Tet> penetrableTets;
+  std::vector<std::int32_t> penetrableIndex;
+  for (std::size_t t = 0; t < tets.size(); ++t)
+    if (penetrable[t]) {
+      penetrableTets.push_back(tets[t]);
+      penetrableIndex.push_back(std::int32_t(t));
+    }
+  const std::vector<std::array<std::int32_t, 3>> faces = boundaryFaces(penetrableTets, nv);
+  std::vector<std::uint8_t> onBoundary(nv, 0);
+  for (const auto& f : boundaryFaces(tets, nv))
+    for (const std::int32_t v : f) onBoundary[std::size_t(v)] = 1;
+  std::vector<std::int32_t> queries;
+  for (std::size_t v = 0; v < nv; ++v)
+    if (candidate[v] && onBoundary[v]) queries.push_back(std::int32_t(v));
+  if (queries.empty() || penetrableTets.empty()) return {};
+
+  // Cells about the mean edge of the penetrable tets.
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  double edgeSum = 0.0;
+  for (const Tet& t : penetrableTets) {
+    for (const std::int32_t v : t) {
+      lo = lo.cwiseMin(positions[std::size_t(v)]);
+      hi = hi.cwiseMax(positions[std::size_t(v)]);
+    }
+    edgeSum += (positions[std::size_t(t[1])] - positions[std::size_t(t[0])]).norm();
+  }
+  for (const std::int32_t v : queries) {
+    lo = lo.cwiseMin(positions[std::size_t(v)]);
+    hi = hi.cwiseMax(positions[std::size_t(v)]);
+  }
+  const double cell = std::max({2.0 * edgeSum / double(penetrableTets.size()), (hi - lo).maxCoeff() / double(1 << 19), 1e-6});
+  CellIndex tetCells(cell, lo), faceCells(cell, lo);
+  for (std::size_t i = 0; i < penetrableTets.size(); ++i) {
+    Eigen::Vector3d a = positions[std::size_t(penetrableTets[i][0])], b = a;
+    for (const std::int32_t v : penetrableTets[i]) {
+      a = a.cwiseMin(positions[std::size_t(v)]);
+      b = b.cwiseMax(positions[std::size_t(v)]);
+    }
+    tetCells.add(std::int32_t(i), a, b);
+  }
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    Eigen::Vector3d a = positions[std::size_t(faces[i][0])], b = a;
+    for (const std::int32_t v : faces[i]) {
+      a = a.cwiseMin(positions[std::size_t(v)]);
+      b = b.cwiseMax(positions[std::size_t(v)]);
+    }
+    faceCells.add(std::int32_t(i), a, b);
+  }
+  tetCells.finish();
+  faceCells.finish();
+
+  const auto apart = [&](std::int32_t v, std::int32_t u) { return (rest[std::size_t(v)] - rest[std::size_t(u)]).squaredNorm() > apart2; };
+  std::vector<std::optional<Penetration>> found(queries.size());
+  parallelFor(std::int64_t(queries.size()), 0, [&](std::int64_t q) {
+    const std::int32_t v = queries[std::size_t(q)];
+    const Eigen::Vector3d& p = positions[std::size_t(v)];
+    // A tet it lies in (closed; the first by index), apart from it at rest.
+    std::int32_t inside = -1;
+    tetCells.forEachIn(p, p, [&](std::int32_t i) {
+      if (inside >= 0 && penetrableIndex[std::size_t(i)] >= inside) return;
+      const Tet& t = penetrableTets[std::size_t(i)];
+      for (const std::int32_t u : t)
+        if (!apart(v, u)) return;
+      std::array<Eigen::Vector3d, 4> x;
+      for (std::size_t c = 0; c < 4; ++c) x[c] = positions[std::size_t(t[c])];
+      if (depthInside(p, x) >= -1e-9 * cell) inside = penetrableIndex[std::size_t(i)];
+    });
+    if (inside < 0) return;
+    // The nearest boundary face apart from v at rest, in growing boxes.
+    double best2 = std::numeric_limits<double>::infinity();
+    Penetration pen;
+    pen.vertex = v;
+    pen.tet = inside;
+    for (double r = cell; r <= 2.0 * options.searchMm; r *= 2.0) {
+      faceCells.forEachIn(p - Eigen::Vector3d::Constant(r), p + Eigen::Vector3d::Constant(r), [&](std::int32_t i) {
+        const auto& f = faces[std::size_t(i)];
+        if (!apart(v, f[0]) || !apart(v, f[1]) || !apart(v, f[2])) return;
+        const Eigen::Vector3d s =
+            nearestPointOnTriangle(p, positions[std::size_t(f[0])], positions[std::size_t(f[1])], positions[std::size_t(f[2])]);
+        const double d2 = (s - p).squaredNorm();
+        if (d2 < best2 || (d2 == best2 && f < pen.face)) {
+          best2 = d2;
+          pen.surface = s;
+          pen.face = f;
+        }
+      });
+      if (best2 <= r * r) break;
+    }
+    if (!(best2 <= options.searchMm * options.searchMm)) return;
+    pen.depth = std::sqrt(best2);
+    if (pen.depth <= options.toleranceMm) return;  // on the boundary: touching
+    found[std::size_t(q)] = pen;
+  });
+  std::vector<Penetration> out;
+  for (const auto& f : found)
+    if (f) out.push_back(*f);
+  return out;
+}
+
+}  // namespace vox

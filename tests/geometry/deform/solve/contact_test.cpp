@@ -1,0 +1,133 @@
+#include "geometry/deform/solve/contact.h"
+#include "geometry/deform/solve/untangle.h"
+#include "geometry/voxel_tetrahedralization.h"
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace vox {
+namespace {
+
+// Two 4 x 4 x 4 blocks of unit voxels (six tets each) in one mesh, 36
+// apart along z at rest; posed, the upper block let down into the lower by
+// 1.5 (its bottom at z = 2.5, the lower's top at z = 4).
+struct TwoBlocks {
+  TetMesh mesh;
+  std::vector<Eigen::Vector3d> posed;
+  std::size_t lowerVertices = 0;
+
+  explicit TwoBlocks(double overlap = 1.5) {
+    GridGeometry g;
+    g.dims = {4, 4, 4};
+    g.origin = Eigen::Vector3d::Constant(0.5);  // voxel corners at integers 0..4
+    mesh = tetrahedralizeVoxels(LabelGrid(g, 1), {.includeBackground = false});
+    lowerVertices = mesh.positions.size();
+    const std::size_t tets = mesh.tets.size();
+    for (std::size_t v = 0; v < lowerVertices; ++v) mesh.positions.push_back(mesh.positions[v] + Eigen::Vector3d(0, 0, 40));
+    for (std::size_t t = 0; t < tets; ++t) {
+      Tet u = mesh.tets[t];
+      for (auto& v : u) v += std::int32_t(lowerVertices);
+      mesh.tets.push_back(u);
+      mesh.labels.push_back(mesh.labels[t]);
+    }
+    posed = mesh.positions;
+    for (std::size_t v = lowerVertices; v < posed.size(); ++v) posed[v].z() -= 40.0 - 4.0 + overlap;
+  }
+};
+
+// The distance from p, inside the box [0,4] x [0,4] x [z0, z0 + 4], to its boundary.
+double toBoxBoundary(const Eigen::Vector3d& p, double z0) {
+  return std::min({p.x(), 4.0 - p.x(), p.y(), 4.0 - p.y(), p.z() - z0, z0 + 4.0 - p.z()});
+}
+
+TEST(Contact, BoundaryFacesOfABlockAreItsSurface) {
+  TwoBlocks b;
+  const auto faces = boundaryFaces(b.mesh.tets, b.mesh.positions.size());
+  // Each block: 6 sides of 4 x 4 squares, two triangles each.
+  EXPECT_EQ(faces.size(), 2u * 6u * 16u * 2u);
+  // Oriented outwards: the normal points away from the block's centre.
+  for (const auto& f : faces) {
+    const Eigen::Vector3d a = b.mesh.positions[std::size_t(f[0])], c = b.mesh.positions[std::size_t(f[1])], d = b.mesh.positions[std::size_t(f[2])];
+    const Eigen::Vector3d centre = a.z() < 20 ? Eigen::Vector3d(2, 2, 2) : Eigen::Vector3d(2, 2, 42);
+    EXPECT_GT((c - a).cross(d - a).dot((a + c + d) / 3.0 - centre), 0.0);
+  }
+}
+
+TEST(Contact, FindsEachSidesVerticesThroughTheOtherAndTheBoundaryTheyCrossed) {
+  TwoBlocks b;
+  const std::vector<std::uint8_t> all(b.mesh.positions.size(), 1), penetrable(b.mesh.tets.size(), 1);
+  const std::vector<Penetration> found = findPenetrations(b.mesh.positions, b.mesh.tets, b.posed, all, penetrable);
+  // The upper block's bottom vertices strictly inside the lower block (3 x
+  // 3 of them) and the lower block's top vertices inside the upper one.
+  ASSERT_EQ(found.size(), 18u);
+  for (const Penetration& p : found) {
+    const bool upper = std::size_t(p.vertex) >= b.lowerVertices;
+    const Eigen::Vector3d& x = b.posed[std::size_t(p.vertex)];
+    EXPECT_NEAR(x.z(), upper ? 2.5 : 4.0, 1e-12);
+    // The nearest point of the other block's boundary.
+    const double other = upper ? 0.0 : 2.5;
+    EXPECT_NEAR(p.depth, toBoxBoundary(x, other), 1e-9) << p.vertex;
+    EXPECT_NEAR((p.surface - x).norm(), p.depth, 1e-12);
+    for (const std::int32_t u : p.face) EXPECT_NE(std::size_t(u) >= b.lowerVertices, upper);
+  }
+  EXPECT_TRUE(std::is_sorted(found.begin(), found.end(), [](const Penetration& a, const Penetration& c) { return a.vertex < c.vertex; }));
+}
+
+TEST(Contact, NothingAtRestOrWithinTheRestSeparationOrWhereNotPenetrable) {
+  TwoBlocks b;
+  const std::vector<std::uint8_t> all(b.mesh.positions.size(), 1), penetrable(b.mesh.tets.size(), 1);
+  EXPECT_TRUE(findPenetrations(b.mesh.positions, b.mesh.tets, b.mesh.positions, all, penetrable).empty());
+  // Blocks that lay within the rest separation of each other do not count.
+  ContactOptions near;
+  near.restSeparationMm = 50.0;
+  EXPECT_TRUE(findPenetrations(b.mesh.positions, b.mesh.tets, b.posed, all, penetrable, near).empty());
+  // Only the candidates are tested, only penetrable tets are entered.
+  std::vector<std::uint8_t> upperOnly(all.size(), 0), lowerTets(b.mesh.tets.size(), 0);
+  std::fill(upperOnly.begin() + std::ptrdiff_t(b.lowerVertices), upperOnly.end(), 1);
+  EXPECT_EQ(findPenetrations(b.mesh.positions, b.mesh.tets, b.posed, upperOnly, penetrable).size(), 9u);
+  std::fill(lowerTets.begin(), lowerTets.begin() + std::ptrdiff_t(b.mesh.tets.size() / 2), 1);
+  for (const Penetration& p : findPenetrations(b.mesh.positions, b.mesh.tets, b.posed, all, lowerTets))
+    EXPECT_GE(std::size_t(p.vertex), b.lowerVertices);
+  // Touching is contact, not penetration.
+  TwoBlocks touching(0.0);
+  EXPECT_TRUE(findPenetrations(touching.mesh.positions, touching.mesh.tets, touching.posed, all, penetrable).empty());
+}
+
+// The contact solve: the upper block's lowest layers drawn out of the lower one by
+// anchors on the crossed boundary (the untangling's energy, lowestEnergy),
+// no tet inverted; without lowestEnergy the positions would not change,
+// since no tet was inverted to begin with.
+TEST(Contact, AnchorsOnTheCrossedBoundaryPartTheBlocks) {
+  for (const bool lowest : {true, false}) {
+    TwoBlocks b;
+    const std::vector<std::uint8_t> all(b.mesh.positions.size(), 1), penetrable(b.mesh.tets.size(), 1);
+    std::vector<std::uint8_t> free(b.mesh.positions.size(), 0);
+    for (std::size_t v = b.lowerVertices; v < free.size(); ++v) free[v] = b.posed[v].z() < 5.0;  // the upper block's lowest layers
+    std::vector<UntangleAnchor> anchors;
+    for (const Penetration& p : findPenetrations(b.mesh.positions, b.mesh.tets, b.posed, all, penetrable))
+      if (free[std::size_t(p.vertex)]) anchors.push_back({p.vertex, Eigen::Vector3d(b.posed[std::size_t(p.vertex)].x(), b.posed[std::size_t(p.vertex)].y(), 4.0), 100.0});
+    ASSERT_EQ(anchors.size(), 9u);
+    UntangleOptions o;
+    o.lowestEnergy = lowest;
+    const std::vector<Eigen::Vector3d> before = b.posed;
+    const UntangleReport r = untangleTets(b.mesh.positions, b.mesh.tets, free, anchors, b.posed, o);
+    EXPECT_EQ(r.invertedAfter, 0u);
+    for (const Tet& t : b.mesh.tets) EXPECT_GT(signedVolume(b.posed, t), 0.0);
+    if (!lowest) {
+      EXPECT_EQ(b.posed, before);
+      continue;
+    }
+    const std::vector<Penetration> left = findPenetrations(b.mesh.positions, b.mesh.tets, b.posed, all, penetrable);
+    double deepest = 0.0;
+    for (const Penetration& p : left) deepest = std::max(deepest, p.depth);
+    // 1.5 deep before; the anchors against the tissue's stiffness (a third
+    // of the block squeezed into the rest) take it most of the way.
+    EXPECT_LT(deepest, 0.75) << left.size() << " left";
+  }
+}
+
+}  // namespace
+}  // namespace vox
