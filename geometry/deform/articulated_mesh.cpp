@@ -1,5 +1,6 @@
 #include "geometry/deform/articulated_mesh.h"
 
+#include "geometry/cancellation.h"
 #include "geometry/deform/solve/injective_solve.h"
 #include "geometry/distance_transform.h"
 #include "geometry/error.h"
@@ -648,7 +649,7 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
     }
     otherBone = euclideanDistanceTransform(g, seeds).distance;
   }
-  for (std::int64_t k = 0; k < g.dims[2]; ++k)
+  for (std::int64_t k = 0; k < g.dims[2]; ++k, throwIfCancelled())
     for (std::int64_t j = 0; j < g.dims[1]; ++j)
       for (std::int64_t i = 0; i < g.dims[0]; ++i) {
         const std::int64_t v = g.index(i, j, k);
@@ -698,7 +699,7 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
   // graded to coarse away from them.
   std::vector<std::uint8_t> fine(std::size_t(g.voxelCount()), 0);
   const double finest = g.spacing.minCoeff();
-  for (std::int64_t k = 0; k < g.dims[2]; ++k)
+  for (std::int64_t k = 0; k < g.dims[2]; ++k, throwIfCancelled())
     for (std::int64_t j = 0; j < g.dims[1]; ++j)
       for (std::int64_t i = 0; i < g.dims[0]; ++i) {
         const Label t = tags.at(i, j, k);

@@ -1,5 +1,7 @@
 #include "geometry/deform/articulated_pose.h"
 
+#include "geometry/cancellation.h"
+
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
 #include <algorithm>
@@ -357,6 +359,7 @@ ArticulatedPoseReport ArticulatedPoser::pose(const MotionPath& path) {
     const int steps = std::max(1, options_.steps);
     std::vector<Eigen::Isometry3d> previous = path(0.0);
     for (int s = 1; s <= steps; ++s) {
+      throwIfCancelled();
       const std::vector<Eigen::Isometry3d> step = s == steps ? motions : path(double(s) / double(steps));
       predict(approach_, previous, step);
       targets(approach_, step);
@@ -509,6 +512,7 @@ void ArticulatedPoser::resolveContacts(std::span<const Eigen::Isometry3d> motion
   std::vector<std::pair<std::int32_t, Eigen::Vector3d>> held;
   std::vector<std::int32_t> heldIndex(nv, -1);
   for (int round = 0; round <= options_.contactRounds; ++round) {
+    throwIfCancelled();
     const std::vector<Penetration> found = findPenetrations(m.positions, m.tets, positions_, candidate, penetrable, options_.contact);
     double deepest = 0.0;
     for (const Penetration& p : found) deepest = std::max(deepest, p.depth);

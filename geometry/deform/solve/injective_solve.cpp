@@ -1,5 +1,6 @@
 #include "geometry/deform/solve/injective_solve.h"
 
+#include "geometry/cancellation.h"
 #include "geometry/deform/solve/deformation_metrics.h"
 #include "geometry/disjoint_sets.h"
 #include "geometry/error.h"
@@ -713,6 +714,7 @@ InjectiveStepReport InjectiveSolver::iterate(std::span<const Eigen::Vector3d> co
   InjectiveStepReport report;
   double energy = 0.0;
   for (int iteration = 0; iteration < iterations; ++iteration) {
+    throwIfCancelled();
     const bool startedAtTargets = atTargets(constrainedTargets);
     // The local step evaluates E at the current positions on the way.
     const Evaluation here = slim ? slimLocalStep(constrainedTargets, softTargets)

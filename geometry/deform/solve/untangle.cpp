@@ -1,5 +1,6 @@
 #include "geometry/deform/solve/untangle.h"
 
+#include "geometry/cancellation.h"
 #include "geometry/error.h"
 #include "geometry/parallel.h"
 
@@ -207,6 +208,7 @@ UntangleReport untangleTets(std::span<const Eigen::Vector3d> rest, std::span<con
   double bestDet = detMin, bestEnergy = energyPrevious;
   int sinceBest = 0;
   for (int round = 0; round < options.rounds; ++round) {
+    throwIfCancelled();
     // The round's lowest point: a line search that fails leaves x where it tried last.
     Eigen::VectorXd lowest = x;
     double lowestEnergy = energyPrevious;

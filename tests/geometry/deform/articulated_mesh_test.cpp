@@ -1,5 +1,6 @@
 #include "geometry/deform/articulated_mesh.h"
 
+#include "geometry/cancellation.h"
 #include "geometry/deform/articulated_pose.h"
 #include "geometry/deform/solve/contact.h"
 #include "geometry/deform/pose/joint_pose.h"
@@ -474,6 +475,26 @@ TEST(ArticulatedPose, ContactPartsTheElbowsCrease) {
     if (f.mesh.role[v] == VertexRole::Rigid) {
       EXPECT_LT((p[v] - motions[std::size_t(f.mesh.vertexPart[v])] * f.mesh.mesh.positions[v]).norm(), 1e-6);
     }
+}
+
+// Ctrl-C (the Python module's cancellation) stops the pose at its next
+// step or iteration instead of after minutes of solving, and the mesh's
+// build between its slices.
+TEST(ArticulatedPose, CancellationStopsThePoseAndTheMesh) {
+  const Figure& f = figure();
+  const skeleton::PartMotions motions = figureMotions(f.skeleton, {jointAngles(JointId::RightElbow, 90.0)});
+  struct Cancel {
+    Cancel() { cancellationRequested() = true; }
+    ~Cancel() { cancellationRequested() = false; }
+  };
+  {
+    const Cancel cancel;
+    ArticulatedPoser poser(f.mesh);
+    EXPECT_THROW(poser.pose(motions), OperationCancelled);
+    EXPECT_THROW(buildArticulatedMesh(f.grid, f.organs, f.skeleton), OperationCancelled);
+  }
+  ArticulatedPoser poser(f.mesh);
+  EXPECT_EQ(poser.pose(motions).invertedTets, 0u);
 }
 
 // Tissue far from every moved bone is held at rest (stillBeyondMm): an

@@ -1,4 +1,5 @@
 #include "geometry/deform/solve/untangle.h"
+#include "geometry/cancellation.h"
 #include "geometry/error.h"
 #include "geometry/voxel_tetrahedralization.h"
 
@@ -69,6 +70,17 @@ TEST(Untangle, UnfoldsTheTissueBetweenTurnedBones) {
       EXPECT_EQ(bar.posed[v], again.posed[v]);
     }
   }
+}
+
+// Ctrl-C stops the untangling at its next round; the positions are left
+// as they were.
+TEST(Untangle, CancellationStopsItAndLeavesThePositions) {
+  TurnedBar bar(90.0);
+  const std::vector<Eigen::Vector3d> before = bar.posed;
+  cancellationRequested() = true;
+  EXPECT_THROW(untangleTets(bar.mesh.positions, bar.mesh.tets, bar.free, {}, bar.posed), OperationCancelled);
+  cancellationRequested() = false;
+  EXPECT_EQ(bar.posed, before);
 }
 
 TEST(Untangle, SameResultOnOneThreadAndOnSeveral) {
