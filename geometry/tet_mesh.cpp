@@ -86,12 +86,16 @@ VertexTets vertexTets(std::span<const Tet> tets, std::size_t vertexCount) {
 }
 
 std::vector<std::array<std::int32_t, 4>> faceNeighbors(const TetMesh& mesh, const std::string& source) {
-  std::vector<std::array<std::int32_t, 4>> nb(mesh.tets.size(), {-1, -1, -1, -1});
+  return faceNeighbors(std::span<const Tet>(mesh.tets), source);
+}
+
+std::vector<std::array<std::int32_t, 4>> faceNeighbors(std::span<const Tet> tets, const std::string& source) {
+  std::vector<std::array<std::int32_t, 4>> nb(tets.size(), {-1, -1, -1, -1});
   std::unordered_map<FaceKey, std::int64_t, FaceKeyHash> open;  // face -> 4*tet + k
-  open.reserve(mesh.tets.size() * 2);
-  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
+  open.reserve(tets.size() * 2);
+  for (std::size_t t = 0; t < tets.size(); ++t) {
     for (int k = 0; k < 4; ++k) {
-      const FaceKey key = sortedKey(tetFace(mesh.tets[t], k));
+      const FaceKey key = sortedKey(tetFace(tets[t], k));
       auto [it, inserted] = open.try_emplace(key, std::int64_t(4 * t + k));
       if (inserted) continue;
       if (it->second < 0) throw InputError(source, "a face of tet " + std::to_string(t) + " is shared by more than two tets");

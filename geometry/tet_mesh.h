@@ -52,6 +52,7 @@ Tri tetFace(const Tet& t, int k);
 // opposite vertex k), or -1 on the boundary. Faces shared by more than two
 // tets are a topology error and throw InputError(source, ...).
 std::vector<std::array<std::int32_t, 4>> faceNeighbors(const TetMesh& mesh, const std::string& source = "mesh");
+std::vector<std::array<std::int32_t, 4>> faceNeighbors(std::span<const Tet> tets, const std::string& source = "mesh");
 
 // Tets around each vertex (compressed rows): the tets holding vertex v are
 // tets[start[v] .. start[v + 1]), in increasing order.

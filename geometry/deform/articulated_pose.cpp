@@ -441,32 +441,45 @@ std::vector<std::uint8_t> ArticulatedPoser::movableVertices() const {
   return movable;
 }
 
+std::vector<double> ArticulatedPoser::distanceToInverted(std::size_t& inverted) const {
+  std::vector<double> dist(mesh_.mesh.vertexCount(), std::numeric_limits<double>::infinity());
+  inverted = 0;
+  for (const Tet& t : mesh_.mesh.tets)
+    if (signedVolume(positions_, t) <= 0.0) {
+      ++inverted;
+      for (const std::int32_t v : t) dist[std::size_t(v)] = 0.0;
+    }
+  if (inverted > 0) edgeDistances(edges_, dist);
+  return dist;
+}
+
+std::size_t ArticulatedPoser::freeWithin(std::span<const double> dist, double radius, std::span<const std::uint8_t> movable,
+                                         std::span<const Eigen::Vector3d> onBodies, std::vector<std::uint8_t>& free,
+                                         std::vector<UntangleAnchor>& anchors) const {
+  free.assign(mesh_.mesh.vertexCount(), 0);
+  std::size_t moved = 0;
+  for (std::size_t v = 0; v < free.size(); ++v) {
+    if (!movable[v] || dist[v] > radius) continue;
+    free[v] = 1;
+    ++moved;
+    if (mesh_.role[v] == VertexRole::Sliding) anchors.push_back({std::int32_t(v), onBodies[v], options_.slidingWeight});
+  }
+  return moved;
+}
+
 void ArticulatedPoser::untangle(std::span<const Eigen::Isometry3d> motions, ArticulatedPoseReport& report) {
   const TetMesh& m = mesh_.mesh;
-  const std::size_t nv = m.vertexCount();
   const std::vector<std::uint8_t> movable = movableVertices();
   std::vector<Eigen::Vector3d> onBodies = positions_;
   projectSlidingVertices(mesh_, motions, 1.0, onBodies);
   const auto start = std::chrono::steady_clock::now();
   for (const double radius : options_.untangleRadiiMm) {
-    std::vector<double> dist(nv, std::numeric_limits<double>::infinity());
     std::size_t inverted = 0;
-    for (const Tet& t : m.tets)
-      if (signedVolume(positions_, t) <= 0.0) {
-        ++inverted;
-        for (const std::int32_t v : t) dist[std::size_t(v)] = 0.0;
-      }
+    const std::vector<double> dist = distanceToInverted(inverted);
     if (inverted == 0) break;
-    edgeDistances(edges_, dist);
-    std::vector<std::uint8_t> free(nv, 0);
+    std::vector<std::uint8_t> free;
     std::vector<UntangleAnchor> anchors;
-    std::size_t moved = 0;
-    for (std::size_t v = 0; v < nv; ++v) {
-      if (!movable[v] || dist[v] > radius) continue;
-      free[v] = 1;
-      ++moved;
-      if (mesh_.role[v] == VertexRole::Sliding) anchors.push_back({std::int32_t(v), onBodies[v], options_.slidingWeight});
-    }
+    const std::size_t moved = freeWithin(dist, radius, movable, onBodies, free, anchors);
     if (moved == 0) continue;
     untangleTets(m.positions, m.tets, free, anchors, positions_, options_.untangle);
     report.untangleRadiusMm = radius;
@@ -483,17 +496,9 @@ void ArticulatedPoser::resolveContacts(std::span<const Eigen::Isometry3d> motion
   // Not about a tangle the untangling left: a vertex there lies inside the
   // tissue across because the tets fold, and a pull on it folds them more.
   {
-    std::vector<double> toFold(nv, std::numeric_limits<double>::infinity());
-    bool any = false;
-    for (const Tet& t : m.tets)
-      if (signedVolume(positions_, t) <= 0.0) {
-        any = true;
-        for (const std::int32_t v : t) toFold[std::size_t(v)] = 0.0;
-      }
-    if (any) {
-      edgeDistances(edges_, toFold);
-      for (std::size_t v = 0; v < nv; ++v) movable[v] = movable[v] && toFold[v] > options_.contactRadiusMm;
-    }
+    std::size_t inverted = 0;
+    const std::vector<double> toFold = distanceToInverted(inverted);
+    for (std::size_t v = 0; v < nv && inverted > 0; ++v) movable[v] = movable[v] && toFold[v] > options_.contactRadiusMm;
   }
   // Candidates: the free tissue (a sliding vertex stays on its body, whose
   // two sides overlap by design where the bones' staircases cross).
@@ -544,15 +549,9 @@ void ArticulatedPoser::resolveContacts(std::span<const Eigen::Isometry3d> motion
         held[std::size_t(k)].second = target;
       }
     }
-    std::vector<std::uint8_t> free(nv, 0);
+    std::vector<std::uint8_t> free;
     std::vector<UntangleAnchor> anchors;
-    std::size_t moved = 0;
-    for (std::size_t v = 0; v < nv; ++v) {
-      if (!movable[v] || dist[v] > options_.contactRadiusMm) continue;
-      free[v] = 1;
-      ++moved;
-      if (mesh_.role[v] == VertexRole::Sliding) anchors.push_back({std::int32_t(v), onBodies[v], options_.slidingWeight});
-    }
+    const std::size_t moved = freeWithin(dist, options_.contactRadiusMm, movable, onBodies, free, anchors);
     for (const auto& [v, target] : held) anchors.push_back({v, target, options_.contactWeight});
     untangleTets(m.positions, m.tets, free, anchors, positions_, solve);
     report.contactVertices = moved;

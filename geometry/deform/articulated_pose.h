@@ -199,6 +199,14 @@ private:
   // Per mesh vertex: solved, not rigid, not still (what the untangling and
   // the contact may move).
   std::vector<std::uint8_t> movableVertices() const;
+  // Per mesh vertex: its distance along the mesh's edges to the nearest
+  // tet inverted in positions_ (infinite with none); `inverted` their count.
+  std::vector<double> distanceToInverted(std::size_t& inverted) const;
+  // The movable vertices within `radius` of `dist`'s seeds set free, the
+  // sliding ones among them anchored to `onBodies` (slidingWeight); how many.
+  std::size_t freeWithin(std::span<const double> dist, double radius, std::span<const std::uint8_t> movable,
+                         std::span<const Eigen::Vector3d> onBodies, std::vector<std::uint8_t>& free,
+                         std::vector<UntangleAnchor>& anchors) const;
   // Per segment: the largest distance of its bone vertices in `solver`'s
   // positions from constrainedTargets_.
   std::vector<double> boneLag(const InjectiveSolver& solver) const;

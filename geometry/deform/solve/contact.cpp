@@ -71,38 +71,26 @@ double depthInside(const Eigen::Vector3d& p, const std::array<Eigen::Vector3d, 4
   return depth;
 }
 
+// Face adjacency (faceNeighbors) of tets whose vertex indices are all below
+// vertexCount; throws InputError("contact", ...) otherwise.
+std::vector<std::array<std::int32_t, 4>> checkedNeighbours(std::span<const Tet> tets, std::size_t vertexCount) {
+  for (std::size_t t = 0; t < tets.size(); ++t)
+    for (const std::int32_t v : tets[t])
+      if (v < 0 || std::size_t(v) >= vertexCount) throw InputError("contact", "tet " + std::to_string(t) + " has a vertex index out of range");
+  return faceNeighbors(tets, "contact");
+}
+
 }  // namespace
 
 std::vector<std::array<std::int32_t, 3>> boundaryFaces(std::span<const Tet> tets, std::size_t vertexCount) {
-  struct Entry {
-    std::array<std::int32_t, 3> sorted;
-    std::int32_t tet;
-    std::int8_t face;
-  };
-  std::vector<Entry> entries;
-  entries.reserve(4 * tets.size());
-  for (std::size_t t = 0; t < tets.size(); ++t)
-    for (int k = 0; k < 4; ++k) {
-      const Tri f = tetFace(tets[t], k);
-      std::array<std::int32_t, 3> s{f[0], f[1], f[2]};
-      for (const std::int32_t v : s)
-        if (v < 0 || std::size_t(v) >= vertexCount) throw InputError("contact", "tet " + std::to_string(t) + " has a vertex index out of range");
-      std::sort(s.begin(), s.end());
-      entries.push_back({s, std::int32_t(t), std::int8_t(k)});
-    }
-  std::sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) {
-    return a.sorted < b.sorted || (a.sorted == b.sorted && a.tet < b.tet);
-  });
+  const std::vector<std::array<std::int32_t, 4>> neighbours = checkedNeighbours(tets, vertexCount);
   std::vector<std::array<std::int32_t, 3>> out;
-  for (std::size_t i = 0; i < entries.size();) {
-    std::size_t j = i + 1;
-    while (j < entries.size() && entries[j].sorted == entries[i].sorted) ++j;
-    if (j == i + 1) {
-      const Tri f = tetFace(tets[std::size_t(entries[i].tet)], entries[i].face);
-      out.push_back({f[0], f[1], f[2]});
-    }
-    i = j;
-  }
+  for (std::size_t t = 0; t < tets.size(); ++t)
+    for (int k = 0; k < 4; ++k)
+      if (neighbours[t][std::size_t(k)] < 0) {
+        const Tri f = tetFace(tets[t], k);
+        out.push_back({f[0], f[1], f[2]});
+      }
   return out;
 }
 
@@ -115,18 +103,28 @@ std::vector<Penetration> findPenetrations(std::span<const Eigen::Vector3d> rest,
   if (tets.empty()) return {};
   const double apart2 = options.restSeparationMm * options.restSeparationMm;
 
-  // The penetrable tets' boundary faces and the candidates on the boundary.
+  // The candidates on the mesh's boundary, and the penetrable tets' boundary
+  // faces (a face of the mesh's boundary, or one beside a tet that is not
+  // penetrable), from one adjacency.
+  const std::vector<std::array<std::int32_t, 4>> neighbours = checkedNeighbours(tets, nv);
   std::vector<Tet> penetrableTets;
   std::vector<std::int32_t> penetrableIndex;
-  for (std::size_t t = 0; t < tets.size(); ++t)
+  std::vector<std::array<std::int32_t, 3>> faces;
+  std::vector<std::uint8_t> onBoundary(nv, 0);
+  for (std::size_t t = 0; t < tets.size(); ++t) {
     if (penetrable[t]) {
       penetrableTets.push_back(tets[t]);
       penetrableIndex.push_back(std::int32_t(t));
     }
-  const std::vector<std::array<std::int32_t, 3>> faces = boundaryFaces(penetrableTets, nv);
-  std::vector<std::uint8_t> onBoundary(nv, 0);
-  for (const auto& f : boundaryFaces(tets, nv))
-    for (const std::int32_t v : f) onBoundary[std::size_t(v)] = 1;
+    for (int k = 0; k < 4; ++k) {
+      const std::int32_t n = neighbours[t][std::size_t(k)];
+      if (n >= 0 && !(penetrable[t] && !penetrable[std::size_t(n)])) continue;
+      const Tri f = tetFace(tets[t], k);
+      if (n < 0)
+        for (const std::int32_t v : f) onBoundary[std::size_t(v)] = 1;
+      if (penetrable[t]) faces.push_back({f[0], f[1], f[2]});
+    }
+  }
   std::vector<std::int32_t> queries;
   for (std::size_t v = 0; v < nv; ++v)
     if (candidate[v] && onBoundary[v]) queries.push_back(std::int32_t(v));
@@ -148,22 +146,16 @@ std::vector<Penetration> findPenetrations(std::span<const Eigen::Vector3d> rest,
   }
   const double cell = std::max({2.0 * edgeSum / double(penetrableTets.size()), (hi - lo).maxCoeff() / double(1 << 19), 1e-6});
   CellIndex tetCells(cell, lo), faceCells(cell, lo);
-  for (std::size_t i = 0; i < penetrableTets.size(); ++i) {
-    Eigen::Vector3d a = positions[std::size_t(penetrableTets[i][0])], b = a;
-    for (const std::int32_t v : penetrableTets[i]) {
+  const auto addBox = [&](CellIndex& cells, std::size_t item, const auto& vertices) {
+    Eigen::Vector3d a = positions[std::size_t(vertices[0])], b = a;
+    for (const std::int32_t v : vertices) {
       a = a.cwiseMin(positions[std::size_t(v)]);
       b = b.cwiseMax(positions[std::size_t(v)]);
     }
-    tetCells.add(std::int32_t(i), a, b);
-  }
-  for (std::size_t i = 0; i < faces.size(); ++i) {
-    Eigen::Vector3d a = positions[std::size_t(faces[i][0])], b = a;
-    for (const std::int32_t v : faces[i]) {
-      a = a.cwiseMin(positions[std::size_t(v)]);
-      b = b.cwiseMax(positions[std::size_t(v)]);
-    }
-    faceCells.add(std::int32_t(i), a, b);
-  }
+    cells.add(std::int32_t(item), a, b);
+  };
+  for (std::size_t i = 0; i < penetrableTets.size(); ++i) addBox(tetCells, i, penetrableTets[i]);
+  for (std::size_t i = 0; i < faces.size(); ++i) addBox(faceCells, i, faces[i]);
   tetCells.finish();
   faceCells.finish();
 
