@@ -306,6 +306,39 @@ TEST(ArticulatedMesh, TheOwnersBoneEndJoinsAHingesBody) {
 // The joint turned with the body's owner moved rigidly, the other side
 // still: the body's tets keep their volume (rigid), and no face is shared
 // across the cut (the two sides can slide).
+// The sliver exudation after the mesher's refinement has no time limit
+// (the mesh must not depend on the machine's speed), and CGAL's exuder can
+// cycle without end: with the figure's elbows turned about these axes (a
+// wrist placement tried on the way) it pumped 435,000 vertices of the
+// articulated mesh's 5,000 with the same 225 cells queued. It now stops
+// after as many pumps as the triangulation has vertices.
+TEST(ArticulatedMesh, TheExudationEndsWhereItWouldCycle) {
+  const Figure& f = figure();
+  skeleton::Skeleton s = f.skeleton;
+  struct Placed {
+    JointId id;
+    Eigen::Vector3d centre, longAxis, leftRight;
+  };
+  const Placed placed[] = {
+      {JointId::RightElbow, {27.0, 28.0, 120.66666666666667}, {0.0, -0.027262590177555817, -0.9996283065103801},
+       {-0.9999999005110546, 0.00044590356687812955, -1.2161006369404435e-05}},
+      {JointId::LeftElbow, {86.25, 27.75, 120.75}, {0.020399668712070152, -0.020399668712070152, -0.9995837668914375},
+       {-0.9997215790197486, -0.012274447128331279, -0.02015198228349831}},
+      {JointId::RightWrist, {27.0, 27.0, 84.0}, {0.0, 0.0, -1.0}, {-1.0, 0.0, 0.0}},
+      {JointId::LeftWrist, {87.0, 27.0, 84.0}, {0.0, 0.0, -1.0}, {-1.0, 0.0, 0.0}},
+  };
+  for (const Placed& p : placed)
+    for (skeleton::Joint& j : s.joints)
+      if (j.id == p.id) {
+        j.centre = p.centre;
+        j.longAxis = p.longAxis.normalized();
+        j.leftRight = p.leftRight.normalized();
+      }
+  const ArticulatedMesh m = buildArticulatedMesh(f.grid, f.organs, s);
+  EXPECT_GT(m.mesh.tetCount(), 1000u);
+  for (const Tet& t : m.mesh.tets) EXPECT_GT(signedVolume(m.mesh.positions, t), 0.0);
+}
+
 TEST(ArticulatedMesh, TurningTheOwnerMovesTheBodyRigidlyAndApartFromTheOtherSide) {
   const Figure& f = figure();
   const ArticulatedMesh& m = f.mesh;
