@@ -138,6 +138,10 @@ struct ArticulatedMeshOptions {
   double bodyMarginVoxels = 0.5;   // a body stops this far (finest spacing) short of the other part's bone
   double minBodyRadiusVoxels = 2.0;  // a smaller body is not built (the joint is not cut)
   double attachmentHalfAngleDeg = 50.0;
+  // A sphere body at each wrist too, about its centre in the carpus up to
+  // the forearm bones, owned by the hand (docs/BENCHMARKS.md, "The wrist in
+  // the carpus": not better on the phone call).
+  bool wristBodies = false;
   // The owner's bone within this many voxels (the grid's coarsest
   // spacing) outside its body, away from the attachment, joins the body:
   // the sliding cut follows the bone's staircase there instead of cutting

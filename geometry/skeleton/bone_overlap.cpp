@@ -15,6 +15,8 @@ const Joint* jointBetween(std::span<const Joint> joints, Part a, Part b) {
   return nullptr;
 }
 
+bool isWrist(JointId id) { return id == JointId::RightWrist || id == JointId::LeftWrist; }
+
 }  // namespace
 
 std::vector<Part> partSubtree(Part part) {
@@ -42,6 +44,34 @@ BoneOverlapIndex::BoneOverlapIndex(const BodyParts& parts) : grid_(parts.parts.g
       bonePart_[std::size_t(v)] = std::uint8_t(p);
       boxes_[p].extend(x);
     }
+  // The wrists' articular faces: each side's bone voxels within a voxel
+  // (the largest spacing) of the other side's bone at rest.
+  const double slack = g.spacing.maxCoeff();
+  for (const JointId id : {JointId::RightWrist, JointId::LeftWrist}) {
+    const Part sides[2] = {jointKind(id).parent, jointKind(id).child};
+    for (int s = 0; s < 2; ++s) {
+      const Part p = sides[s], other = sides[1 - s];
+      std::vector<std::uint8_t>& face = face_[std::size_t(p)];
+      face.assign(points_[std::size_t(p)].size(), 0);
+      Eigen::AlignedBox3d near = boxes_[std::size_t(other)];
+      if (near.isEmpty()) continue;
+      near.extend(near.min() - Eigen::Vector3d::Constant(slack)).extend(near.max() + Eigen::Vector3d::Constant(slack));
+      std::array<std::int64_t, 3> reach{};
+      for (int a = 0; a < 3; ++a) reach[std::size_t(a)] = std::int64_t(std::floor(slack / g.spacing[a]));
+      for (std::size_t i = 0; i < face.size(); ++i) {
+        const Eigen::Vector3d& x = points_[std::size_t(p)][i];
+        if (!near.contains(x)) continue;
+        const Eigen::Vector3d q = g.continuousIndex(x);
+        const std::int64_t ci = std::llround(q[0]), cj = std::llround(q[1]), ck = std::llround(q[2]);
+        for (std::int64_t k = ck - reach[2]; k <= ck + reach[2] && !face[i]; ++k)
+          for (std::int64_t j = cj - reach[1]; j <= cj + reach[1] && !face[i]; ++j)
+            for (std::int64_t ii = ci - reach[0]; ii <= ci + reach[0] && !face[i]; ++ii)
+              if (g.contains(ii, j, k) && bonePart_[std::size_t(g.index(ii, j, k))] == std::uint8_t(other) &&
+                  (g.voxelCenter(ii, j, k) - x).norm() <= slack)
+                face[i] = 1;
+      }
+    }
+  }
 }
 
 std::vector<BoneOverlap> BoneOverlapIndex::under(std::span<const Joint> joints, std::span<const Eigen::Isometry3d> motions) const {
@@ -66,9 +96,15 @@ std::vector<BoneOverlap> BoneOverlapIndex::under(std::span<const Joint> joints, 
       // centre, so the shell is the same in both parts' frames.
       const Joint* ball = jointBetween(joints, Part(a), Part(b));
       const double shell = ball && ball->radius > 0.0 ? ball->radius + slack : -1.0;
+      // At a wrist, the faces that meet at rest are left out as well: the
+      // carpals roll on the radius, and their staircases cross as the hand
+      // turns about the carpus.
+      const std::vector<std::uint8_t>* face = ball && isWrist(ball->id) && !face_[std::size_t(a)].empty() ? &face_[std::size_t(a)] : nullptr;
       std::size_t n = 0;
-      for (const Eigen::Vector3d& x : points_[std::size_t(a)]) {
+      for (std::size_t at = 0; at < points_[std::size_t(a)].size(); ++at) {
+        const Eigen::Vector3d& x = points_[std::size_t(a)][at];
         if (shell > 0.0 && (x - ball->centre).norm() <= shell) continue;
+        if (face && (*face)[at]) continue;
         const Eigen::Vector3d q = g.continuousIndex(t * x);
         const std::int64_t i = std::llround(q[0]), j = std::llround(q[1]), k = std::llround(q[2]);
         n += g.contains(i, j, k) && bonePart_[std::size_t(g.index(i, j, k))] == std::uint8_t(b);

@@ -10,8 +10,11 @@
 // surfaces cross where they meet: voxels of the parent and the child within
 // the sphere's radius plus one voxel (the largest spacing) of the joint's
 // centre are the articular surfaces and are not counted between those two
-// parts. Everywhere else, and between parts that do not share a joint, every
-// overlapping voxel counts.
+// parts. At a wrist (its sphere about the carpus' centre up to the forearm
+// bones) the voxels of either side within a voxel of the other
+// side's bone at rest are not counted either: the carpals' face rolls on the
+// radius' across the wrist's width, beyond the sphere. Everywhere else, and
+// between parts that do not share a joint, every overlapping voxel counts.
 
 #include "geometry/skeleton/body_parts.h"
 #include "geometry/skeleton/joints.h"
@@ -51,6 +54,9 @@ private:
   std::array<std::vector<Eigen::Vector3d>, kPartCount + 1> points_;  // bone voxel centres per part
   std::array<Eigen::AlignedBox3d, kPartCount + 1> boxes_;
   std::vector<std::uint8_t> bonePart_;  // per voxel: the part whose bone it is (0: none)
+  // Per point of a wrist's two parts: 1 where it lies within a voxel of the
+  // other part's bone at rest (the articular faces); empty for other parts.
+  std::array<std::vector<std::uint8_t>, kPartCount + 1> face_;
 };
 
 // BoneOverlapIndex(parts).under(joints, motions).

@@ -10,6 +10,7 @@
 #include <cctype>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <numbers>
 
 namespace vox::skeleton {
@@ -165,6 +166,43 @@ std::vector<std::int64_t> surfaceVoxels(const GridGeometry& g, const std::vector
   return out;
 }
 
+// The wrist's centre: the hand's bones this near the forearm bones (a
+// share of the forearm bones' length: 24 to 26 mm on the ICRP adults) are
+// the carpus, whose centroid (about the capitate's head) the hand turns
+// about: deeper reaches the metacarpals; the proximal row alone turns the
+// carpals into the radius over the wrist's range.
+constexpr double kCarpusDepth = 0.1;
+
+// The points of `points` within `reach` mm of a point of `other`, on a cell
+// grid of `reach` over `other`.
+std::vector<Eigen::Vector3d> pointsNear(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& other, double reach) {
+  std::vector<Eigen::Vector3d> out;
+  if (points.empty() || other.empty() || !(reach > 0.0)) return out;
+  const auto cellOf = [reach](const Eigen::Vector3d& p) {
+    return std::array<std::int64_t, 3>{std::int64_t(std::floor(p[0] / reach)), std::int64_t(std::floor(p[1] / reach)), std::int64_t(std::floor(p[2] / reach))};
+  };
+  std::map<std::array<std::int64_t, 3>, std::vector<Eigen::Vector3d>> cells;
+  for (const Eigen::Vector3d& q : other) cells[cellOf(q)].push_back(q);
+  const double r2 = reach * reach;
+  for (const Eigen::Vector3d& p : points) {
+    const std::array<std::int64_t, 3> c = cellOf(p);
+    bool near = false;
+    for (std::int64_t dz = -1; dz <= 1 && !near; ++dz)
+      for (std::int64_t dy = -1; dy <= 1 && !near; ++dy)
+        for (std::int64_t dx = -1; dx <= 1 && !near; ++dx) {
+          const auto it = cells.find({c[0] + dx, c[1] + dy, c[2] + dz});
+          if (it == cells.end()) continue;
+          for (const Eigen::Vector3d& q : it->second)
+            if ((p - q).squaredNorm() <= r2) {
+              near = true;
+              break;
+            }
+        }
+    if (near) out.push_back(p);
+  }
+  return out;
+}
+
 // The point of `child` nearest to any point of `parent` (brute force over
 // the parent points within `reach` mm of the child's bounding box).
 std::optional<Eigen::Vector3d> nearestTo(const std::vector<Eigen::Vector3d>& child, const std::vector<Eigen::Vector3d>& parent, double reach) {
@@ -298,9 +336,15 @@ std::string clearedOver(const JointKind& kind) {
 // which a single pivot turns the vertebrae into their neighbours). Searched within an
 // eighth of the parent bone's length, on a grid of two finest voxels, then of
 // half a voxel about the best; the fewest overlaps win, then the nearest to
-// the estimate; a move under a finest voxel is not made. Returns the
-// distance moved (mm).
-double clearHinge(Joint& joint, const GridGeometry& g, const BoneVoxels& parent, const BoneShape& parentShape, const BoneVoxels& child) {
+// the estimate; a move under a finest voxel is not made. With
+// `minClearance` (mm), among the places with the fewest overlaps those whose
+// flexion axis passes at least that far from the child's bone come first: the
+// elbow's and knee's axis runs through the trochlea and the condyles, which
+// the ulna's notch and the tibia's plateaus wrap at a distance, so an axis
+// that grazes the child's bone is the estimate's error, and the articular
+// mesh could cut no cylinder about it. Returns the distance moved (mm).
+double clearHinge(Joint& joint, const GridGeometry& g, const BoneVoxels& parent, const BoneShape& parentShape, const BoneVoxels& child,
+                  double minClearance = 0.0) {
   const double reach = 0.3 * parentShape.length(), range = 0.125 * parentShape.length();
   std::vector<Eigen::Vector3d> near;
   for (const Eigen::Vector3d& p : centres(g, surfaceVoxels(g, child.voxels)))
@@ -329,14 +373,29 @@ double clearHinge(Joint& joint, const GridGeometry& g, const BoneVoxels& parent,
   }
   const VoxelBitmap parentBits(g, parent.voxels);
   const Eigen::Vector3d estimate = joint.centre;
+  // Whether the flexion axis through `centre` passes minClearance or more
+  // from every child point.
+  const auto clears = [&](const Eigen::Vector3d& centre) {
+    const double limit = minClearance * minClearance;
+    for (const Eigen::Vector3d& p : near) {
+      const Eigen::Vector3d d = p - centre;
+      if ((d - d.dot(axis) * axis).squaredNorm() < limit) return false;
+    }
+    return true;
+  };
   std::size_t best = hingeOverlaps(turns, estimate, near, parentBits, std::numeric_limits<std::size_t>::max());
-  if (best == 0) return 0.0;
+  bool bestClears = clears(estimate);
+  if (best == 0 && bestClears) return 0.0;
   Eigen::Vector2d bestOffset = Eigen::Vector2d::Zero();
   const auto consider = [&](const Eigen::Vector2d& o) {
     if (o.norm() > range) return;
-    const std::size_t n = hingeOverlaps(turns, estimate + o[0] * u + o[1] * w, near, parentBits, best);
-    if (n < best || (n == best && o.norm() < bestOffset.norm())) {
+    const Eigen::Vector3d centre = estimate + o[0] * u + o[1] * w;
+    const std::size_t n = hingeOverlaps(turns, centre, near, parentBits, best);
+    if (n > best) return;
+    const bool c = clears(centre);
+    if (n < best || (c && !bestClears) || (c == bestClears && o.norm() < bestOffset.norm())) {
       best = n;
+      bestClears = c;
       bestOffset = o;
     }
   };
@@ -415,6 +474,9 @@ void estimateLimb(std::array<std::optional<Joint>, kJointCount>& found, const Gr
     found[std::size_t(limb.mid)] = j;
   }
   // Low joint (wrist, ankle): the middle bone's end nearer the end bones.
+  // The wrist's, where the hand turns: the centroid of the hand's bones
+  // within the carpus' depth of the forearm bones (the carpals, about the
+  // capitate), if any lie that near.
   if (middleShape && endShape) {
     const BoneShape& s = *middleShape;
     const bool distalHigh = s.nearerHigh(endShape->centroid);
@@ -422,6 +484,17 @@ void estimateLimb(std::array<std::optional<Joint>, kJointCount>& found, const Gr
     j.id = limb.low;
     j.centre = mean(s.end(distalHigh, 0.06 * s.length()));
     j.method = "distal end";
+    const std::vector<Eigen::Vector3d> middleSurface = limb.lowHinge ? std::vector<Eigen::Vector3d>{} : centres(g, surfaceVoxels(g, middle->voxels));
+    const std::vector<Eigen::Vector3d> carpus = pointsNear(centres(g, end->voxels), middleSurface, kCarpusDepth * s.length());
+    if (!limb.lowHinge && !carpus.empty()) {
+      j.centre = mean(carpus);
+      j.method = "carpus";
+      // The sphere about it up to the forearm bones: the articular
+      // surfaces within it, as a ball's (bone_overlap.h).
+      double nearest = std::numeric_limits<double>::infinity();
+      for (const Eigen::Vector3d& p : middleSurface) nearest = std::min(nearest, (p - j.centre).norm());
+      j.radius = nearest;
+    }
     found[std::size_t(limb.low)] = j;
   }
 
@@ -462,11 +535,16 @@ void estimateLimb(std::array<std::optional<Joint>, kJointCount>& found, const Gr
   // parent's, then the axes again from it.
   // The wrist's and ankle's first: the elbow's and knee's long axis points
   // at them.
-  if (low && middle && end && clearHinge(*low, g, *middle, *middleShape, *end) > 0.0) {
-    low->method = "distal end" + clearedOver(low->kind());
+  // (The carpus' centre is where the hand turns: cleared over the wrist's
+  // whole range it moved about 50 mm up the forearm, and the hand swung
+  // about a point inside the radius.)
+  if (low && middle && end && low->method == "distal end" && clearHinge(*low, g, *middle, *middleShape, *end) > 0.0) {
+    low->method += clearedOver(low->kind());
     setAxes();
   }
-  if (mid && upper && middle && clearHinge(*mid, g, *upper, *upperShape, *middle) > 0.0) {
+  // The elbow's and knee's axis at least three finest voxels from the
+  // forearm's and lower leg's bone.
+  if (mid && upper && middle && clearHinge(*mid, g, *upper, *upperShape, *middle, 3.0 * g.spacing.minCoeff()) > 0.0) {
     mid->method = "distal end" + clearedOver(mid->kind());
     setAxes();
   }

@@ -109,7 +109,7 @@ struct Joint {
   Eigen::Vector3d leftRight = Eigen::Vector3d::UnitX();    // unit flexion axis (up to the joint's sign), towards the body's right
   Eigen::Vector3d anterior = -Eigen::Vector3d::UnitY();    // the body's front-back axis (abduction)
   Eigen::Vector3d superior = Eigen::Vector3d::UnitZ();     // the body's up
-  double radius = 0.0;       // fitted sphere (shoulder, hip), mm; 0 otherwise
+  double radius = 0.0;       // articular sphere, mm: fitted (shoulder, hip), up to the middle bones (wrist, ankle); 0 otherwise
   std::string method;        // how the centre was found ("sphere fit", "distal end", ...)
   std::string axisMethod;    // how leftRight was found ("bone end width", "body axis", "given")
 

@@ -28,7 +28,7 @@
 // bones held at rest in the steps, not soft targets), --no-untangle (no
 // untangling after the last step), --contact-rounds N, --contact-radius
 // MM, --contact-weight W (the contact after it; 0 rounds: none),
-// --owner-shell V (ownerShellVoxels), --attachment-angle DEG (the bodies'
+// --owner-shell V (ownerShellVoxels), --wrist-bodies (a sphere body at each wrist), --attachment-angle DEG (the bodies'
 // attachment half angle), --untangle-radius MM (one radius instead of the
 // pose's), --whole-part-bone-clearance MM (the
 // hands', feet's and head's tissue this near another part's bone soft; 0:
@@ -69,7 +69,7 @@ double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>
 int usage() {
   std::fprintf(stderr,
                "usage: articulated_pose_bench GRID ORGANS POSE [--steps N] [--bone-weight W] [--sliding-weight W] [--max-iterations N] "
-               "[--volume-weight L] [--direct-limit N] [--scapulae] [--yielding-shell V] [--yielding-hips] [--squeezed F] [--dump PREFIX] [--mesh-only] "
+               "[--volume-weight L] [--direct-limit N] [--scapulae] [--wrist-bodies] [--yielding-shell V] [--yielding-hips] [--squeezed F] [--dump PREFIX] [--mesh-only] "
                "[--knee-forward MM] [--trunk-reach MM] [--pelvis-reach MM] [--joint-clearance MM] [--still-beyond MM] [--hold-unmoved-bones] [--no-untangle] [--contact-rounds N] [--contact-radius MM] [--contact-weight W] [--owner-shell V] [--attachment-angle DEG] [--untangle-radius MM] [--whole-part-bone-clearance MM] [--whole-part-own-bone-clearance MM]\n"
                "       articulated_pose_bench --figure POSE [options]\n");
   return 2;
@@ -201,6 +201,7 @@ int main(int argc, char** argv) {
     else if (arg == "--mesh-only") meshOnly = true;
     else if (arg == "--knee-forward") kneeForwardMm = std::stod(value());
     else if (arg == "--scapulae") meshOptions.movingScapulae = true;
+    else if (arg == "--wrist-bodies") meshOptions.wristBodies = true;
     else if (arg == "--yielding-shell") meshOptions.yieldingShellVoxels = std::stod(value());
     else if (arg == "--trunk-reach") meshOptions.trunkBoneReachMm = std::stod(value());
     else if (arg == "--pelvis-reach") meshOptions.pelvisBoneReachMm = std::stod(value());
