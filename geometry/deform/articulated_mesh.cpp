@@ -117,7 +117,6 @@ namespace {
 bool isBallJoint(JointId id) {
   return id == JointId::RightShoulder || id == JointId::LeftShoulder || id == JointId::RightHip || id == JointId::LeftHip;
 }
-bool isWrist(JointId id) { return id == JointId::RightWrist || id == JointId::LeftWrist; }
 bool isHingeJoint(JointId id) {
   return id == JointId::RightElbow || id == JointId::LeftElbow || id == JointId::RightKnee || id == JointId::LeftKnee;
 }
@@ -154,7 +153,7 @@ std::vector<ArticularBody> articularBodies(const LabelGrid& grid, const LabelGri
     b.centre = joint.centre;
     b.attachmentHalfAngleDeg = options.attachmentHalfAngleDeg;
     const Part parent = joint.kind().parent, child = joint.kind().child;
-    if (isBallJoint(joint.id) || (options.wristBodies && isWrist(joint.id))) {
+    if (isBallJoint(joint.id) || (options.wristBodies && skeleton::isWrist(joint.id))) {
       // The head's sphere, up to the socket: the nearest bone voxel of
       // another part than the head's.
       b.shape = ArticularShape::Sphere;

@@ -15,8 +15,6 @@ const Joint* jointBetween(std::span<const Joint> joints, Part a, Part b) {
   return nullptr;
 }
 
-bool isWrist(JointId id) { return id == JointId::RightWrist || id == JointId::LeftWrist; }
-
 }  // namespace
 
 std::vector<Part> partSubtree(Part part) {
@@ -91,19 +89,19 @@ std::vector<BoneOverlap> BoneOverlapIndex::under(std::span<const Joint> joints, 
       Eigen::AlignedBox3d target = boxes_[std::size_t(b)];
       target.extend(target.min() - Eigen::Vector3d::Constant(slack)).extend(target.max() + Eigen::Vector3d::Constant(slack));
       if (!moved.intersects(target)) continue;
-      // A joint between them with a fitted ball leaves its articular shell
-      // out; the rigid map between two parts that share a joint fixes its
+      // A joint between them with an articular sphere (a fitted ball, a
+      // wrist's) leaves its shell out; the rigid map between two parts that share a joint fixes its
       // centre, so the shell is the same in both parts' frames.
-      const Joint* ball = jointBetween(joints, Part(a), Part(b));
-      const double shell = ball && ball->radius > 0.0 ? ball->radius + slack : -1.0;
+      const Joint* joint = jointBetween(joints, Part(a), Part(b));
+      const double shell = joint && joint->radius > 0.0 ? joint->radius + slack : -1.0;
       // At a wrist, the faces that meet at rest are left out as well: the
       // carpals roll on the radius, and their staircases cross as the hand
       // turns about the carpus.
-      const std::vector<std::uint8_t>* face = ball && isWrist(ball->id) && !face_[std::size_t(a)].empty() ? &face_[std::size_t(a)] : nullptr;
+      const std::vector<std::uint8_t>* face = joint && isWrist(joint->id) && !face_[std::size_t(a)].empty() ? &face_[std::size_t(a)] : nullptr;
       std::size_t n = 0;
       for (std::size_t at = 0; at < points_[std::size_t(a)].size(); ++at) {
         const Eigen::Vector3d& x = points_[std::size_t(a)][at];
-        if (shell > 0.0 && (x - ball->centre).norm() <= shell) continue;
+        if (shell > 0.0 && (x - joint->centre).norm() <= shell) continue;
         if (face && (*face)[at]) continue;
         const Eigen::Vector3d q = g.continuousIndex(t * x);
         const std::int64_t i = std::llround(q[0]), j = std::llround(q[1]), k = std::llround(q[2]);

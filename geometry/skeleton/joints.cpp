@@ -484,16 +484,17 @@ void estimateLimb(std::array<std::optional<Joint>, kJointCount>& found, const Gr
     j.id = limb.low;
     j.centre = mean(s.end(distalHigh, 0.06 * s.length()));
     j.method = "distal end";
-    const std::vector<Eigen::Vector3d> middleSurface = limb.lowHinge ? std::vector<Eigen::Vector3d>{} : centres(g, surfaceVoxels(g, middle->voxels));
-    const std::vector<Eigen::Vector3d> carpus = pointsNear(centres(g, end->voxels), middleSurface, kCarpusDepth * s.length());
-    if (!limb.lowHinge && !carpus.empty()) {
-      j.centre = mean(carpus);
-      j.method = "carpus";
-      // The sphere about it up to the forearm bones: the articular
-      // surfaces within it, as a ball's (bone_overlap.h).
-      double nearest = std::numeric_limits<double>::infinity();
-      for (const Eigen::Vector3d& p : middleSurface) nearest = std::min(nearest, (p - j.centre).norm());
-      j.radius = nearest;
+    if (!limb.lowHinge) {
+      const std::vector<Eigen::Vector3d> forearm = centres(g, surfaceVoxels(g, middle->voxels));
+      const std::vector<Eigen::Vector3d> carpus = pointsNear(centres(g, end->voxels), forearm, kCarpusDepth * s.length());
+      if (!carpus.empty()) {
+        j.centre = mean(carpus);
+        j.method = "centroid of the carpus";
+        // The sphere about it up to the forearm bones: the articular
+        // surfaces within it, as a ball's (bone_overlap.h).
+        j.radius = std::numeric_limits<double>::infinity();
+        for (const Eigen::Vector3d& p : forearm) j.radius = std::min(j.radius, (p - j.centre).norm());
+      }
     }
     found[std::size_t(limb.low)] = j;
   }

@@ -95,6 +95,7 @@ struct JointKind {
 };
 
 const JointKind& jointKind(JointId id);
+inline bool isWrist(JointId id) { return id == JointId::RightWrist || id == JointId::LeftWrist; }
 std::optional<JointId> jointFromName(const std::string& name);
 std::string jointNames();  // "neck, head, right_shoulder, ..." for messages
 // The joint whose child is `part` (nullopt for the trunk and pelvis).

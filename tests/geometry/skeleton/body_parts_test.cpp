@@ -149,6 +149,16 @@ TEST(Joints, SkeletonFigureJointsWhereTheyWereBuilt) {
   EXPECT_NEAR(elbow->centre.x(), figureMm(truth.humeralHeadX[0]), voxel);
 }
 
+// The distance (mm) from p to the nearest voxel centre of `bone`.
+double nearestVoxelMm(const GridGeometry& g, const BoneVoxels& bone, const Eigen::Vector3d& p) {
+  double d = std::numeric_limits<double>::infinity();
+  for (const std::int64_t v : bone.voxels) {
+    const Index3 c = g.ijk(v);
+    d = std::min(d, (g.voxelCenter(c[0], c[1], c[2]) - p).norm());
+  }
+  return d;
+}
+
 // The wrists' centres lie in the carpus: among the hand's bones, nearer
 // them than the forearm bones, which lie the joint's radius away (the
 // distal-end estimate cleared over the wrist's range lay 52 mm up the
@@ -157,18 +167,11 @@ void expectWristsInTheCarpus(const GridGeometry& g, const Skeleton& s) {
   for (const JointId id : {JointId::RightWrist, JointId::LeftWrist}) {
     const Joint* j = s.joint(id);
     ASSERT_TRUE(j);
-    EXPECT_EQ(j->method, "carpus") << j->kind().name;
-    const auto nearest = [&](Bone bone) {
-      const BoneVoxels* b = s.parts.find(bone, j->kind().side);
-      double d = std::numeric_limits<double>::infinity();
-      if (b)
-        for (const std::int64_t v : b->voxels) {
-          const Index3 c = g.ijk(v);
-          d = std::min(d, (g.voxelCenter(c[0], c[1], c[2]) - j->centre).norm());
-        }
-      return d;
-    };
-    const double hand = nearest(Bone::HandBones), forearm = nearest(Bone::ForearmBones);
+    EXPECT_EQ(j->method, "centroid of the carpus") << j->kind().name;
+    const BoneVoxels* handBones = s.parts.find(Bone::HandBones, j->kind().side);
+    const BoneVoxels* forearmBones = s.parts.find(Bone::ForearmBones, j->kind().side);
+    ASSERT_TRUE(handBones && forearmBones);
+    const double hand = nearestVoxelMm(g, *handBones, j->centre), forearm = nearestVoxelMm(g, *forearmBones, j->centre);
     std::cout << j->kind().name << ": " << hand << " mm from the hand's bones, " << forearm << " from the forearm's\n";
     EXPECT_LT(hand, 0.5 * g.spacing.norm()) << j->kind().name;
     EXPECT_GT(forearm, 2.0 * g.spacing.minCoeff()) << j->kind().name;
@@ -326,12 +329,7 @@ TEST(BodyParts, AdultMale) {
     const bool arm = id == JointId::RightShoulder || id == JointId::LeftShoulder;
     const BoneVoxels* bone = s.parts.find(arm ? Bone::Humerus : Bone::Femur, j->kind().side);
     ASSERT_TRUE(bone);
-    double nearest = std::numeric_limits<double>::infinity();
-    for (const std::int64_t v : bone->voxels) {
-      const Index3 c = grid.geometry().ijk(v);
-      nearest = std::min(nearest, (grid.geometry().voxelCenter(c[0], c[1], c[2]) - j->centre).norm());
-    }
-    EXPECT_LT(nearest, halfDiagonal) << j->kind().name;
+    EXPECT_LT(nearestVoxelMm(grid.geometry(), *bone, j->centre), halfDiagonal) << j->kind().name;
   }
   EXPECT_LT((s.joint(JointId::RightShoulder)->centre - Eigen::Vector3d(97, 145, 1450)).norm(), 5.0);
 
