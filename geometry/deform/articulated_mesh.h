@@ -138,6 +138,16 @@ struct ArticulatedMeshOptions {
   double bodyMarginVoxels = 0.5;   // a body stops this far (finest spacing) short of the other part's bone
   double minBodyRadiusVoxels = 2.0;  // a smaller body is not built (the joint is not cut)
   double attachmentHalfAngleDeg = 50.0;
+  // The same at an elbow (an angular sector about the flexion axis about
+  // the humerus' shaft); < 0: attachmentHalfAngleDeg. Narrow, so that the
+  // cut follows the humerus' end up to where its shaft leaves: the AF's
+  // olecranon lies in the humerus' fossa about 30 degrees behind the shaft,
+  // under 2 mm from it, and at 50 degrees the tets between them (edges
+  // split between the two bones) kept ulna and humerus joined there, so
+  // that the phone call's elbow could not turn (docs/BENCHMARKS.md, "The
+  // elbow's sliding cut up to the humerus' shaft"). The knees keep
+  // attachmentHalfAngleDeg.
+  double elbowAttachmentHalfAngleDeg = 15.0;
   // A sphere body at each wrist too, about its centre in the carpus up to
   // the forearm bones, owned by the hand (docs/BENCHMARKS.md, "The wrist in
   // the carpus": not better on the phone call).

@@ -17,7 +17,7 @@
 // iteration), --scapulae (moving
 // scapulae), --yielding-shell V (the shoulders' yielding shell, V voxels
 // thick; default none), --yielding-hips (the hips' shell too),
-// --dump PREFIX (the mesh's arrays for numpy, rest and posed: dumpMesh),
+// --dump PREFIX (the mesh's arrays for numpy, rest, every step's and posed: dumpMesh),
 // --mesh-only (build the mesh, dump it, stop), --squeezed F (per step, the tets under F of their rest volume, by nearest
 // joint and by what holds their vertices: where the tissue locks),
 // --trunk-reach MM, --pelvis-reach MM (trunk or pelvis bones this near a
@@ -29,7 +29,7 @@
 // untangling after the last step), --contact-rounds N, --contact-radius
 // MM, --contact-weight W (the contact after it; 0 rounds: none),
 // --owner-shell V (ownerShellVoxels), --wrist-bodies (a sphere body at each wrist), --attachment-angle DEG (the bodies'
-// attachment half angle), --untangle-radius MM (one radius instead of the
+// attachment half angle), --elbow-attachment-angle DEG (the elbows' alone), --untangle-radius MM (one radius instead of the
 // pose's), --whole-part-bone-clearance MM (the
 // hands', feet's and head's tissue this near another part's bone soft; 0:
 // only within the joint's clearance), --whole-part-own-bone-clearance MM
@@ -70,7 +70,7 @@ int usage() {
   std::fprintf(stderr,
                "usage: articulated_pose_bench GRID ORGANS POSE [--steps N] [--bone-weight W] [--sliding-weight W] [--max-iterations N] "
                "[--volume-weight L] [--direct-limit N] [--scapulae] [--wrist-bodies] [--yielding-shell V] [--yielding-hips] [--squeezed F] [--dump PREFIX] [--mesh-only] "
-               "[--knee-forward MM] [--trunk-reach MM] [--pelvis-reach MM] [--joint-clearance MM] [--still-beyond MM] [--hold-unmoved-bones] [--no-untangle] [--contact-rounds N] [--contact-radius MM] [--contact-weight W] [--owner-shell V] [--attachment-angle DEG] [--untangle-radius MM] [--whole-part-bone-clearance MM] [--whole-part-own-bone-clearance MM]\n"
+               "[--knee-forward MM] [--trunk-reach MM] [--pelvis-reach MM] [--joint-clearance MM] [--still-beyond MM] [--hold-unmoved-bones] [--no-untangle] [--contact-rounds N] [--contact-radius MM] [--contact-weight W] [--owner-shell V] [--attachment-angle DEG] [--elbow-attachment-angle DEG] [--untangle-radius MM] [--whole-part-bone-clearance MM] [--whole-part-own-bone-clearance MM]\n"
                "       articulated_pose_bench --figure POSE [options]\n");
   return 2;
 }
@@ -152,7 +152,7 @@ void squeezedTets(const vox::ArticulatedMesh& mesh, const vox::skeleton::Skeleto
 
 // The mesh as raw arrays for numpy (np.fromfile): PREFIX.tets (int32 x4),
 // PREFIX.tags (int32), PREFIX.roles and PREFIX.parts (uint8 per vertex),
-// PREFIX.WHICH (float64 x3 per vertex: rest or posed positions).
+// PREFIX.WHICH (float64 x3 per vertex: rest, stepN after the pose's step N, or posed positions).
 void dumpMesh(const std::string& prefix, const vox::ArticulatedMesh& mesh, std::span<const Eigen::Vector3d> positions,
               const std::string& which) {
   const auto write = [&](const std::string& suffix, const void* data, std::size_t bytes) {
@@ -217,6 +217,7 @@ int main(int argc, char** argv) {
     else if (arg == "--joint-clearance") meshOptions.jointClearanceMm = std::stod(value());
     else if (arg == "--owner-shell") meshOptions.ownerShellVoxels = std::stod(value());
     else if (arg == "--attachment-angle") meshOptions.attachmentHalfAngleDeg = std::stod(value());
+    else if (arg == "--elbow-attachment-angle") meshOptions.elbowAttachmentHalfAngleDeg = std::stod(value());
     else if (arg == "--untangle-radius") poseOptions.untangleRadiiMm = {std::stod(value())};
     else if (arg.starts_with("--")) return usage();
     else positional.push_back(arg);
@@ -255,8 +256,9 @@ int main(int argc, char** argv) {
     if (!dumpPrefix.empty()) dumpMesh(dumpPrefix, mesh, mesh.mesh.positions, "rest");
     if (meshOnly) return 0;
 
-    if (squeezedBelow > 0.0) poseOptions.onStep = [&](int step, std::span<const Eigen::Vector3d> posed) {
-      squeezedTets(mesh, sk, step, posed, squeezedBelow);
+    if (squeezedBelow > 0.0 || !dumpPrefix.empty()) poseOptions.onStep = [&](int step, std::span<const Eigen::Vector3d> posed) {
+      if (squeezedBelow > 0.0) squeezedTets(mesh, sk, step, posed, squeezedBelow);
+      if (!dumpPrefix.empty()) dumpMesh(dumpPrefix, mesh, posed, "step" + std::to_string(step));
     };
     poseOptions.steps = stepsGiven > 0 ? stepsGiven : articulatedPoseSteps(pose.joints, poseOptions);
     ArticulatedPoser poser(mesh, poseOptions);

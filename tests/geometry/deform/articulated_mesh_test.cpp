@@ -303,6 +303,43 @@ TEST(ArticulatedMesh, TheOwnersBoneEndJoinsAHingesBody) {
   EXPECT_LT(joinedWithout, joined);
 }
 
+// At an elbow the cut leaves out only a narrow sector about the humerus'
+// shaft (elbowAttachmentHalfAngleDeg), so the humerus' end between that
+// sector and the balls' wider one joins the elbow's body (the olecranon
+// fossa, behind the shaft, which the ulna's tip touches); the knees keep
+// the wider sector.
+TEST(ArticulatedMesh, TheElbowsCutReachesUpToTheHumerusShaft) {
+  const Figure& f = figure();
+  const ArticulatedMeshOptions defaults;
+  ASSERT_LT(defaults.elbowAttachmentHalfAngleDeg, defaults.attachmentHalfAngleDeg);
+  const auto betweenSectors = [&](const ArticulatedMesh& m) {
+    std::size_t joined = 0;
+    for (std::size_t t = 0; t < m.mesh.tetCount(); ++t) {
+      Eigen::Vector3d c = Eigen::Vector3d::Zero();
+      for (const std::int32_t v : m.mesh.tets[t]) c += 0.25 * m.mesh.positions[std::size_t(v)];
+      for (const ArticularBody& b : m.bodies) {
+        if (b.joint != JointId::RightElbow && b.joint != JointId::LeftElbow) continue;
+        Eigen::Vector3d d = c - b.centre;
+        d -= d.dot(b.axis) * b.axis;
+        if (d.norm() < 1e-9 || b.contains(c)) continue;
+        const double angle = std::acos(std::clamp(d.normalized().dot(b.attachment), -1.0, 1.0)) * 180.0 / std::numbers::pi;
+        joined += angle > defaults.elbowAttachmentHalfAngleDeg && angle < defaults.attachmentHalfAngleDeg &&
+                  m.mesh.labels[t] == b.tag();
+      }
+    }
+    return joined;
+  };
+  EXPECT_GT(betweenSectors(f.mesh), 0u);
+  for (const ArticularBody& b : f.mesh.bodies) {
+    const bool elbow = b.joint == JointId::RightElbow || b.joint == JointId::LeftElbow;
+    EXPECT_EQ(b.attachmentHalfAngleDeg, elbow ? defaults.elbowAttachmentHalfAngleDeg : defaults.attachmentHalfAngleDeg)
+        << "joint " << int(b.joint);
+  }
+  ArticulatedMeshOptions wide;
+  wide.elbowAttachmentHalfAngleDeg = wide.attachmentHalfAngleDeg;
+  EXPECT_EQ(betweenSectors(buildArticulatedMesh(f.grid, f.organs, f.skeleton, wide)), 0u);
+}
+
 // The joint turned with the body's owner moved rigidly, the other side
 // still: the body's tets keep their volume (rigid), and no face is shared
 // across the cut (the two sides can slide).
