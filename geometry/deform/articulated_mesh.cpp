@@ -117,8 +117,7 @@ namespace {
 bool isBallJoint(JointId id) {
   return id == JointId::RightShoulder || id == JointId::LeftShoulder || id == JointId::RightHip || id == JointId::LeftHip;
 }
-bool isElbow(JointId id) { return id == JointId::RightElbow || id == JointId::LeftElbow; }
-bool isHingeJoint(JointId id) { return isElbow(id) || id == JointId::RightKnee || id == JointId::LeftKnee; }
+bool isHingeJoint(JointId id) { return skeleton::isElbow(id) || id == JointId::RightKnee || id == JointId::LeftKnee; }
 
 // Calls fn(voxel centre, part) for every bone voxel within `reach` mm of `c`.
 template <class Fn>
@@ -195,7 +194,7 @@ std::vector<ArticularBody> articularBodies(const LabelGrid& grid, const LabelGri
       shaft -= shaft.dot(b.axis) * b.axis;
       if (shaft.norm() < 1e-6) continue;
       b.attachment = shaft.normalized();
-      if (isElbow(joint.id) && options.elbowAttachmentHalfAngleDeg >= 0.0) b.attachmentHalfAngleDeg = options.elbowAttachmentHalfAngleDeg;
+      if (skeleton::isElbow(joint.id) && options.elbowAttachmentHalfAngleDeg >= 0.0) b.attachmentHalfAngleDeg = options.elbowAttachmentHalfAngleDeg;
     } else {
       continue;
     }

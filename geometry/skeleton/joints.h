@@ -96,6 +96,7 @@ struct JointKind {
 
 const JointKind& jointKind(JointId id);
 inline bool isWrist(JointId id) { return id == JointId::RightWrist || id == JointId::LeftWrist; }
+inline bool isElbow(JointId id) { return id == JointId::RightElbow || id == JointId::LeftElbow; }
 std::optional<JointId> jointFromName(const std::string& name);
 std::string jointNames();  // "neck, head, right_shoulder, ..." for messages
 // The joint whose child is `part` (nullopt for the trunk and pelvis).
@@ -110,7 +111,7 @@ struct Joint {
   Eigen::Vector3d leftRight = Eigen::Vector3d::UnitX();    // unit flexion axis (up to the joint's sign), towards the body's right
   Eigen::Vector3d anterior = -Eigen::Vector3d::UnitY();    // the body's front-back axis (abduction)
   Eigen::Vector3d superior = Eigen::Vector3d::UnitZ();     // the body's up
-  double radius = 0.0;       // articular sphere, mm: fitted (shoulder, hip), up to the middle bones (wrist, ankle); 0 otherwise
+  double radius = 0.0;       // articular sphere, mm: fitted (shoulder, hip), up to the forearm bones (wrist); 0 otherwise
   std::string method;        // how the centre was found ("sphere fit", "distal end", ...)
   std::string axisMethod;    // how leftRight was found ("bone end width", "body axis", "given")
 

@@ -318,7 +318,7 @@ TEST(ArticulatedMesh, TheElbowsCutReachesUpToTheHumerusShaft) {
       Eigen::Vector3d c = Eigen::Vector3d::Zero();
       for (const std::int32_t v : m.mesh.tets[t]) c += 0.25 * m.mesh.positions[std::size_t(v)];
       for (const ArticularBody& b : m.bodies) {
-        if (b.joint != JointId::RightElbow && b.joint != JointId::LeftElbow) continue;
+        if (!skeleton::isElbow(b.joint)) continue;
         Eigen::Vector3d d = c - b.centre;
         d -= d.dot(b.axis) * b.axis;
         if (d.norm() < 1e-9 || b.contains(c)) continue;
@@ -331,8 +331,7 @@ TEST(ArticulatedMesh, TheElbowsCutReachesUpToTheHumerusShaft) {
   };
   EXPECT_GT(betweenSectors(f.mesh), 0u);
   for (const ArticularBody& b : f.mesh.bodies) {
-    const bool elbow = b.joint == JointId::RightElbow || b.joint == JointId::LeftElbow;
-    EXPECT_EQ(b.attachmentHalfAngleDeg, elbow ? defaults.elbowAttachmentHalfAngleDeg : defaults.attachmentHalfAngleDeg)
+    EXPECT_EQ(b.attachmentHalfAngleDeg, skeleton::isElbow(b.joint) ? defaults.elbowAttachmentHalfAngleDeg : defaults.attachmentHalfAngleDeg)
         << "joint " << int(b.joint);
   }
   ArticulatedMeshOptions wide;
@@ -340,9 +339,6 @@ TEST(ArticulatedMesh, TheElbowsCutReachesUpToTheHumerusShaft) {
   EXPECT_EQ(betweenSectors(buildArticulatedMesh(f.grid, f.organs, f.skeleton, wide)), 0u);
 }
 
-// The joint turned with the body's owner moved rigidly, the other side
-// still: the body's tets keep their volume (rigid), and no face is shared
-// across the cut (the two sides can slide).
 // The sliver exudation after the mesher's refinement has no time limit
 // (the mesh must not depend on the machine's speed), and CGAL's exuder can
 // cycle without end: with the figure's elbows turned about these axes (a
@@ -376,6 +372,9 @@ TEST(ArticulatedMesh, TheExudationEndsWhereItWouldCycle) {
   for (const Tet& t : m.mesh.tets) EXPECT_GT(signedVolume(m.mesh.positions, t), 0.0);
 }
 
+// The joint turned with the body's owner moved rigidly, the other side
+// still: the body's tets keep their volume (rigid), and no face is shared
+// across the cut (the two sides can slide).
 TEST(ArticulatedMesh, TurningTheOwnerMovesTheBodyRigidlyAndApartFromTheOtherSide) {
   const Figure& f = figure();
   const ArticulatedMesh& m = f.mesh;

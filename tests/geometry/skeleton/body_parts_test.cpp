@@ -344,7 +344,7 @@ TEST(BodyParts, AdultMale) {
     const Joint* j = s.joint(id);
     ASSERT_TRUE(j);
     EXPECT_EQ(j->method, "distal end, cleared over flexion") << j->kind().name;
-    const bool arm = id == JointId::RightElbow || id == JointId::LeftElbow;
+    const bool arm = isElbow(id);
     const BoneVoxels* parent = s.parts.find(arm ? Bone::Humerus : Bone::Femur, j->kind().side);
     const BoneVoxels* child = s.parts.find(arm ? Bone::ForearmBones : Bone::LowerLegBones, j->kind().side);
     ASSERT_TRUE(parent && child);
