@@ -352,7 +352,9 @@ Eigen::Isometry3d patellaMotion(const skeleton::Joint& joint, const ArticulatedM
   // femur's profile (at most the centre's): where the profile under an end
   // of the patella rises above the one under its centre, the patella is
   // lifted off it along the radius, instead of pressing that end into the
-  // trochlea and crushing the tissue between.
+  // trochlea and crushing the tissue between. A vertex that lies below the
+  // profile at rest (the profile is the highest within 6 degrees) keeps
+  // that depth, so that the knee at rest leaves the patella where it is.
   const auto polar = [&](const Eigen::Vector3d& p) {
     const Eigen::Vector3d q = p - c;
     return std::pair{std::atan2(q.dot(e2), q.dot(e1)), std::hypot(q.dot(e1), q.dot(e2))};
@@ -366,7 +368,7 @@ Eigen::Isometry3d patellaMotion(const skeleton::Joint& joint, const ArticulatedM
       const auto [phiNow, rNow] = polar(local * rest[v]);
       const double hRest = height(phiRest), hNow = height(phiNow);
       if (hRest < 0.0 || hNow < 0.0) continue;
-      lift = std::max(lift, hNow + std::clamp(rRest - hRest, 0.0, std::max(gap, 0.0)) - rNow);
+      lift = std::max(lift, hNow + std::min(rRest - hRest, std::max(gap, 0.0)) - rNow);
     }
     if (lift <= 1e-6) break;
     local.translation() += lift * radial;

@@ -412,6 +412,8 @@ ArticulatedPoseReport ArticulatedPoser::pose(const MotionPath& path) {
     report.reachedTargets = r.reachedTargets;
     ++report.steps;
     gather(solver_);
+  } else {
+    report.reachedTargets = true;  // nothing to solve: the bones are placed on their motions below
   }
   placeRigidVertices(mesh_, motions, 1.0, positions_);
   const TetMesh& m = mesh_.mesh;

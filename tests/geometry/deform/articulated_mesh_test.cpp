@@ -608,6 +608,20 @@ TEST(ArticulatedPose, TissueFarFromTheMovedBonesStaysAtRest) {
   EXPECT_GT(every.solvedTets, r.solvedTets);
 }
 
+// A pose that turns no joint leaves the mesh at rest: nothing is solved,
+// every vertex stays where it is, and the bones are on their motions.
+TEST(ArticulatedPose, APoseThatTurnsNoJointLeavesTheMeshAtRest) {
+  const Figure& f = figure();
+  const skeleton::PartMotions motions = figureMotions(f.skeleton, {jointAngles(JointId::RightKnee, 0.0), jointAngles(JointId::RightElbow, 0.0)});
+  for (const Eigen::Isometry3d& m : segmentMotions(motions, f.skeleton, f.mesh)) EXPECT_TRUE(m.isApprox(Eigen::Isometry3d::Identity(), 1e-12));
+  ArticulatedPoser poser(f.mesh, {});
+  const ArticulatedPoseReport r = poser.pose(motions);
+  EXPECT_EQ(r.solvedTets, 0u);
+  EXPECT_EQ(r.invertedTets, 0u);
+  EXPECT_TRUE(r.reachedTargets);
+  EXPECT_EQ(poser.positions(), f.mesh.mesh.positions);
+}
+
 // A patella slides along the femur's profile as its knee bends: relative
 // to the thigh it keeps its height above the profile and its ligament's
 // length, from its apex (its lowest vertex) to the tibial tuberosity; where
@@ -695,6 +709,18 @@ TEST(ArticulatedPose, APatellaSlidesAlongTheFemurKeepingItsLigament) {
   // Round about the axis: the lower leg's motion.
   const ArticulatedMesh round = mesh([](double) { return 40.0; });
   EXPECT_TRUE(segmentMotions(motions, f.skeleton, round)[std::size_t(kRightPatella)].isApprox(leg, 1e-6));
+  // The knee straight: the patella stays at rest, also with a vertex below
+  // the profile's highest within its 6-degree window (as on the AM, whose
+  // straight knees otherwise lifted their patellae and moved the tissue
+  // about them in poses that leave the legs alone).
+  ArticulatedMesh deep = mesh(receding);
+  deep.mesh.positions.push_back(at(receding(3.0) - 2.0, 3.0, 0.0));
+  deep.role.push_back(VertexRole::Rigid);
+  deep.vertexPart.push_back(Part(kRightPatella));
+  deep.vertexBody.push_back(-1);
+  ++deep.rigidVertices[std::size_t(kRightPatella)];
+  const skeleton::PartMotions straight = figureMotions(f.skeleton, {jointAngles(JointId::RightKnee, 0.0)});
+  EXPECT_TRUE(segmentMotions(straight, f.skeleton, deep)[std::size_t(kRightPatella)].isApprox(Eigen::Isometry3d::Identity(), 1e-9));
 }
 
 // A large turn takes more pose steps: 16 per quarter turn of the largest
