@@ -177,9 +177,14 @@ void addDeformCommand(CLI::App& app) {
                   "smaller part's bones, %")
       ->capture_default_str()
       ->check(numberIn(0, 100, "%"));
+  cmd->add_option("--max-tissue-overlap", o->run.maxTissueOverlapPercent,
+                  "Refuse (write nothing) a pose that presses two body parts' tissue through each other over more than this share of "
+                  "the body, % (the report's collisions; with an organ table that names the bones)")
+      ->capture_default_str()
+      ->check(numberIn(0, 100, "%"));
   cmd->add_flag("--force", o->run.force,
-                "Write a result beyond --max-body-change, --max-bone-change or --max-bone-overlap anyway (a warning, and \"forced\": "
-                "true in the report)");
+                "Write a result beyond --max-body-change, --max-bone-change, --max-bone-overlap or --max-tissue-overlap anyway (a "
+                "warning, and \"forced\": true in the report)");
   cmd->add_flag("--allow-growth", o->run.allowGrowth,
                 "Accept a posed grid of more than 8 times the source's voxels (a pose that moves parts far from the body)");
   cmd->add_flag("--cpu", o->cpu, "Rasterize and interpolate fields with the CPU reference instead of the GPU");

@@ -77,7 +77,7 @@ Provenance deformProvenance(const py::object& grid, const py::object& organs, co
 
 py::tuple deform(const py::object& gridArgument, const py::object& pose, const py::object& organsArgument, const py::object& preserveVolumes,
                  const py::object& prepared, const std::string& output, bool cpu, int samples, bool rigidBones, bool articulated, bool force,
-                 double maxBodyChange, double maxBoneChange, double maxBoneOverlap, bool allowGrowth, std::int64_t maxMemoryMb) {
+                 double maxBodyChange, double maxBoneChange, double maxBoneOverlap, double maxTissueOverlap, bool allowGrowth, std::int64_t maxMemoryMb) {
   if (!prepared.is_none() && py::isinstance<Grid>(gridArgument))
     throw py::value_error("prepared: a prepared state is checked against the grid file it was made from; give the grid as that path, not a Grid");
   DeformGridRequest request;
@@ -94,6 +94,7 @@ py::tuple deform(const py::object& gridArgument, const py::object& pose, const p
   request.maxBodyChangePercent = maxBodyChange;
   request.maxBoneChangePercent = maxBoneChange;
   request.maxBoneOverlapPercent = maxBoneOverlap;
+  request.maxTissueOverlapPercent = maxTissueOverlap;
   request.allowGrowth = allowGrowth;
   request.maxMemoryMb = maxMemoryMb;
   checkOutputPath(output, OutputKind::Grid, "output");
@@ -252,7 +253,8 @@ void bindDeform(py::module_& m) {
         py::arg("samples") = 1, py::arg("rigid_bones") = false, py::arg("articulated") = false, py::arg("force") = false,
         py::arg("max_body_change") = DeformGridRequest{}.maxBodyChangePercent,
         py::arg("max_bone_change") = DeformGridRequest{}.maxBoneChangePercent,
-        py::arg("max_bone_overlap") = DeformGridRequest{}.maxBoneOverlapPercent, py::arg("allow_growth") = false,
+        py::arg("max_bone_overlap") = DeformGridRequest{}.maxBoneOverlapPercent,
+        py::arg("max_tissue_overlap") = DeformGridRequest{}.maxTissueOverlapPercent, py::arg("allow_growth") = false,
         py::arg("max_memory") = 0, R"doc(
 Re-poses a label grid, as `voxmorph deform` does, and returns (posed Grid, report dict).
 
@@ -272,10 +274,11 @@ output: also write the posed grid to this file (atomically: nothing is left on e
 cpu: rasterize with the CPU reference instead of the GPU (the GPU falls back to the CPU
     with a RuntimeWarning when none is usable).
 samples: k, k^3 samples per output voxel (majority label).
-rigid_bones, articulated, force, max_body_change, max_bone_change, max_bone_overlap, allow_growth,
-    max_memory: as the CLI's --rigid-bones, --articulated, --force, --max-body-change (%),
-    --max-bone-change (%), --max-bone-overlap (%: a joint pose pressing two parts' bones through
-    each other), --allow-growth and --max-memory (MB; 0: in core).
+rigid_bones, articulated, force, max_body_change, max_bone_change, max_bone_overlap,
+    max_tissue_overlap, allow_growth, max_memory: as the CLI's --rigid-bones, --articulated,
+    --force, --max-body-change (%), --max-bone-change (%), --max-bone-overlap (%: a joint pose
+    pressing two parts' bones through each other), --max-tissue-overlap (%: two parts' tissue
+    through each other, of the body), --allow-growth and --max-memory (MB; 0: in core).
 
 The report dict is the CLI's JSON report (--report); its provenance lists the inputs given
 as paths (and a pose dict's JSON text) with their SHA-256, while a Grid in memory, which has

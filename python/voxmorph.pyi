@@ -81,6 +81,7 @@ def deform(
     max_body_change: float = 2.0,
     max_bone_change: float = 10.0,
     max_bone_overlap: float = 2.0,
+    max_tissue_overlap: float = 0.5,
     allow_growth: bool = False,
     max_memory: int = 0,
 ) -> tuple[Grid, dict[str, Any]]:

@@ -147,7 +147,7 @@ struct ArticulatedMeshOptions {
   // that the phone call's elbow could not turn (docs/BENCHMARKS.md, "The
   // elbow's sliding cut up to the humerus' shaft"). The knees keep
   // attachmentHalfAngleDeg.
-  double elbowAttachmentHalfAngleDeg = 15.0;
+  double elbowAttachmentHalfAngleDeg = 20.0;
   // A sphere body at each wrist too, about its centre in the carpus up to
   // the forearm bones, owned by the hand (docs/BENCHMARKS.md, "The wrist in
   // the carpus": not better on the phone call).

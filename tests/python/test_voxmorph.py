@@ -385,7 +385,7 @@ def test_long_calls_release_the_gil(figure):
 def test_help_explains_every_argument():
     doc = voxmorph.deform.__doc__
     for argument in ("grid", "pose", "organs", "preserve_volumes", "prepared", "output", "cpu", "samples", "rigid_bones", "force",
-                     "max_body_change", "max_bone_change", "max_bone_overlap", "allow_growth", "max_memory"):
+                     "max_body_change", "max_bone_change", "max_bone_overlap", "max_tissue_overlap", "allow_growth", "max_memory"):
         assert f"{argument}:" in doc or f"{argument}," in doc, argument
     for name in ("Grid", "OrganTable", "Posing", "mesh", "remesh", "render", "parts"):
         assert getattr(voxmorph, name).__doc__

@@ -175,6 +175,22 @@ std::optional<std::string> boneChangeFault(const DeformationReport& report, doub
          " % (more than --max-bone-change " + formatNumber("%g", maxPercent) + " %)";
 }
 
+// Two parts' tissue pressed through each other over more than `maxPercent`
+// of the body (report.collisions): more than contact holds. Named by the
+// pair that overlaps most and, where one hangs from the other, their joint.
+std::optional<std::string> tissueOverlapFault(const Collisions& c, double maxPercent) {
+  const double percent = 100.0 * c.bodyFraction();
+  if (!(percent > maxPercent) || c.pairs.empty()) return std::nullopt;
+  const auto a = skeleton::Part(c.pairs.front().partA), b = skeleton::Part(c.pairs.front().partB);
+  std::string joint;
+  for (const auto& [parent, child] : {std::pair{a, b}, std::pair{b, a}})
+    if (const std::optional<skeleton::JointId> j = skeleton::jointMoving(child); j && skeleton::parentPart(child) == parent)
+      joint = std::string(" at the ") + skeleton::jointKind(*j).name;
+  return "the pose presses the tissue of the " + std::string(skeleton::partName(a)) + " and the " + skeleton::partName(b) +
+         " through each other" + joint + " (" + formatNumber("%.2f", percent) + " % of the body overlaps, more than --max-tissue-overlap " +
+         formatNumber("%g", maxPercent) + " %)";
+}
+
 // A physically wrong result: refused (nothing written) unless forced, then
 // written with a warning and "forced" in the report.
 void refuseOrForce(const DeformGridRequest& o, DeformationReport& report, const std::string& fault) {
@@ -339,6 +355,7 @@ PosedMesh poseByCage(const DeformGridRequest& o, const Source& source, RasterEng
     StageTimer collisionTimer("collisions");
     report.collisions = collisionsOf(o, source, pipeline->transferMesh(), pipeline->deformedTransferMesh(), *parts, out.collisionMask);
     collisionTime = collisionTimer.stop();
+    if (const std::optional<std::string> fault = tissueOverlapFault(*report.collisions, o.maxTissueOverlapPercent)) refuseOrForce(o, report, *fault);
   }
   // The extra outputs are written with G', once the whole body is measured
   // (the posed mesh from `rest` and `deformed` below).
@@ -436,6 +453,7 @@ PosedMesh poseArticulated(const DeformGridRequest& o, const Source& source, Defo
   StageTimer collisionTimer("collisions");
   report.collisions = collisionsOf(o, source, out.rest, out.deformed, sk.parts.parts, out.collisionMask);
   report.stages.push_back(collisionTimer.stop());
+  if (const std::optional<std::string> fault = tissueOverlapFault(*report.collisions, o.maxTissueOverlapPercent)) refuseOrForce(o, report, *fault);
   return out;
 }
 

@@ -83,11 +83,14 @@ struct DeformGridRequest {
   // and the extra outputs are committed; a joint pose whose bones pass
   // through each other by more than maxBoneOverlapPercent of the smaller
   // part's bones (skeleton::bonesThroughEachOther), checked before the
-  // transfer mesh is built. `force` writes them anyway, with a warning and
-  // "forced" in the report.
+  // transfer mesh is built; two parts' tissue pressed through each other
+  // (report.collisions) over more than maxTissueOverlapPercent of the body,
+  // checked before the rasterization. `force` writes them anyway, with a
+  // warning and "forced" in the report.
   double maxBodyChangePercent = 2.0;
   double maxBoneChangePercent = 10.0;
   double maxBoneOverlapPercent = skeleton::kMaxBoneOverlapPercent;
+  double maxTissueOverlapPercent = 0.5;
   bool force = false;
   std::int64_t maxTets = RefinementOptions{}.maxTets;
   int refineIterations = RefinementOptions{}.maxIterations;
