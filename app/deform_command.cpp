@@ -152,7 +152,8 @@ void addDeformCommand(CLI::App& app) {
                   "With body parts (an organ table that names the bones, or --parts): also write a grid, 1 where the posed tissue of two body parts overlaps "
                   "(the posed grid's extent at the working grid's spacing)");
   cmd->add_flag("--preserve-volumes{deformed}", o->volumeTarget,
-                "Relabel boundary voxels of the posed grid so that each label keeps the volume the deformation gives it "
+                "Fill the gaps the pose opens inside the body (background no tet covers, enclosed by tissue) with the tissue around "
+                "them, then relabel boundary voxels of the posed grid so that each label keeps the volume the deformation gives it "
                 "(sum of the transfer mesh's Jacobian determinants over its voxels), within about a voxel; "
                 "--preserve-volumes=rest: its rest volume instead, so organ masses are kept; in core only")
       ->check(CLI::IsMember({"deformed", "rest"}));

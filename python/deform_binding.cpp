@@ -263,8 +263,9 @@ pose: the pose as a dict (the JSON schema of docs/POSES.md: "joints", "selection
     "separations"; world-frame mm) or the path of a pose file.
 organs: OrganTable or its path: masses in the report, label groups for separations,
     and the bones a joint pose needs.
-preserve_volumes: False; True or 'deformed' relabels boundary voxels so each label keeps
-    the volume the deformation gives it; 'rest' keeps its rest volume (organ masses).
+preserve_volumes: False; True or 'deformed' fills the gaps the pose opens inside the body
+    and relabels boundary voxels so each label keeps the volume the deformation gives it;
+    'rest' keeps its rest volume (organ masses).
 prepared: a rest state saved by `voxmorph prepare` (.vxprep path): the skeleton, cage,
     envelope and transfer mesh are taken from it instead of rebuilt; the result is
     byte-identical. The grid must then be given as the path it was prepared from; a state

@@ -323,6 +323,9 @@ std::vector<std::string> deformationWarnings(const DeformationReport& r) {
     w.push_back(r.bones.empty() ? "--rigid-bones: no bones to hold rigid (a joint pose or --parts gives the body parts)"
                                 : "--rigid-bones: no bone could be held rigid: every transfer-mesh vertex at a bone lies near another part's bone "
                                   "(a transfer mesh too coarse for the skeleton)");
+  if (r.volumeCorrection && r.volumeCorrection->gapsFilled > 0)
+    w.push_back(std::to_string(r.volumeCorrection->gapsFilled) +
+                " voxels of gaps inside the body (surfaces the pose parted, covered by no tet) filled with the tissue around them");
   std::string unnamed;
   std::size_t count = 0;
   for (const LabelChange& c : r.labels)

@@ -231,6 +231,7 @@ std::string deformationReportJson(const DeformationReport& r) {
                                  {"boundary_voxels", c->candidates},
                                  {"relabelled_voxels", c->relabelled},
                                  {"still_boundary_voxels_kept", c->still},
+                                 {"gap_voxels_filled", c->gapsFilled},
                                  {"sweeps", c->sweeps},
                                  {"deviation_before_voxels", c->deviationBefore},
                                  {"deviation_after_voxels", c->deviationAfter},

@@ -129,6 +129,99 @@ std::vector<double> deformedLabelVolumes(const TetLabelVoxels& voxels, const Tet
   return volumes;
 }
 
+std::uint64_t fillEnclosedGaps(LabelGrid& posed, const LabelGrid& source, const TetMesh& rest, const std::vector<Eigen::Vector3d>& deformed,
+                               int threads, std::span<const std::uint8_t> behind) {
+  const RasterizationPlan plan(source.geometry(), rest, deformed, 1);
+  const GridGeometry& out = plan.output();
+  if (out.dims != posed.dims() || (out.origin - posed.origin()).norm() > 1e-6 * out.spacing.norm() ||
+      (out.spacing - posed.spacing()).norm() > 1e-9 * out.spacing.norm())
+    throw InputError("posed grid", "its geometry is not the output grid of this deformation");
+  const auto isBehind = [&behind](Label l) { return std::size_t(l) < behind.size() && behind[l] != 0; };
+  const std::int64_t nx = out.dims[0], ny = out.dims[1], nz = out.dims[2], slice = out.sliceVoxels();
+  Label* labels = posed.data();
+  // Background that no tet covers.
+  std::vector<std::uint8_t> open(std::size_t(out.voxelCount()), 0);
+  forEachLocatedSlab(plan.tets(), plan.lattice(), slabSlicesFor(out), threads, [&](const SlabTets& slab, const std::uint32_t* state) {
+    const std::int64_t first = std::int64_t(slab.z0) * slice, points = std::int64_t(slab.z1 - slab.z0) * slice;
+    for (std::int64_t i = 0; i < points; ++i) open[std::size_t(first + i)] = state[i] == kNoTet && labels[first + i] == 0;
+  });
+  // Background reached from G''s border (covered or not) is outside.
+  const std::array<std::int64_t, 6> step = {1, -1, nx, -nx, slice, -slice};
+  const auto neighbour = [&](std::int64_t v, int n, std::int64_t& w) {
+    const std::int64_t i = v % nx, j = (v / nx) % ny, k = v / slice;
+    if ((n == 0 && i + 1 >= nx) || (n == 1 && i == 0) || (n == 2 && j + 1 >= ny) || (n == 3 && j == 0) || (n == 4 && k + 1 >= nz) ||
+        (n == 5 && k == 0))
+      return false;
+    w = v + step[std::size_t(n)];
+    return true;
+  };
+  std::vector<std::uint8_t> outside(std::size_t(out.voxelCount()), 0);
+  std::vector<std::int64_t> stack;
+  const auto reach = [&](std::int64_t v) {
+    if (labels[v] == 0 && !outside[std::size_t(v)]) {
+      outside[std::size_t(v)] = 1;
+      stack.push_back(v);
+    }
+  };
+  for (std::int64_t k = 0; k < nz; ++k)
+    for (std::int64_t j = 0; j < ny; ++j)
+      for (std::int64_t i = 0; i < nx; ++i)
+        if (i == 0 || j == 0 || k == 0 || i == nx - 1 || j == ny - 1 || k == nz - 1) reach(out.index(i, j, k));
+  while (!stack.empty()) {
+    const std::int64_t v = stack.back();
+    stack.pop_back();
+    std::int64_t w = 0;
+    for (int n = 0; n < 6; ++n)
+      if (neighbour(v, n, w)) reach(w);
+  }
+  std::vector<std::int64_t> gaps;
+  for (std::int64_t v = 0; v < out.voxelCount(); ++v)
+    if (open[std::size_t(v)] && !outside[std::size_t(v)]) gaps.push_back(v);
+  // From the rim inward: each round labels the gap voxels beside a label by
+  // the labels before the round; the bones' labels only once the others
+  // reach no further.
+  std::uint64_t filled = 0;
+  bool withBehind = false;
+  std::vector<std::pair<std::int64_t, Label>> round;
+  std::vector<std::int64_t> left;
+  while (!gaps.empty()) {
+    round.clear();
+    left.clear();
+    for (const std::int64_t v : gaps) {
+      std::array<Label, 6> seen{};
+      std::array<int, 6> count{};
+      int kinds = 0;
+      std::int64_t w = 0;
+      for (int n = 0; n < 6; ++n) {
+        if (!neighbour(v, n, w) || labels[w] == 0 || (!withBehind && isBehind(labels[w]))) continue;
+        int m = 0;
+        while (m < kinds && seen[std::size_t(m)] != labels[w]) ++m;
+        if (m == kinds) seen[std::size_t(kinds++)] = labels[w];
+        ++count[std::size_t(m)];
+      }
+      if (kinds == 0) {
+        left.push_back(v);
+        continue;
+      }
+      int best = 0;
+      for (int m = 1; m < kinds; ++m)
+        if (count[std::size_t(m)] > count[std::size_t(best)] ||
+            (count[std::size_t(m)] == count[std::size_t(best)] && seen[std::size_t(m)] < seen[std::size_t(best)]))
+          best = m;
+      round.push_back({v, seen[std::size_t(best)]});
+    }
+    if (round.empty()) {
+      if (withBehind) break;  // enclosed by covered background only
+      withBehind = true;
+      continue;
+    }
+    for (const auto& [v, l] : round) labels[v] = l;
+    filled += round.size();
+    gaps.swap(left);
+  }
+  return filled;
+}
+
 LabelVolumeCorrection preserveLabelVolumes(LabelGrid& posed, const LabelGrid& source, const TetMesh& rest,
                                            const std::vector<Eigen::Vector3d>& deformed, std::span<const double> targets,
                                            int threads) {

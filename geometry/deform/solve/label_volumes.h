@@ -63,6 +63,20 @@ TetLabelVoxels tetLabelVoxels(const LabelGrid& source, const TetMesh& rest, int 
 std::vector<double> deformedLabelVolumes(const TetLabelVoxels& voxels, const TetMesh& rest,
                                          const std::vector<Eigen::Vector3d>& deformed);
 
+// Gaps the deformation opens inside the body: voxels of `posed` (G' of
+// rest -> deformed, as preserveLabelVolumes takes it) that hold background,
+// that no deformed tet covers, and that background does not connect to
+// G''s border (6-connected). Sliding surfaces that part leave such voids,
+// which the source does not have. They are filled from their rim inward,
+// each voxel with the most frequent label among its 6 neighbours (ties: the
+// lower label), so the tissue closes over them. Labels flagged in `behind`
+// (index = label: the bones, which move rigidly and do not flow into a
+// gap) fill only what no other label reaches. Voxels a tet covers keep what
+// the rasterization gave them (the source's own enclosed background stays).
+// Returns the voxels filled. Throws InputError as preserveLabelVolumes.
+std::uint64_t fillEnclosedGaps(LabelGrid& posed, const LabelGrid& source, const TetMesh& rest, const std::vector<Eigen::Vector3d>& deformed,
+                               int threads = 0, std::span<const std::uint8_t> behind = {});
+
 struct LabelVolumeCorrection {
   std::uint64_t candidates = 0;   // voxels whose source neighbourhood holds another label
   std::uint64_t still = 0;        // such voxels left alone: their tet did not move (kStillFraction)
@@ -73,6 +87,7 @@ struct LabelVolumeCorrection {
   double worstPercentBefore = 0.0;  // largest |count_l / V'_l - 1| in %, labels > 0 with V'_l >= 0.5
   double worstPercentAfter = 0.0;
   bool toRestVolumes = false;     // targets: the rest volumes (else the deformed ones)
+  std::uint64_t gapsFilled = 0;   // voxels of enclosed gaps filled before it (fillEnclosedGaps)
 };
 
 // A tet whose vertices all moved by less than this fraction of the finest

@@ -3,7 +3,8 @@
 // identity and uniform scaling give the expected volumes, a rotated and a
 // twisted junction sphere end with every label within one voxel of its
 // volume, relabelling only voxels at label boundaries, the same for any
-// thread count; a grid of another geometry is rejected.
+// thread count; enclosed gaps are filled; a grid of another geometry is
+// rejected.
 
 #include "geometry/deform/solve/label_volumes.h"
 #include "geometry/raster/rasterize.h"
@@ -153,6 +154,83 @@ TEST(LabelVolumes, StillTissueKeepsItsLabels) {
         ASSERT_EQ(posed.at(i, j, k), s.source.at(v[0], v[1], v[2])) << "voxel " << i << " " << j << " " << k;
       }
   EXPECT_GT(compared, 1000);
+}
+
+// A gap inside the body, where no tet covers the posed grid (the sliding
+// surfaces of an articulated pose parting), is closed with the labels
+// around it; background outside the body stays. A label flagged as behind
+// (a bone) fills only what the others do not reach.
+TEST(LabelVolumes, EnclosedGapsAreFilledWithTheTissueAround) {
+  const Scene& s = junctionSphere();
+  const GridGeometry& g = s.source.geometry();
+  const Eigen::Vector3d c = gridCentre(g);
+  // The mesh without the tets whose centroid lies within 4 voxels of a
+  // point inside the sphere, off its centre: the posed grid (identity) has a
+  // hole there.
+  const Eigen::Vector3d hole = c + Eigen::Vector3d(5.0, 3.0, 2.0).cwiseProduct(g.spacing);
+  TetMesh holed = s.rest;
+  holed.tets.clear();
+  for (const Tet& t : s.rest.tets) {
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (const std::int32_t v : t) centroid += 0.25 * s.rest.positions[std::size_t(v)];
+    if ((centroid - hole).cwiseQuotient(g.spacing).norm() >= 4.0) holed.tets.push_back(t);
+  }
+  holed.labels.assign(holed.tets.size(), 0);
+  ASSERT_LT(holed.tets.size(), s.rest.tets.size());
+  LabelGrid posed = rasterizeDeformedGrid(s.source, holed, holed.positions);
+  const LabelGrid before = posed;
+  // The source's label at each posed voxel (the posed grid may add a margin).
+  const GridGeometry& out = posed.geometry();
+  std::vector<Label> sourceAt(std::size_t(posed.voxelCount()), 0);
+  for (std::int64_t k = 0; k < out.dims[2]; ++k)
+    for (std::int64_t j = 0; j < out.dims[1]; ++j)
+      for (std::int64_t i = 0; i < out.dims[0]; ++i) {
+        Index3 v;
+        if (g.voxelAt(out.voxelCenter(i, j, k), v)) sourceAt[std::size_t(out.index(i, j, k))] = s.source.at(v[0], v[1], v[2]);
+      }
+  std::int64_t holeVoxels = 0, outside = 0;
+  for (std::int64_t v = 0; v < posed.voxelCount(); ++v) {
+    holeVoxels += posed.data()[v] == 0 && sourceAt[std::size_t(v)] != 0;
+    outside += sourceAt[std::size_t(v)] == 0;
+  }
+  ASSERT_GT(holeVoxels, 20);
+  ASSERT_GT(outside, 0);
+  const std::uint64_t filled = fillEnclosedGaps(posed, s.source, holed, holed.positions, 2);
+  EXPECT_EQ(std::int64_t(filled), holeVoxels);
+  std::int64_t agree = 0;
+  for (std::int64_t v = 0; v < posed.voxelCount(); ++v) {
+    const Label was = before.data()[v], now = posed.data()[v], rest = sourceAt[std::size_t(v)];
+    if (was != 0) {
+      ASSERT_EQ(now, was) << v;
+    }
+    if (rest == 0) {
+      ASSERT_EQ(now, 0) << v;
+    }
+    if (was == 0 && rest != 0) {
+      ASSERT_NE(now, 0) << v;
+      agree += now == rest;
+    }
+  }
+  EXPECT_GT(double(agree), 0.7 * double(holeVoxels));
+  // The label that filled most, flagged as behind: it fills less; every
+  // label flagged: as none.
+  std::vector<std::int64_t> took(std::size_t(s.source.maxLabel()) + 1, 0);
+  for (std::int64_t v = 0; v < posed.voxelCount(); ++v)
+    if (before.data()[v] == 0 && posed.data()[v] != 0) ++took[posed.data()[v]];
+  const auto most = Label(std::max_element(took.begin(), took.end()) - took.begin());
+  std::vector<std::uint8_t> behind(took.size(), 0);
+  behind[most] = 1;
+  LabelGrid aside = before;
+  EXPECT_EQ(fillEnclosedGaps(aside, s.source, holed, holed.positions, 2, behind), filled);
+  std::int64_t tookAside = 0;
+  for (std::int64_t v = 0; v < aside.voxelCount(); ++v) tookAside += before.data()[v] == 0 && aside.data()[v] == most;
+  EXPECT_LT(tookAside, took[most]);
+  LabelGrid all = before;
+  fillEnclosedGaps(all, s.source, holed, holed.positions, 2, std::vector<std::uint8_t>(took.size(), 1));
+  EXPECT_EQ(all.labels(), posed.labels());
+  // The whole mesh: nothing to fill.
+  LabelGrid whole = rasterizeDeformedGrid(s.source, s.rest, s.rest.positions);
+  EXPECT_EQ(fillEnclosedGaps(whole, s.source, s.rest, s.rest.positions, 2), 0u);
 }
 
 TEST(LabelVolumes, RejectsAGridOfAnotherGeometry) {
