@@ -6,17 +6,6 @@
 
 namespace vox::skeleton {
 
-namespace {
-
-// The joint between parts a and b when one hangs from the other.
-const Joint* jointBetween(std::span<const Joint> joints, Part a, Part b) {
-  for (const Joint& j : joints)
-    if ((j.kind().parent == a && j.kind().child == b) || (j.kind().parent == b && j.kind().child == a)) return &j;
-  return nullptr;
-}
-
-}  // namespace
-
 std::vector<Part> partSubtree(Part part) {
   std::vector<Part> out;
   for (int p = 1; p <= kPartCount; ++p)
@@ -92,7 +81,9 @@ std::vector<BoneOverlap> BoneOverlapIndex::under(std::span<const Joint> joints, 
       // A joint between them with an articular sphere (a fitted ball, a
       // wrist's) leaves its shell out; the rigid map between two parts that share a joint fixes its
       // centre, so the shell is the same in both parts' frames.
-      const Joint* joint = jointBetween(joints, Part(a), Part(b));
+      const std::optional<JointId> between = jointBetween(Part(a), Part(b));
+      const auto found = between ? std::find_if(joints.begin(), joints.end(), [&](const Joint& j) { return j.id == *between; }) : joints.end();
+      const Joint* joint = found != joints.end() ? &*found : nullptr;
       const double shell = joint && joint->radius > 0.0 ? joint->radius + slack : -1.0;
       // At a wrist, the faces that meet at rest are left out as well: the
       // carpals roll on the radius, and their staircases cross as the hand

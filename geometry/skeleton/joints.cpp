@@ -575,6 +575,12 @@ std::optional<JointId> jointMoving(Part part) {
   return std::nullopt;
 }
 
+std::optional<JointId> jointBetween(Part a, Part b) {
+  for (const JointKind& k : kKinds)
+    if ((k.parent == a && k.child == b) || (k.parent == b && k.child == a)) return k.id;
+  return std::nullopt;
+}
+
 Part parentPart(Part part) {
   if (part == Part::Pelvis) return Part::Trunk;
   if (const auto j = jointMoving(part)) return jointKind(*j).parent;

@@ -103,6 +103,8 @@ std::string jointNames();  // "neck, head, right_shoulder, ..." for messages
 std::optional<JointId> jointMoving(Part part);
 // The part `part` hangs from (trunk for the pelvis; None for the trunk).
 Part parentPart(Part part);
+// The joint between parts a and b when one hangs from the other by it.
+std::optional<JointId> jointBetween(Part a, Part b);
 
 struct Joint {
   JointId id = JointId::Neck;

@@ -182,10 +182,8 @@ std::optional<std::string> tissueOverlapFault(const Collisions& c, double maxPer
   const double percent = 100.0 * c.bodyFraction();
   if (!(percent > maxPercent) || c.pairs.empty()) return std::nullopt;
   const auto a = skeleton::Part(c.pairs.front().partA), b = skeleton::Part(c.pairs.front().partB);
-  std::string joint;
-  for (const auto& [parent, child] : {std::pair{a, b}, std::pair{b, a}})
-    if (const std::optional<skeleton::JointId> j = skeleton::jointMoving(child); j && skeleton::parentPart(child) == parent)
-      joint = std::string(" at the ") + skeleton::jointKind(*j).name;
+  const std::optional<skeleton::JointId> between = skeleton::jointBetween(a, b);
+  const std::string joint = between ? std::string(" at the ") + skeleton::jointKind(*between).name : std::string();
   return "the pose presses the tissue of the " + std::string(skeleton::partName(a)) + " and the " + skeleton::partName(b) +
          " through each other" + joint + " (" + formatNumber("%.2f", percent) + " % of the body overlaps, more than --max-tissue-overlap " +
          formatNumber("%g", maxPercent) + " %)";

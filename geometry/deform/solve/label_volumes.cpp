@@ -48,6 +48,13 @@ int stencilLabels(const LabelGrid& source, const Eigen::Vector3d& p, std::array<
   return n;
 }
 
+// `posed` must be the output grid G' of the plan it is corrected by.
+void requireOutputGrid(const LabelGrid& posed, const GridGeometry& out) {
+  if (out.dims != posed.dims() || (out.origin - posed.origin()).norm() > 1e-6 * out.spacing.norm() ||
+      (out.spacing - posed.spacing()).norm() > 1e-9 * out.spacing.norm())
+    throw InputError("posed grid", "its geometry is not the output grid of this deformation");
+}
+
 double worstPercent(std::span<const std::int64_t> counts, std::span<const double> targets) {
   double worst = 0.0;
   for (std::size_t l = 1; l < targets.size(); ++l)
@@ -133,9 +140,7 @@ std::uint64_t fillEnclosedGaps(LabelGrid& posed, const LabelGrid& source, const 
                                int threads, std::span<const std::uint8_t> behind) {
   const RasterizationPlan plan(source.geometry(), rest, deformed, 1);
   const GridGeometry& out = plan.output();
-  if (out.dims != posed.dims() || (out.origin - posed.origin()).norm() > 1e-6 * out.spacing.norm() ||
-      (out.spacing - posed.spacing()).norm() > 1e-9 * out.spacing.norm())
-    throw InputError("posed grid", "its geometry is not the output grid of this deformation");
+  requireOutputGrid(posed, out);
   const auto isBehind = [&behind](Label l) { return std::size_t(l) < behind.size() && behind[l] != 0; };
   const std::int64_t nx = out.dims[0], ny = out.dims[1], nz = out.dims[2], slice = out.sliceVoxels();
   Label* labels = posed.data();
@@ -227,9 +232,7 @@ LabelVolumeCorrection preserveLabelVolumes(LabelGrid& posed, const LabelGrid& so
                                            int threads) {
   const RasterizationPlan plan(source.geometry(), rest, deformed, 1);
   const GridGeometry& out = plan.output();
-  if (out.dims != posed.dims() || (out.origin - posed.origin()).norm() > 1e-6 * out.spacing.norm() ||
-      (out.spacing - posed.spacing()).norm() > 1e-9 * out.spacing.norm())
-    throw InputError("posed grid", "its geometry is not the output grid of this deformation");
+  requireOutputGrid(posed, out);
 
   // Still tets (every vertex within kStillFraction of a voxel of its rest
   // position): their voxels are not candidates.
