@@ -555,13 +555,11 @@ DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines)
     std::vector<std::uint8_t> bones;
     if (o.organs)
       for (const skeleton::Bone b : skeleton::boneOfLabels(*o.organs, maxLabel)) bones.push_back(b != skeleton::Bone::None);
-    const std::uint64_t gaps = fillEnclosedGaps(posed, *source.grid, rest, deformed, 0, bones);
     deformedVolumes = deformedLabelVolumes(*source.grid, rest, deformed);
     const bool toRest = o.volumeTarget == DeformGridRequest::VolumeTarget::Rest;
     const std::vector<double> targets = toRest ? deformedLabelVolumes(*source.grid, rest, rest.positions) : deformedVolumes;
-    report.volumeCorrection = preserveLabelVolumes(posed, *source.grid, rest, deformed, targets);
+    report.volumeCorrection = preserveLabelVolumes(posed, *source.grid, rest, deformed, targets, 0, true, bones);
     report.volumeCorrection->toRestVolumes = toRest;
-    report.volumeCorrection->gapsFilled = gaps;
     report.stages.push_back(correctionTimer.stop());
     StageTimer writeTimer("write");
     HeldGrid held(posed);

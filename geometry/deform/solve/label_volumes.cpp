@@ -2,6 +2,7 @@
 
 #include "geometry/raster/lattice_tets.h"
 #include "geometry/raster/rasterize.h"
+#include "geometry/disjoint_sets.h"
 #include "geometry/error.h"
 #include "geometry/parallel.h"
 
@@ -60,6 +61,129 @@ double worstPercent(std::span<const std::int64_t> counts, std::span<const double
   for (std::size_t l = 1; l < targets.size(); ++l)
     if (targets[l] >= 0.5) worst = std::max(worst, 100.0 * std::abs(double(counts[l]) / targets[l] - 1.0));
   return worst;
+}
+
+// The background of `posed` that background does not connect to G''s
+// border (6-connected), found over the rows' runs of background: each run
+// joins the runs it overlaps in the row before (y - 1) and the slice
+// before (z - 1). Returns, in voxel order, the voxels flagged in `open`
+// that lie in such enclosed runs.
+std::vector<std::int64_t> enclosedVoxels(const LabelGrid& posed, std::span<const std::uint8_t> open) {
+  const std::int64_t nx = posed.dims()[0], ny = posed.dims()[1], nz = posed.dims()[2];
+  const Label* labels = posed.data();
+  struct Run {
+    std::int32_t x0, x1;  // [x0, x1)
+  };
+  std::vector<Run> runs;
+  std::vector<std::int64_t> rowStart(std::size_t(ny * nz) + 1, 0);
+  for (std::int64_t r = 0; r < ny * nz; ++r) {
+    const Label* row = labels + r * nx;
+    for (std::int64_t x = 0; x < nx;) {
+      if (row[x] != 0) {
+        ++x;
+        continue;
+      }
+      const std::int64_t x0 = x;
+      while (x < nx && row[x] == 0) ++x;
+      runs.push_back({std::int32_t(x0), std::int32_t(x)});
+    }
+    rowStart[std::size_t(r) + 1] = std::int64_t(runs.size());
+  }
+  DisjointSets sets(runs.size());
+  // Joins the runs of rows a and b that share an x.
+  const auto join = [&](std::int64_t a, std::int64_t b) {
+    std::int64_t i = rowStart[std::size_t(a)], j = rowStart[std::size_t(b)];
+    const std::int64_t iEnd = rowStart[std::size_t(a) + 1], jEnd = rowStart[std::size_t(b) + 1];
+    while (i < iEnd && j < jEnd) {
+      const Run& u = runs[std::size_t(i)];
+      const Run& w = runs[std::size_t(j)];
+      if (u.x0 < w.x1 && w.x0 < u.x1) sets.unite(std::int32_t(i), std::int32_t(j));
+      if (u.x1 < w.x1) ++i;
+      else ++j;
+    }
+  };
+  for (std::int64_t z = 0; z < nz; ++z)
+    for (std::int64_t y = 0; y < ny; ++y) {
+      const std::int64_t r = z * ny + y;
+      if (y > 0) join(r, r - 1);
+      if (z > 0) join(r, r - ny);
+    }
+  std::vector<std::uint8_t> border(runs.size(), 0);
+  for (std::int64_t z = 0; z < nz; ++z)
+    for (std::int64_t y = 0; y < ny; ++y) {
+      const std::int64_t r = z * ny + y;
+      const bool edgeRow = y == 0 || z == 0 || y == ny - 1 || z == nz - 1;
+      for (std::int64_t i = rowStart[std::size_t(r)]; i < rowStart[std::size_t(r) + 1]; ++i)
+        if (edgeRow || runs[std::size_t(i)].x0 == 0 || runs[std::size_t(i)].x1 == nx) border[std::size_t(sets.find(std::int32_t(i)))] = 1;
+    }
+  std::vector<std::int64_t> enclosed;
+  for (std::int64_t r = 0; r < ny * nz; ++r)
+    for (std::int64_t i = rowStart[std::size_t(r)]; i < rowStart[std::size_t(r) + 1]; ++i) {
+      if (border[std::size_t(sets.find(std::int32_t(i)))]) continue;
+      for (std::int64_t x = runs[std::size_t(i)].x0; x < runs[std::size_t(i)].x1; ++x)
+        if (open[std::size_t(r * nx + x)]) enclosed.push_back(r * nx + x);
+    }
+  return enclosed;
+}
+
+// Fills the enclosed voxels flagged in `open` (fillEnclosedGaps).
+std::uint64_t fillGaps(LabelGrid& posed, std::span<const std::uint8_t> open, std::span<const std::uint8_t> behind) {
+  const auto isBehind = [&behind](Label l) { return std::size_t(l) < behind.size() && behind[l] != 0; };
+  const std::int64_t nx = posed.dims()[0], ny = posed.dims()[1], nz = posed.dims()[2], slice = nx * ny;
+  Label* labels = posed.data();
+  const std::array<std::int64_t, 6> step = {1, -1, nx, -nx, slice, -slice};
+  const auto neighbour = [&](std::int64_t v, int n, std::int64_t& w) {
+    const std::int64_t i = v % nx, j = (v / nx) % ny, k = v / slice;
+    if ((n == 0 && i + 1 >= nx) || (n == 1 && i == 0) || (n == 2 && j + 1 >= ny) || (n == 3 && j == 0) || (n == 4 && k + 1 >= nz) ||
+        (n == 5 && k == 0))
+      return false;
+    w = v + step[std::size_t(n)];
+    return true;
+  };
+  std::vector<std::int64_t> gaps = enclosedVoxels(posed, open);
+  // From the rim inward: each round labels the gap voxels beside a label by
+  // the labels before the round; the bones' labels only once the others
+  // reach no further.
+  std::uint64_t filled = 0;
+  bool withBehind = false;
+  std::vector<std::pair<std::int64_t, Label>> round;
+  std::vector<std::int64_t> left;
+  while (!gaps.empty()) {
+    round.clear();
+    left.clear();
+    for (const std::int64_t v : gaps) {
+      std::array<Label, 6> seen{};
+      std::array<int, 6> count{};
+      int kinds = 0;
+      std::int64_t w = 0;
+      for (int n = 0; n < 6; ++n) {
+        if (!neighbour(v, n, w) || labels[w] == 0 || (!withBehind && isBehind(labels[w]))) continue;
+        int m = 0;
+        while (m < kinds && seen[std::size_t(m)] != labels[w]) ++m;
+        if (m == kinds) seen[std::size_t(kinds++)] = labels[w];
+        ++count[std::size_t(m)];
+      }
+      if (kinds == 0) {
+        left.push_back(v);
+        continue;
+      }
+      int best = 0;
+      for (int m = 1; m < kinds; ++m)
+        if (count[std::size_t(m)] > count[std::size_t(best)] ||
+            (count[std::size_t(m)] == count[std::size_t(best)] && seen[std::size_t(m)] < seen[std::size_t(best)]))
+          best = m;
+      round.push_back({v, seen[std::size_t(best)]});
+    }
+    if (round.empty()) {
+      if (withBehind) break;  // enclosed by covered background only
+      withBehind = true;
+      continue;
+    }
+    for (const auto& [v, l] : round) labels[v] = l;
+    filled += round.size();
+    gaps.swap(left);
+  }
+  return filled;
 }
 
 }  // namespace
@@ -141,95 +265,19 @@ std::uint64_t fillEnclosedGaps(LabelGrid& posed, const LabelGrid& source, const 
   const RasterizationPlan plan(source.geometry(), rest, deformed, 1);
   const GridGeometry& out = plan.output();
   requireOutputGrid(posed, out);
-  const auto isBehind = [&behind](Label l) { return std::size_t(l) < behind.size() && behind[l] != 0; };
-  const std::int64_t nx = out.dims[0], ny = out.dims[1], nz = out.dims[2], slice = out.sliceVoxels();
-  Label* labels = posed.data();
-  // Background that no tet covers.
+  const std::int64_t slice = out.sliceVoxels();
+  const Label* labels = posed.data();
   std::vector<std::uint8_t> open(std::size_t(out.voxelCount()), 0);
   forEachLocatedSlab(plan.tets(), plan.lattice(), slabSlicesFor(out), threads, [&](const SlabTets& slab, const std::uint32_t* state) {
     const std::int64_t first = std::int64_t(slab.z0) * slice, points = std::int64_t(slab.z1 - slab.z0) * slice;
     for (std::int64_t i = 0; i < points; ++i) open[std::size_t(first + i)] = state[i] == kNoTet && labels[first + i] == 0;
   });
-  // Background reached from G''s border (covered or not) is outside.
-  const std::array<std::int64_t, 6> step = {1, -1, nx, -nx, slice, -slice};
-  const auto neighbour = [&](std::int64_t v, int n, std::int64_t& w) {
-    const std::int64_t i = v % nx, j = (v / nx) % ny, k = v / slice;
-    if ((n == 0 && i + 1 >= nx) || (n == 1 && i == 0) || (n == 2 && j + 1 >= ny) || (n == 3 && j == 0) || (n == 4 && k + 1 >= nz) ||
-        (n == 5 && k == 0))
-      return false;
-    w = v + step[std::size_t(n)];
-    return true;
-  };
-  std::vector<std::uint8_t> outside(std::size_t(out.voxelCount()), 0);
-  std::vector<std::int64_t> stack;
-  const auto reach = [&](std::int64_t v) {
-    if (labels[v] == 0 && !outside[std::size_t(v)]) {
-      outside[std::size_t(v)] = 1;
-      stack.push_back(v);
-    }
-  };
-  for (std::int64_t k = 0; k < nz; ++k)
-    for (std::int64_t j = 0; j < ny; ++j)
-      for (std::int64_t i = 0; i < nx; ++i)
-        if (i == 0 || j == 0 || k == 0 || i == nx - 1 || j == ny - 1 || k == nz - 1) reach(out.index(i, j, k));
-  while (!stack.empty()) {
-    const std::int64_t v = stack.back();
-    stack.pop_back();
-    std::int64_t w = 0;
-    for (int n = 0; n < 6; ++n)
-      if (neighbour(v, n, w)) reach(w);
-  }
-  std::vector<std::int64_t> gaps;
-  for (std::int64_t v = 0; v < out.voxelCount(); ++v)
-    if (open[std::size_t(v)] && !outside[std::size_t(v)]) gaps.push_back(v);
-  // From the rim inward: each round labels the gap voxels beside a label by
-  // the labels before the round; the bones' labels only once the others
-  // reach no further.
-  std::uint64_t filled = 0;
-  bool withBehind = false;
-  std::vector<std::pair<std::int64_t, Label>> round;
-  std::vector<std::int64_t> left;
-  while (!gaps.empty()) {
-    round.clear();
-    left.clear();
-    for (const std::int64_t v : gaps) {
-      std::array<Label, 6> seen{};
-      std::array<int, 6> count{};
-      int kinds = 0;
-      std::int64_t w = 0;
-      for (int n = 0; n < 6; ++n) {
-        if (!neighbour(v, n, w) || labels[w] == 0 || (!withBehind && isBehind(labels[w]))) continue;
-        int m = 0;
-        while (m < kinds && seen[std::size_t(m)] != labels[w]) ++m;
-        if (m == kinds) seen[std::size_t(kinds++)] = labels[w];
-        ++count[std::size_t(m)];
-      }
-      if (kinds == 0) {
-        left.push_back(v);
-        continue;
-      }
-      int best = 0;
-      for (int m = 1; m < kinds; ++m)
-        if (count[std::size_t(m)] > count[std::size_t(best)] ||
-            (count[std::size_t(m)] == count[std::size_t(best)] && seen[std::size_t(m)] < seen[std::size_t(best)]))
-          best = m;
-      round.push_back({v, seen[std::size_t(best)]});
-    }
-    if (round.empty()) {
-      if (withBehind) break;  // enclosed by covered background only
-      withBehind = true;
-      continue;
-    }
-    for (const auto& [v, l] : round) labels[v] = l;
-    filled += round.size();
-    gaps.swap(left);
-  }
-  return filled;
+  return fillGaps(posed, open, behind);
 }
 
 LabelVolumeCorrection preserveLabelVolumes(LabelGrid& posed, const LabelGrid& source, const TetMesh& rest,
                                            const std::vector<Eigen::Vector3d>& deformed, std::span<const double> targets,
-                                           int threads) {
+                                           int threads, bool fillGapsFirst, std::span<const std::uint8_t> behind) {
   const RasterizationPlan plan(source.geometry(), rest, deformed, 1);
   const GridGeometry& out = plan.output();
   requireOutputGrid(posed, out);
@@ -250,6 +298,10 @@ LabelVolumeCorrection preserveLabelVolumes(LabelGrid& posed, const LabelGrid& so
   std::uint64_t candidates = 0;
   std::vector<std::vector<Move>> rowMoves;
   std::vector<std::uint64_t> rowCandidates;
+  // With fillGapsFirst, the background no tet covers (fillEnclosedGaps),
+  // from the same located lattice: the fill changes no covered voxel, so
+  // the moves are those after it.
+  std::vector<std::uint8_t> open(fillGapsFirst ? std::size_t(out.voxelCount()) : 0, 0);
   forEachLocatedSlab(plan.tets(), plan.lattice(), slabSlicesFor(out), threads, [&](const SlabTets& slab, const std::uint32_t* state) {
     const std::int64_t z0 = slab.z0, z1 = slab.z1;
     rowMoves.assign(std::size_t((z1 - z0) * ny), {});
@@ -262,7 +314,10 @@ LabelVolumeCorrection preserveLabelVolumes(LabelGrid& posed, const LabelGrid& so
       std::array<float, 8> weights;
       for (std::int32_t x = 0; x < nx; ++x) {
         const std::uint32_t s = state[r * nx + x];
-        if (s == kNoTet) continue;
+        if (s == kNoTet) {
+          if (fillGapsFirst) open[std::size_t(out.index(x, y, z))] = posed.data()[out.index(x, y, z)] == 0;
+          continue;
+        }
         const std::int32_t t = slab.tets[s];
         const Eigen::Vector4d lambda = plan.tets()[std::size_t(t)].barycentric(x, y, z);
         const auto c = plan.restCorners(t);
@@ -290,6 +345,7 @@ LabelVolumeCorrection preserveLabelVolumes(LabelGrid& posed, const LabelGrid& so
       stillVoxels += rowStill[r];
     }
   });
+  const std::uint64_t gapsFilled = fillGapsFirst ? fillGaps(posed, open, behind) : 0;
   std::sort(moves.begin(), moves.end(), [](const Move& a, const Move& b) {
     if (a.cost != b.cost) return a.cost < b.cost;
     if (a.voxel != b.voxel) return a.voxel < b.voxel;
@@ -323,6 +379,7 @@ LabelVolumeCorrection preserveLabelVolumes(LabelGrid& posed, const LabelGrid& so
   LabelVolumeCorrection result;
   result.candidates = candidates;
   result.still = stillVoxels;
+  result.gapsFilled = gapsFilled;
   result.deviationBefore = deviation();
   result.worstPercentBefore = worstPercent(counts, goal);
   Label* labels = posed.data();

@@ -100,9 +100,13 @@ inline constexpr double kStillFraction = 0.1;
 // rest -> deformed, samples = 1 or more) so that label l > 0 has about
 // targets[l] voxels and label 0 the rest (see above). targets: from
 // deformedLabelVolumes (index = label). Throws InputError when posed's
-// geometry is not the output grid of this deformation.
+// geometry is not the output grid of this deformation. With fillGapsFirst
+// it fills the enclosed gaps first, as fillEnclosedGaps(posed, source, rest,
+// deformed, threads, behind) does, from the same located output lattice
+// (result.gapsFilled), and corrects the filled grid.
 LabelVolumeCorrection preserveLabelVolumes(LabelGrid& posed, const LabelGrid& source, const TetMesh& rest,
                                            const std::vector<Eigen::Vector3d>& deformed, std::span<const double> targets,
-                                           int threads = 0);
+                                           int threads = 0, bool fillGapsFirst = false,
+                                           std::span<const std::uint8_t> behind = {});
 
 }  // namespace vox

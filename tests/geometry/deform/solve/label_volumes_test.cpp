@@ -156,6 +156,21 @@ TEST(LabelVolumes, StillTissueKeepsItsLabels) {
   EXPECT_GT(compared, 1000);
 }
 
+// The scene's mesh without the tets whose centroid lies within 4 voxels of
+// `hole` (a point inside the sphere).
+TetMesh holedMesh(const Scene& s, const Eigen::Vector3d& hole) {
+  const GridGeometry& g = s.source.geometry();
+  TetMesh holed = s.rest;
+  holed.tets.clear();
+  for (const Tet& t : s.rest.tets) {
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (const std::int32_t v : t) centroid += 0.25 * s.rest.positions[std::size_t(v)];
+    if ((centroid - hole).cwiseQuotient(g.spacing).norm() >= 4.0) holed.tets.push_back(t);
+  }
+  holed.labels.assign(holed.tets.size(), 0);
+  return holed;
+}
+
 // A gap inside the body, where no tet covers the posed grid (the sliding
 // surfaces of an articulated pose parting), is closed with the labels
 // around it; background outside the body stays. A label flagged as behind
@@ -167,15 +182,7 @@ TEST(LabelVolumes, EnclosedGapsAreFilledWithTheTissueAround) {
   // The mesh without the tets whose centroid lies within 4 voxels of a
   // point inside the sphere, off its centre: the posed grid (identity) has a
   // hole there.
-  const Eigen::Vector3d hole = c + Eigen::Vector3d(5.0, 3.0, 2.0).cwiseProduct(g.spacing);
-  TetMesh holed = s.rest;
-  holed.tets.clear();
-  for (const Tet& t : s.rest.tets) {
-    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-    for (const std::int32_t v : t) centroid += 0.25 * s.rest.positions[std::size_t(v)];
-    if ((centroid - hole).cwiseQuotient(g.spacing).norm() >= 4.0) holed.tets.push_back(t);
-  }
-  holed.labels.assign(holed.tets.size(), 0);
+  const TetMesh holed = holedMesh(s, c + Eigen::Vector3d(5.0, 3.0, 2.0).cwiseProduct(g.spacing));
   ASSERT_LT(holed.tets.size(), s.rest.tets.size());
   LabelGrid posed = rasterizeDeformedGrid(s.source, holed, holed.positions);
   const LabelGrid before = posed;
@@ -231,6 +238,34 @@ TEST(LabelVolumes, EnclosedGapsAreFilledWithTheTissueAround) {
   // The whole mesh: nothing to fill.
   LabelGrid whole = rasterizeDeformedGrid(s.source, s.rest, s.rest.positions);
   EXPECT_EQ(fillEnclosedGaps(whole, s.source, s.rest, s.rest.positions, 2), 0u);
+}
+
+// The correction that fills the gaps first, in its own pass over the posed
+// lattice, gives what the fill and then the correction give.
+TEST(LabelVolumes, TheCorrectionFillsTheGapsAsTheFillDoes) {
+  const Scene& s = junctionSphere();
+  const GridGeometry& g = s.source.geometry();
+  const Eigen::Vector3d c = gridCentre(g);
+  const TetMesh holed = holedMesh(s, c + Eigen::Vector3d(5.0, 3.0, 2.0).cwiseProduct(g.spacing));
+  const auto deformed = deformPositions(holed.positions, test::rotation(c, {0, 0, 1}, 30.0));
+  const LabelGrid posed = rasterizeDeformedGrid(s.source, holed, deformed);
+  const std::vector<double> targets = deformedLabelVolumes(s.source, holed, deformed);
+  std::vector<std::uint8_t> behind(std::size_t(s.source.maxLabel()) + 1, 0);
+  behind[1] = 1;
+  LabelGrid apart = posed;
+  const std::uint64_t filled = fillEnclosedGaps(apart, s.source, holed, deformed, 2, behind);
+  const LabelVolumeCorrection after = preserveLabelVolumes(apart, s.source, holed, deformed, targets, 2);
+  for (const int threads : {1, 2}) {
+    LabelGrid together = posed;
+    const LabelVolumeCorrection both = preserveLabelVolumes(together, s.source, holed, deformed, targets, threads, true, behind);
+    EXPECT_EQ(together.labels(), apart.labels()) << threads << " threads";
+    EXPECT_EQ(both.gapsFilled, filled);
+    EXPECT_EQ(both.relabelled, after.relabelled);
+    EXPECT_EQ(both.candidates, after.candidates);
+  }
+  EXPECT_GT(filled, 20u);
+  EXPECT_GT(after.relabelled, 0u);
+  EXPECT_EQ(after.gapsFilled, 0u);
 }
 
 TEST(LabelVolumes, RejectsAGridOfAnotherGeometry) {
