@@ -2,10 +2,11 @@
 
 #include "geometry/cancellation.h"
 #include "geometry/error.h"
+#include "geometry/parallel.h"
 
 #include <Eigen/Dense>
 #include <algorithm>
-#include <unordered_map>
+#include <limits>
 
 namespace vox {
 
@@ -53,24 +54,6 @@ Tri tetFace(const Tet& t, int k) {
   return {t[kFace[k][0]], t[kFace[k][1]], t[kFace[k][2]]};
 }
 
-namespace {
-struct FaceKey {
-  std::int32_t a, b, c;
-  bool operator==(const FaceKey&) const = default;
-};
-struct FaceKeyHash {
-  std::size_t operator()(const FaceKey& k) const {
-    std::uint64_t h = std::uint64_t(std::uint32_t(k.a)) * 0x9E3779B97F4A7C15ull;
-    h ^= std::uint64_t(std::uint32_t(k.b)) + 0x7F4A7C159E3779B9ull + (h << 6) + (h >> 2);
-    h ^= std::uint64_t(std::uint32_t(k.c)) + 0x94D049BB133111EBull + (h << 6) + (h >> 2);
-    return std::size_t(h);
-  }
-};
-FaceKey sortedKey(Tri f) {
-  std::sort(f.begin(), f.end());
-  return {f[0], f[1], f[2]};
-}
-}  // namespace
 
 VertexTets vertexTets(std::span<const Tet> tets, std::size_t vertexCount) {
   VertexTets out;
@@ -91,20 +74,48 @@ std::vector<std::array<std::int32_t, 4>> faceNeighbors(const TetMesh& mesh, cons
 
 std::vector<std::array<std::int32_t, 4>> faceNeighbors(std::span<const Tet> tets, const std::string& source) {
   std::vector<std::array<std::int32_t, 4>> nb(tets.size(), {-1, -1, -1, -1});
-  std::unordered_map<FaceKey, std::int64_t, FaceKeyHash> open;  // face -> 4*tet + k
-  open.reserve(tets.size() * 2);
-  for (std::size_t t = 0; t < tets.size(); ++t) {
-    for (int k = 0; k < 4; ++k) {
-      const FaceKey key = sortedKey(tetFace(tets[t], k));
-      auto [it, inserted] = open.try_emplace(key, std::int64_t(4 * t + k));
-      if (inserted) continue;
-      if (it->second < 0) throw InputError(source, "a face of tet " + std::to_string(t) + " is shared by more than two tets");
-      const std::int64_t other = it->second;
-      nb[t][k] = std::int32_t(other / 4);
-      nb[std::size_t(other / 4)][other % 4] = std::int32_t(t);
-      it->second = -1;
+  if (tets.empty()) return nb;
+  std::int64_t lowest = 0, highest = -1;
+  for (const Tet& t : tets)
+    for (const std::int32_t v : t) {
+      lowest = std::min<std::int64_t>(lowest, v);
+      highest = std::max<std::int64_t>(highest, v);
     }
-  }
+  if (lowest < 0) throw InputError(source, "a tet has a negative vertex index");
+  // Face k of tet t is shared with the tets that hold its three vertices:
+  // the intersection of their vertices' tet lists (each in tet order). A
+  // face held by more than two tets names the third of them in tet order,
+  // and the error the smallest such tet: the first met in tet order.
+  const VertexTets around = vertexTets(tets, std::size_t(highest) + 1);
+  std::vector<std::int32_t> overShared(tets.size(), std::numeric_limits<std::int32_t>::max());
+  parallelFor(std::int64_t(tets.size()), 0, [&](std::int64_t ti) {
+    const auto t = std::int32_t(ti);
+    std::int32_t worst = std::numeric_limits<std::int32_t>::max();
+    for (int k = 0; k < 4; ++k) {
+      std::array<std::span<const std::int32_t>, 3> lists;
+      for (int i = 0, n = 0; i < 4; ++i)
+        if (i != k) lists[std::size_t(n++)] = around.of(tets[std::size_t(t)][std::size_t(i)]);
+      std::array<std::size_t, 3> at = {0, 0, 0};
+      int count = 0;
+      while (at[0] < lists[0].size() && at[1] < lists[1].size() && at[2] < lists[2].size()) {
+        const std::int32_t x = lists[0][at[0]], y = lists[1][at[1]], z = lists[2][at[2]];
+        if (x == y && y == z) {
+          if (x != t && nb[std::size_t(t)][std::size_t(k)] < 0) nb[std::size_t(t)][std::size_t(k)] = x;
+          if (++count == 3) worst = std::min(worst, x);
+          for (int l = 0; l < 3; ++l)
+            while (at[std::size_t(l)] < lists[std::size_t(l)].size() && lists[std::size_t(l)][at[std::size_t(l)]] == x) ++at[std::size_t(l)];
+          continue;
+        }
+        const std::int32_t top = std::max({x, y, z});
+        for (int l = 0; l < 3; ++l)
+          while (at[std::size_t(l)] < lists[std::size_t(l)].size() && lists[std::size_t(l)][at[std::size_t(l)]] < top) ++at[std::size_t(l)];
+      }
+    }
+    overShared[std::size_t(t)] = worst;
+  });
+  const std::int32_t bad = *std::min_element(overShared.begin(), overShared.end());
+  if (bad != std::numeric_limits<std::int32_t>::max())
+    throw InputError(source, "a face of tet " + std::to_string(bad) + " is shared by more than two tets");
   return nb;
 }
 

@@ -152,27 +152,20 @@ std::vector<Label> nearestGroups(std::span<const Eigen::Vector3d> points, const 
   // A point in a foreground voxel's cell takes its value. Otherwise the
   // nearest foreground voxel has a background (or off-grid) 6-neighbour: a
   // step towards the point along an axis where it lies more than half a
-  // voxel away would be nearer. So only those boundary voxels are searched.
+  // voxel away would be nearer. So only those boundary voxels are searched
+  // (the nearest centre; ties: the lowest voxel index), in boxes about the
+  // point whose half-width r doubles until the nearest found lies within r:
+  // every voxel outside the box is farther than r.
   const GridGeometry& g = groups.geometry();
-  std::vector<std::int64_t> boundary;
-  for (std::int64_t k = 0; k < g.dims[2]; ++k)
-    for (std::int64_t j = 0; j < g.dims[1]; ++j)
-      for (std::int64_t i = 0; i < g.dims[0]; ++i) {
-        if (groups.at(i, j, k) == 0) continue;
-        const std::int64_t n[6][3] = {{i - 1, j, k}, {i + 1, j, k}, {i, j - 1, k}, {i, j + 1, k}, {i, j, k - 1}, {i, j, k + 1}};
-        bool edge = false;
-        for (const auto& q : n) edge = edge || groups.atOr(q[0], q[1], q[2]) == 0;
-        if (edge) boundary.push_back(g.index(i, j, k));
-      }
   std::vector<Label> out(points.size(), 0);
-  if (boundary.empty()) return out;
-  std::vector<Eigen::Vector3d> centres(boundary.size());
-  for (std::size_t b = 0; b < boundary.size(); ++b) {
-    const Index3 v = g.ijk(boundary[b]);
-    centres[b] = g.voxelCenter(v[0], v[1], v[2]);
-  }
+  if (std::none_of(groups.labels().begin(), groups.labels().end(), [](Label l) { return l != 0; })) return out;
+  const auto boundary = [&](std::int64_t i, std::int64_t j, std::int64_t k) {
+    return groups.atOr(i - 1, j, k) == 0 || groups.atOr(i + 1, j, k) == 0 || groups.atOr(i, j - 1, k) == 0 ||
+           groups.atOr(i, j + 1, k) == 0 || groups.atOr(i, j, k - 1) == 0 || groups.atOr(i, j, k + 1) == 0;
+  };
   parallelFor(std::int64_t(points.size()), 0, [&](std::int64_t p) {
     const Eigen::Vector3d& x = points[std::size_t(p)];
+    if (!x.allFinite()) return;
     const Eigen::Vector3d c = g.continuousIndex(x);
     const std::int64_t i = std::lround(c.x()), j = std::lround(c.y()), k = std::lround(c.z());
     if (const Label inside = groups.atOr(i, j, k); inside != 0) {
@@ -180,13 +173,30 @@ std::vector<Label> nearestGroups(std::span<const Eigen::Vector3d> points, const 
       return;
     }
     double best = std::numeric_limits<double>::infinity();
-    std::size_t nearest = 0;
-    for (std::size_t b = 0; b < centres.size(); ++b)
-      if (const double d = (centres[b] - x).squaredNorm(); d < best) {
-        best = d;
-        nearest = b;
+    std::int64_t nearest = -1;
+    for (double r = 2.0 * g.spacing.maxCoeff();; r *= 2.0) {
+      Index3 lo, hi;
+      bool whole = true;
+      for (int a = 0; a < 3; ++a) {
+        const double reach = r / g.spacing[a];
+        lo[a] = std::max<std::int64_t>(0, std::int64_t(std::ceil(c[a] - reach)));
+        hi[a] = std::min<std::int64_t>(g.dims[a] - 1, std::int64_t(std::floor(c[a] + reach)));
+        whole = whole && lo[a] == 0 && hi[a] == g.dims[a] - 1;
       }
-    out[std::size_t(p)] = groups.labels()[std::size_t(boundary[nearest])];
+      for (std::int64_t kk = lo[2]; kk <= hi[2]; ++kk)
+        for (std::int64_t jj = lo[1]; jj <= hi[1]; ++jj)
+          for (std::int64_t ii = lo[0]; ii <= hi[0]; ++ii) {
+            if (groups.at(ii, jj, kk) == 0) continue;
+            const double d = (g.voxelCenter(ii, jj, kk) - x).squaredNorm();
+            const std::int64_t index = g.index(ii, jj, kk);
+            if ((d < best || (d == best && index < nearest)) && boundary(ii, jj, kk)) {
+              best = d;
+              nearest = index;
+            }
+          }
+      if ((nearest >= 0 && best <= r * r) || whole) break;
+    }
+    out[std::size_t(p)] = groups.labels()[std::size_t(nearest)];
   });
   return out;
 }

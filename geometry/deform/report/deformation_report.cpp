@@ -2,6 +2,7 @@
 
 #include "geometry/skeleton/body_parts.h"
 #include "geometry/skeleton/bones.h"
+#include "geometry/parallel.h"
 
 #include <algorithm>
 #include <cmath>
@@ -21,10 +22,13 @@ EdgeDistortion summarize(std::vector<double>& values) {
   double sum = 0;
   for (const double v : values) sum += v;
   d.mean = sum / double(values.size());
-  std::sort(values.begin(), values.end());
-  d.median = values[values.size() / 2];
-  d.p95 = values[std::min(values.size() - 1, std::size_t(0.95 * double(values.size())))];
-  d.max = values.back();
+  // Order statistics: the same values as those of the sorted list.
+  const std::size_t median = values.size() / 2, p95 = std::min(values.size() - 1, std::size_t(0.95 * double(values.size())));
+  std::nth_element(values.begin(), values.begin() + std::ptrdiff_t(p95), values.end());
+  d.p95 = values[p95];
+  d.max = *std::max_element(values.begin() + std::ptrdiff_t(p95), values.end());
+  std::nth_element(values.begin(), values.begin() + std::ptrdiff_t(median), values.begin() + std::ptrdiff_t(p95));
+  d.median = median < p95 ? values[median] : d.p95;
   return d;
 }
 
@@ -85,13 +89,21 @@ WholeBodyChange wholeBodyChange(std::span<const LabelChange> labels) {
 
 OutlierDistortion outlierEdgeDistortion(const TetMesh& rest, std::span<const Eigen::Vector3d> deformed,
                                         std::span<const std::uint8_t> inside, int neighbourhoodRings) {
+  // The mesh's edges (a < b) in increasing order: per vertex a, the higher
+  // vertices of its tets.
+  const VertexTets around = vertexTets(rest.tets, rest.vertexCount());
+  std::vector<std::vector<std::int32_t>> higher(rest.vertexCount());
+  parallelFor(std::int64_t(rest.vertexCount()), 0, [&](std::int64_t a) {
+    std::vector<std::int32_t>& out = higher[std::size_t(a)];
+    for (const std::int32_t t : around.of(std::int32_t(a)))
+      for (const std::int32_t b : rest.tets[std::size_t(t)])
+        if (b > a) out.push_back(b);
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+  });
   std::vector<std::pair<std::int32_t, std::int32_t>> edges;
-  edges.reserve(rest.tetCount() * 6);
-  for (const Tet& t : rest.tets)
-    for (int a = 0; a < 4; ++a)
-      for (int b = a + 1; b < 4; ++b) edges.emplace_back(std::min(t[a], t[b]), std::max(t[a], t[b]));
-  std::sort(edges.begin(), edges.end());
-  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  for (std::size_t a = 0; a < higher.size(); ++a)
+    for (const std::int32_t b : higher[a]) edges.emplace_back(std::int32_t(a), b);
 
   // Rings around the outside vertices.
   const std::size_t nv = rest.vertexCount();

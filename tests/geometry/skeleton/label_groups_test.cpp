@@ -7,7 +7,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
+#include <limits>
 #include <map>
+#include <vector>
 
 namespace vox {
 namespace {
@@ -101,6 +104,43 @@ TEST(LabelGroups, SidesFromGeometry) {
       ASSERT_EQ(mirrored.labels()[v], Label(LabelGroup::LeftArm));
     }
   }
+}
+
+TEST(LabelGroups, NearestGroupIsTheNearestForegroundVoxel) {
+  LabelGrid grid = synthesize(SynthKind::StickFigure, 40);
+  grid.geometry().spacing = {1.5, 1.0, 4.0};
+  grid.geometry().origin = {-7.0, 3.0, 11.0};
+  const GridGeometry& g = grid.geometry();
+  // Points inside, beside the figure and far off the grid, from a fixed
+  // sequence.
+  std::vector<Eigen::Vector3d> points;
+  std::uint64_t state = 12345;
+  const auto next = [&state] {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return double(state >> 11) / double(1ull << 53);
+  };
+  const Eigen::Vector3d lo = g.boxMin(), size = g.boxMax() - g.boxMin();
+  for (int n = 0; n < 400; ++n) {
+    const double stretch = n < 300 ? 1.0 : 3.0;
+    points.push_back(lo - 0.5 * (stretch - 1.0) * size + stretch * Eigen::Vector3d(next(), next(), next()).cwiseProduct(size));
+  }
+  const std::vector<Label> found = nearestGroups(points, grid);
+  ASSERT_EQ(found.size(), points.size());
+  for (std::size_t p = 0; p < points.size(); ++p) {
+    double best = std::numeric_limits<double>::infinity();
+    Label label = 0;
+    for (std::int64_t v = 0; v < grid.voxelCount(); ++v) {
+      if (grid.labels()[std::size_t(v)] == 0) continue;
+      const Index3 ijk = g.ijk(v);
+      const double d = (g.voxelCenter(ijk[0], ijk[1], ijk[2]) - points[p]).squaredNorm();
+      if (d < best) {
+        best = d;
+        label = grid.labels()[std::size_t(v)];
+      }
+    }
+    EXPECT_EQ(found[p], label) << "point " << p;
+  }
+  EXPECT_EQ(nearestGroups(points, LabelGrid(g, 0)), std::vector<Label>(points.size(), 0));
 }
 
 TEST(LabelGroups, AdultMalePhantom) {
