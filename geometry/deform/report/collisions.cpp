@@ -31,7 +31,7 @@ Collisions findCollisions(const TetMesh& rest, std::span<const Eigen::Vector3d> 
   std::vector<std::array<std::int64_t, 3>> contactFaces(kParts * kParts, {0, 0, 0});
   // Apart at rest: more than two of the rest grid's largest voxel sides.
   const float apart2 = float(4.0 * restGrid.spacing.maxCoeff() * restGrid.spacing.maxCoeff());
-  parallelRanges(lattice.dims[2], threads, [&](std::int64_t z0, std::int64_t z1) {
+  parallelRanges(lattice.dims[2], workerThreads(threads), [&](std::int64_t z0, std::int64_t z1) {
     std::vector<Label> first(std::size_t(nx * ny)), below(std::size_t(nx * ny), Label(0));
     // Where the first tet's map puts each point at rest (grid frame).
     std::vector<Eigen::Vector3f> from(std::size_t(nx * ny)), fromBelow(std::size_t(nx * ny));
