@@ -1,5 +1,6 @@
 #include "app/viewer/script_runner.h"
 
+#include "app/viewer/export_job.h"
 #include "app/viewer/viewer_app.h"
 #include "geometry/deform/pose/pose_editor.h"
 #include "geometry/error.h"
@@ -13,6 +14,22 @@ namespace vox::app {
 ScriptRunner::ScriptRunner(ViewerScript script, std::string screenshotDir)
     : script_(std::move(script)), screenshotDir_(std::move(screenshotDir)) {
   wait_ = script_.steps.empty() ? 0 : script_.steps[0].frames;
+  // Every file the session writes, before the pre-processing: a missing or
+  // read-only directory is refused at the start, not at its step.
+  if (!screenshotDir_.empty() && !std::filesystem::is_directory(screenshotDir_))
+    throw InputError(screenshotDir_, "the screenshot directory does not exist");
+  for (const ScriptStep& s : script_.steps) {
+    if (s.step == "screenshot") checkWritablePath(screenshotPath(s));
+    if (s.step == "save_pose") checkWritablePath(s.path);
+    if (s.step == "export")
+      for (const std::string* path : {&s.path, &s.report, &s.png})
+        if (!path->empty()) checkWritablePath(*path);
+  }
+}
+
+std::string ScriptRunner::screenshotPath(const ScriptStep& s) const {
+  const bool relative = !screenshotDir_.empty() && !std::filesystem::path(s.path).is_absolute();
+  return relative ? (std::filesystem::path(screenshotDir_) / s.path).string() : s.path;
 }
 
 bool ScriptRunner::beginFrame(Viewer& viewer) {
@@ -147,8 +164,7 @@ void ScriptRunner::runStep(const ScriptStep& s, Viewer& viewer) {
     viewer.exportJob().wait();
     viewer.status(viewer.exportJob().message());
   } else if (k == "screenshot") {
-    const bool relative = !screenshotDir_.empty() && !std::filesystem::path(s.path).is_absolute();
-    viewer.screenshot(relative ? (std::filesystem::path(screenshotDir_) / s.path).string() : s.path, s.flag);
+    viewer.screenshot(screenshotPath(s), s.flag);
   } else if (k == "camera") {
     OrbitCamera& orbit = viewer.orbit();
     if (s.value != 0.0 || !s.numbers.empty()) orbit.azimuth = s.value;

@@ -17,6 +17,8 @@ class Viewer;
 class ScriptRunner {
 public:
   // Screenshot paths are taken relative to screenshotDir when it is given.
+  // Throws InputError for a file the script writes (screenshot, saved pose,
+  // export) whose directory is missing or not writable.
   ScriptRunner(ViewerScript script, std::string screenshotDir);
   const ViewerScript& script() const { return script_; }
 
@@ -34,6 +36,7 @@ public:
 
 private:
   void runStep(const ScriptStep& step, Viewer& viewer);
+  std::string screenshotPath(const ScriptStep& step) const;
   void drag(PointerPath path);
 
   ViewerScript script_;

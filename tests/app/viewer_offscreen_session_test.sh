@@ -7,7 +7,8 @@
 # undo and redo give the same images byte for byte; the window screenshot
 # has the window's size, the panels drawn left of the view and the ray-cast
 # view right of them (the cage hidden for it); the frame log has a row per rendered frame. Without
-# --script, --offscreen is a usage error (exit 2, one line).
+# --script, --offscreen is a usage error (exit 2, one line); a missing
+# screenshot directory is refused before the pre-processing (exit 1, one line).
 set -euo pipefail
 bin=$1 src=$2 work=$3
 rm -rf "$work" && mkdir -p "$work"
@@ -49,4 +50,15 @@ rc=$?
 set -e
 echo "$out"
 test "$rc" -eq 2 && test "$(echo "$out" | wc -l)" -eq 1 && echo "$out" | grep -q -- '--offscreen'
+# A screenshot directory that does not exist: refused at the start with
+# one line (exit 1), before the pre-processing, nothing written.
+set +e
+out=$(env -u DISPLAY -u WAYLAND_DISPLAY "$bin" view "$src/assets/icrp110_am.nii.gz" --organs "$src/assets/icrp110_am_organs.dat" \
+  --script "$src/tests/app/data/viewer_offscreen_session.json" --screenshot-dir "$work/missing" --offscreen 2>&1)
+rc=$?
+set -e
+echo "$out"
+test "$rc" -eq 1 && test "$(echo "$out" | wc -l)" -eq 1 && echo "$out" | grep -q 'missing: the screenshot directory does not exist'
+! echo "$out" | grep -q 'pre-processing'
+test ! -e "$work/missing"
 echo "viewer offscreen session: passed"
