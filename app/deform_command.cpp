@@ -28,6 +28,7 @@
 #include "gpu/raster_engines.h"
 
 #include <cstdio>
+#include <future>
 #include <filesystem>
 #include <memory>
 
@@ -87,11 +88,16 @@ void deform(const DeformOptions& o) {
     surfaceWorldToGrid(*request.cage, frame);
   }
   checkDeformGridRequest(request);
-  request.provenance =
-      commandProvenance({{"grid", o.run.input}, {"organs", o.organs}, {"pose", o.pose}, {"cage", o.cage}, {"prepared", o.run.prepared}});
+  // The inputs' SHA-256 (the report's provenance) on a thread of its own
+  // beside the run, which reads the grid meanwhile: a large grid's digest
+  // takes a core for a while.
+  std::future<Provenance> provenance = std::async(std::launch::async, [&o] {
+    return commandProvenance({{"grid", o.run.input}, {"organs", o.organs}, {"pose", o.pose}, {"cage", o.cage}, {"prepared", o.run.prepared}});
+  });
 
   const std::unique_ptr<RasterEngines> engines = gpu::makeRasterEngines(o.cpu, request.warn);
-  const DeformationReport report = deformGrid(request, *engines);
+  DeformationReport report = deformGrid(request, *engines);
+  report.provenance = provenance.get();
   if (!o.report.empty()) {
     const std::string json = deformationReportJson(report);
     if (o.report == "-") {
