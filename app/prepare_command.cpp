@@ -5,7 +5,8 @@
 // pre-processing; their results are byte-identical to a run without it. The
 // file holds a cage and transfer mesh per set of separations: those of each
 // --pose (compiled against the skeleton for a joint pose) plus --separate,
-// or of a pose without separations when no --pose is given.
+// or of a pose without separations when no --pose is given; with
+// --articulated also the transfer mesh that resolves the skeleton.
 
 #include "app/command_line.h"
 #include "geometry/deform/cage/cage_builder.h"
@@ -63,6 +64,11 @@ void prepare(const PrepareOptions& o) {
       skeleton::requireBones(*request.organs, o.organs);
     }
   }
+  if (request.articulated) {
+    if (!o.run.parts.empty()) throw UsageError("--articulated", "cannot be combined with --parts (deform --articulated takes none)");
+    requireOrganTable(request.organs.has_value(), OrganTableNeed::Bones, "--articulated");
+    skeleton::requireBones(*request.organs, o.organs);
+  }
   if (!o.run.parts.empty()) {
     requireOrganTable(request.organs.has_value(), OrganTableNeed::Bones, "--parts");
     if (openGridSlices(o.run.parts)->geometry().dims != frame.dims) throw InputError(o.run.parts, "has other dims than the grid " + o.run.input);
@@ -104,6 +110,8 @@ void addPrepareCommand(CLI::App& app) {
   cmd->add_option("--vertices", o->run.vertices, "Automatic cage: vertices after QEM (the runs give the same)")
       ->capture_default_str()
       ->check(integerIn(8, 100000));
+  cmd->add_flag("--articulated", o->run.articulated,
+                "Also the transfer mesh that resolves the skeleton, for deform --articulated (needs an organ table that names the bones)");
   cmd->add_flag("-q,--quiet", o->quiet, "No progress or summary");
   cmd->callback([o] { prepare(*o); });
 }

@@ -140,6 +140,122 @@ TriMesh getTriMesh(SectionUnpacker& u, const std::string& source) {
   return m;
 }
 
+void putTetMesh(SectionPacker& p, const TetMesh& m) {
+  putPoints(p, m.positions);
+  p.putVector(m.tets);
+  p.putVector(m.labels);
+  p.put(std::uint64_t(m.labelNames.size()));
+  for (const auto& [label, name] : m.labelNames) {
+    p.put(label);
+    p.putString(name);
+  }
+}
+
+TetMesh getTetMesh(SectionUnpacker& u, const std::string& source) {
+  TetMesh m;
+  m.positions = getPoints(u);
+  m.tets = u.getVector<Tet>();
+  m.labels = u.getVector<std::int32_t>();
+  const std::size_t names = u.getCount(4 + 8);
+  for (std::size_t i = 0; i < names; ++i) {
+    const auto label = u.get<std::int32_t>();
+    m.labelNames[label] = u.getString();
+  }
+  m.validate(source);
+  return m;
+}
+
+void putCutReport(SectionPacker& p, const CutReport& c) {
+  for (const std::size_t n : {c.cutFaces, c.duplicatedVertices, c.openedRimFaces, c.contactVertices}) p.put(std::uint64_t(n));
+  p.putVector(c.splitVertices);
+}
+
+CutReport getCutReport(SectionUnpacker& u, std::size_t vertexCount) {
+  CutReport c;
+  for (std::size_t* n : {&c.cutFaces, &c.duplicatedVertices, &c.openedRimFaces, &c.contactVertices}) *n = std::size_t(u.get<std::uint64_t>());
+  c.splitVertices = u.getVector<std::int32_t>();
+  for (const std::int32_t v : c.splitVertices)
+    if (v < 0 || std::size_t(v) >= vertexCount) u.invalid("split vertex " + std::to_string(v) + " outside the mesh");
+  return c;
+}
+
+void putArticulatedMesh(SectionPacker& p, const ArticulatedMesh& m) {
+  putTetMesh(p, m.mesh);
+  p.put(std::uint64_t(m.bodies.size()));
+  for (const ArticularBody& b : m.bodies) {
+    for (const std::uint8_t e : {std::uint8_t(b.joint), std::uint8_t(b.shape), std::uint8_t(b.owner), std::uint8_t(b.other)}) p.put(e);
+    for (const Eigen::Vector3d* v : {&b.centre, &b.axis, &b.attachment}) putVector3(p, *v);
+    for (const double v : {b.radius, b.halfLength, b.attachmentHalfAngleDeg}) p.put(v);
+  }
+  p.put(std::uint64_t(m.cuts.size()));
+  for (const CutReport& c : m.cuts) putCutReport(p, c);
+  putCutReport(p, m.limbCut);
+  std::vector<std::uint8_t> role(m.role.size()), part(m.vertexPart.size());
+  for (std::size_t v = 0; v < role.size(); ++v) role[v] = std::uint8_t(m.role[v]);
+  for (std::size_t v = 0; v < part.size(); ++v) part[v] = std::uint8_t(m.vertexPart[v]);
+  p.putVector(role);
+  p.putVector(part);
+  p.putVector(m.vertexBody);
+  for (const std::size_t n : {m.conflictVertices, m.resolvedBoneVoxels, m.snappedVertices, m.unsnappedVertices, m.splitEdges})
+    p.put(std::uint64_t(n));
+  for (const std::size_t n : m.rigidVertices) p.put(std::uint64_t(n));
+  p.put(std::uint64_t(m.bodySurfaces.size()));
+  for (const auto& surface : m.bodySurfaces) {
+    std::vector<Eigen::Vector3d> corners;
+    for (const auto& triangle : surface) corners.insert(corners.end(), triangle.begin(), triangle.end());
+    putPoints(p, corners);
+  }
+  p.put(m.seconds);
+}
+
+ArticulatedMesh getArticulatedMesh(SectionUnpacker& u, const std::string& source) {
+  ArticulatedMesh m;
+  m.mesh = getTetMesh(u, source);
+  const std::size_t nv = m.mesh.vertexCount();
+  const std::size_t bodies = u.getCount(4 + 9 * 8 + 3 * 8);
+  for (std::size_t i = 0; i < bodies; ++i) {
+    ArticularBody b;
+    const auto joint = u.get<std::uint8_t>(), shape = u.get<std::uint8_t>(), owner = u.get<std::uint8_t>(), other = u.get<std::uint8_t>();
+    if (joint >= skeleton::kJointCount || shape > std::uint8_t(ArticularShape::Cylinder) || owner > kSegmentCount ||
+        other > kSegmentCount)
+      u.invalid("articular body " + std::to_string(i) + ": joint, shape or part out of range");
+    b.joint = skeleton::JointId(joint);
+    b.shape = ArticularShape(shape);
+    b.owner = skeleton::Part(owner);
+    b.other = skeleton::Part(other);
+    for (Eigen::Vector3d* v : {&b.centre, &b.axis, &b.attachment}) *v = getVector3(u);
+    for (double* v : {&b.radius, &b.halfLength, &b.attachmentHalfAngleDeg}) *v = u.get<double>();
+    m.bodies.push_back(b);
+  }
+  const std::size_t cuts = u.getCount(4 * 8 + 8);
+  for (std::size_t i = 0; i < cuts; ++i) m.cuts.push_back(getCutReport(u, nv));
+  m.limbCut = getCutReport(u, nv);
+  const std::vector<std::uint8_t> role = u.getVector<std::uint8_t>(), part = u.getVector<std::uint8_t>();
+  m.vertexBody = u.getVector<std::int8_t>();
+  if (role.size() != nv || part.size() != nv || m.vertexBody.size() != nv) u.invalid("per-vertex arrays of another length than the mesh's");
+  for (std::size_t v = 0; v < nv; ++v) {
+    if (role[v] > std::uint8_t(VertexRole::Sliding) || part[v] > kSegmentCount ||
+        m.vertexBody[v] < -1 || m.vertexBody[v] >= std::int64_t(m.bodies.size()))
+      u.invalid("vertex " + std::to_string(v) + ": role, part or body out of range");
+    m.role.push_back(VertexRole(role[v]));
+    m.vertexPart.push_back(skeleton::Part(part[v]));
+  }
+  for (std::size_t* n : {&m.conflictVertices, &m.resolvedBoneVoxels, &m.snappedVertices, &m.unsnappedVertices, &m.splitEdges})
+    *n = std::size_t(u.get<std::uint64_t>());
+  for (std::size_t& n : m.rigidVertices) n = std::size_t(u.get<std::uint64_t>());
+  const std::size_t surfaces = u.getCount(8);
+  if (surfaces != m.bodies.size()) u.invalid("body surfaces of another count than the bodies'");
+  for (std::size_t i = 0; i < surfaces; ++i) {
+    const std::vector<Eigen::Vector3d> corners = getPoints(u);
+    if (corners.size() % 3 != 0) u.invalid("a body surface's corners are not triangles");
+    std::vector<std::array<Eigen::Vector3d, 3>> surface(corners.size() / 3);
+    for (std::size_t t = 0; t < surface.size(); ++t) surface[t] = {corners[3 * t], corners[3 * t + 1], corners[3 * t + 2]};
+    m.bodySurfaces.push_back(std::move(surface));
+  }
+  m.seconds = u.get<double>();
+  return m;
+}
+
 void putSurfaceCheck(SectionPacker& p, const SurfaceCheck& c) {
   for (const std::size_t n : {c.vertices, c.edges, c.faces, c.boundaryEdges, c.nonManifoldEdges, c.nonManifoldVertices, c.misorientedEdges,
                               c.isolatedVertices, c.degenerateFaces, c.components, c.selfIntersections})
@@ -346,6 +462,21 @@ std::string transferMeshOptionsKey(const TransferMeshOptions& o) {
          exact(o.radiusEdgeRatio) + (o.coverageCaps ? " caps" : "");
 }
 
+std::string articulatedMeshOptionsKey(const ArticulatedMeshOptions& o) {
+  std::string k = "articulated";
+  for (const double v : {o.fineSizeVoxels, o.coarseSizeMm, o.gradingMm, o.trunkBoneReachMm, o.pelvisBoneReachMm, o.jointClearanceMm,
+                         o.wholePartBoneClearanceMm, o.wholePartOwnBoneClearanceMm, o.bodyMarginVoxels, o.minBodyRadiusVoxels,
+                         o.attachmentHalfAngleDeg, o.elbowAttachmentHalfAngleDeg, o.ownerShellVoxels, o.hingeOwnerReachMm,
+                         o.yieldingShellVoxels, o.limbCutMarginRadii})
+    k += " " + exact(v);
+  k += " whole";
+  for (const skeleton::Part p : o.rigidWholeParts) k += " " + std::to_string(int(p));
+  k += " yielding";
+  for (const skeleton::JointId j : o.yieldingShellJoints) k += " " + std::to_string(int(j));
+  for (const bool b : {o.wristBodies, o.movingScapulae, o.movingPatellae}) k += b ? " 1" : " 0";
+  return k + " mesh " + transferMeshOptionsKey(o.transferMesh);
+}
+
 std::string separationsText(const std::vector<LimbSeparation>& separations, const GridGeometry& grid) {
   if (separations.empty()) return "none";
   std::string s;
@@ -398,6 +529,12 @@ const PreparedEnvelope* PreparedState::findEnvelope(const std::string& key) cons
 
 const PreparedTransferMesh* PreparedState::findMesh(const std::string& key) const {
   for (const PreparedTransferMesh& m : meshes)
+    if (m.key == key) return &m;
+  return nullptr;
+}
+
+const PreparedArticulatedMesh* PreparedState::findArticulatedMesh(const std::string& key) const {
+  for (const PreparedArticulatedMesh& m : articulatedMeshes)
     if (m.key == key) return &m;
   return nullptr;
 }
@@ -500,6 +637,9 @@ std::string PreparedState::summary() const {
   for (const PreparedTransferMesh& m : meshes)
     s += "transfer mesh: " + std::to_string(m.mesh.vertexCount()) + " vertices, " + std::to_string(m.mesh.tetCount()) + " tets; cuts " +
          m.cuts + "\n";
+  for (const PreparedArticulatedMesh& m : articulatedMeshes)
+    s += "articulated transfer mesh: " + std::to_string(m.mesh.mesh.vertexCount()) + " vertices, " + std::to_string(m.mesh.mesh.tetCount()) +
+         " tets, " + std::to_string(m.mesh.bodies.size()) + " articular bodies\n";
   return s;
 }
 
@@ -539,21 +679,17 @@ std::string PreparedState::bytes() const {
     SectionPacker p;
     p.putString(m.key);
     p.putString(m.cuts);
-    putPoints(p, m.mesh.positions);
-    p.putVector(m.mesh.tets);
-    p.putVector(m.mesh.labels);
-    p.put(std::uint64_t(m.mesh.labelNames.size()));
-    for (const auto& [label, name] : m.mesh.labelNames) {
-      p.put(label);
-      p.putString(name);
-    }
+    putTetMesh(p, m.mesh);
     p.put(std::uint64_t(m.cutReports.size()));
-    for (const CutReport& c : m.cutReports) {
-      for (const std::size_t n : {c.cutFaces, c.duplicatedVertices, c.openedRimFaces, c.contactVertices}) p.put(std::uint64_t(n));
-      p.putVector(c.splitVertices);
-    }
+    for (const CutReport& c : m.cutReports) putCutReport(p, c);
     p.put(m.uncoveredVoxels);
     w.add("transfer mesh " + std::to_string(i), p.bytes());
+  }
+  for (std::size_t i = 0; i < articulatedMeshes.size(); ++i) {
+    SectionPacker p;
+    p.putString(articulatedMeshes[i].key);
+    putArticulatedMesh(p, articulatedMeshes[i].mesh);
+    w.add("articulated mesh " + std::to_string(i), p.bytes());
   }
   return w.bytes();
 }
@@ -605,27 +741,19 @@ PreparedState PreparedState::unpackState(const SectionFile& file) {
       PreparedTransferMesh m;
       m.key = u.getString();
       m.cuts = u.getString();
-      m.mesh.positions = getPoints(u);
-      m.mesh.tets = u.getVector<Tet>();
-      m.mesh.labels = u.getVector<std::int32_t>();
-      const std::size_t names = u.getCount(4 + 8);
-      for (std::size_t i = 0; i < names; ++i) {
-        const auto label = u.get<std::int32_t>();
-        m.mesh.labelNames[label] = u.getString();
-      }
-      m.mesh.validate(path + " (" + name + ")");
+      m.mesh = getTetMesh(u, path + " (" + name + ")");
       const std::size_t cuts = u.getCount(4 * 8 + 8);
-      for (std::size_t i = 0; i < cuts; ++i) {
-        CutReport c;
-        for (std::size_t* n : {&c.cutFaces, &c.duplicatedVertices, &c.openedRimFaces, &c.contactVertices}) *n = std::size_t(u.get<std::uint64_t>());
-        c.splitVertices = u.getVector<std::int32_t>();
-        for (const std::int32_t v : c.splitVertices)
-          if (v < 0 || std::size_t(v) >= m.mesh.vertexCount()) u.invalid("split vertex " + std::to_string(v) + " outside the mesh");
-        m.cutReports.push_back(std::move(c));
-      }
+      for (std::size_t i = 0; i < cuts; ++i) m.cutReports.push_back(getCutReport(u, m.mesh.vertexCount()));
       m.uncoveredVoxels = u.get<std::int64_t>();
       u.finish();
       s.meshes.push_back(std::move(m));
+    } else if (name.rfind("articulated mesh ", 0) == 0) {
+      SectionUnpacker u = file.unpacker(name, bytes);
+      PreparedArticulatedMesh m;
+      m.key = u.getString();
+      m.mesh = getArticulatedMesh(u, path + " (" + name + ")");
+      u.finish();
+      s.articulatedMeshes.push_back(std::move(m));
     } else if (name != "inputs" && name != "skeleton") {
       throw InputError(path, "unknown section '" + name + "'");
     }

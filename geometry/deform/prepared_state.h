@@ -12,7 +12,9 @@
 //  - per label-group grid and cage options: the automatic cage and its
 //    report; per label-group grid: the envelope; per (transfer-mesh group
 //    grid, sizing field, cuts): the cut transfer mesh, its cut reports and
-//    its uncovered voxels. Each is found by a key: a digest of the grid it
+//    its uncovered voxels; with `prepare --articulated`, the articulated
+//    transfer mesh (articulated_mesh.h) per set of its options. Each is
+//    found by a key: a digest of the grid it
 //    was built from and the canonical text of the options that shape it, so
 //    a pipeline takes a stored piece only where it would have built the same
 //    one (byte-identical results), and a prepared state holds one cage and
@@ -29,6 +31,7 @@
 // "VXPREP\r\n", format version kPreparedStateVersion, zlib-compressed
 // sections, a CRC-32; the reader allocates only what its bytes justify.
 
+#include "geometry/deform/articulated_mesh.h"
 #include "geometry/deform/cage/cage_builder.h"
 #include "geometry/deform/cage/envelope.h"
 #include "geometry/deform/transfer_mesh.h"
@@ -83,6 +86,13 @@ struct PreparedEnvelope {
   TriMesh envelope;
 };
 
+// The transfer mesh that resolves the skeleton (deform --articulated),
+// built from the working grid, the organ table and the stored skeleton.
+struct PreparedArticulatedMesh {
+  std::string key;  // articulatedMeshOptionsKey
+  ArticulatedMesh mesh;
+};
+
 struct PreparedTransferMesh {
   std::string key;   // group grid, label groups, sizing field digests + mesh options + cuts
   std::string cuts;  // its cuts, in words (world frame)
@@ -108,6 +118,7 @@ public:
   std::vector<PreparedCage> cages;
   std::vector<PreparedEnvelope> envelopes;
   std::vector<PreparedTransferMesh> meshes;
+  std::vector<PreparedArticulatedMesh> articulatedMeshes;
   // `voxmorph prepare`: pipelines add what they build. Otherwise a pipeline
   // that finds no piece for its key refuses (refuseCage, refuseMesh).
   bool recording = false;
@@ -115,6 +126,7 @@ public:
   const PreparedCage* findCage(const std::string& key) const;
   const PreparedEnvelope* findEnvelope(const std::string& key) const;
   const PreparedTransferMesh* findMesh(const std::string& key) const;
+  const PreparedArticulatedMesh* findArticulatedMesh(const std::string& key) const;
   // InputError(source, ...) naming what differs from the nearest stored
   // cage (separations, label groups, cage options) or transfer mesh (cuts).
   [[noreturn]] void refuseCage(const PreparedCageQuery& query) const;
@@ -149,6 +161,7 @@ std::string gridDigest(const ScalarGrid& grid);
 std::string cageOptionsKey(const CageOptions& options);
 std::string envelopeOptionsKey(const EnvelopeOptions& options);
 std::string transferMeshOptionsKey(const TransferMeshOptions& options);
+std::string articulatedMeshOptionsKey(const ArticulatedMeshOptions& options);
 std::string separationsKey(const std::vector<LimbSeparation>& separations);
 // Words for messages: "right_arm:trunk@x0,y0,z0,x1,y1,z1 mm, ..." (world
 // frame, as --separate takes them), "none" when empty; the cage options.

@@ -270,6 +270,30 @@ TEST(PartsCommand, ArticulatedJointPose) {
     }
   EXPECT_TRUE(std::filesystem::exists(out));
 
+  // Prepared once with the articulated transfer mesh: the same pose from
+  // the state writes the same bytes, and its report says the mesh took no
+  // building.
+  const std::string state = f.dir + "/figure.vxprep", fromState = f.dir + "/from_state.nii.gz";
+  const auto prepared = test::runCommand(voxmorph("prepare " + test::quote(f.grid) + " --organs " + test::quote(f.organs) +
+                                                  " --articulated -q -o " + test::quote(state)));
+  ASSERT_EQ(prepared.exitCode, 0) << prepared.err;
+  const std::string withState = "deform " + test::quote(f.grid) + " --organs " + test::quote(f.organs) + " --pose " + test::quote(pose) +
+                                " -o " + test::quote(fromState) + " --articulated --cpu -q --preserve-volumes --prepared " + test::quote(state);
+  const auto fromStateRun = test::runCommand(voxmorph(withState + " --report " + test::quote(f.dir + "/from_state.json")));
+  ASSERT_EQ(fromStateRun.exitCode, 0) << fromStateRun.err;
+  EXPECT_EQ(fromStateRun.err.find("holds no articulated transfer mesh"), std::string::npos) << fromStateRun.err;
+  EXPECT_FALSE(test::readText(out).empty());
+  EXPECT_TRUE(test::readText(fromState) == test::readText(out));
+  const auto meshSeconds = [](const nlohmann::json& report) {
+    for (const auto& stage : report["stages"])
+      if (stage["stage"] == "articulated transfer mesh") return stage["seconds"].get<double>();
+    return -1.0;
+  };
+  const double built = meshSeconds(j), taken = meshSeconds(nlohmann::json::parse(std::ifstream(f.dir + "/from_state.json")));
+  EXPECT_GT(built, 0.0);
+  EXPECT_GE(taken, 0.0);
+  EXPECT_LT(taken, 0.5 * built);
+
   const std::string selections = writeFile(f.dir + "/box.json", R"({"selections": [{"name": "b", "box": {"min": [0, 0, 0], "max": [10, 10, 10]}, "fixed": true}]})");
   const auto noJoints = test::runCommand(voxmorph("deform " + test::quote(f.grid) + " --organs " + test::quote(f.organs) + " --pose " +
                                                   test::quote(selections) + " -o " + test::quote(f.dir + "/x.nii.gz") + " --articulated --cpu -q"));

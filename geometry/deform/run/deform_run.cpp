@@ -385,7 +385,11 @@ PosedMesh poseArticulated(const DeformGridRequest& o, const Source& source, Defo
   report.stages.push_back(skeletonTimer.stop());
   if (const auto fault = skeleton::bonesThroughEachOther(sk, joints, o.pose.joints, o.maxBoneOverlapPercent)) refuseOrForce(o, report, *fault);
   StageTimer meshTimer("articulated transfer mesh");
-  ArticulatedMesh mesh = buildArticulatedMesh(grid, *o.organs, sk);
+  const ArticulatedMeshOptions meshOptions;
+  const PreparedArticulatedMesh* stored = prepared ? prepared->findArticulatedMesh(articulatedMeshOptionsKey(meshOptions)) : nullptr;
+  if (prepared && !stored)
+    warn(o, prepared->source + ": holds no articulated transfer mesh (voxmorph prepare --articulated adds it); building it");
+  ArticulatedMesh mesh = stored ? stored->mesh : buildArticulatedMesh(grid, *o.organs, sk, meshOptions);
   const std::vector<Eigen::Isometry3d> motions = segmentMotions(partMotions, sk, mesh);
   report.stages.push_back(meshTimer.stop());
   StageTimer poseTimer("articulated pose");

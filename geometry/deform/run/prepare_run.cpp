@@ -92,6 +92,13 @@ PrepareResult prepareRestState(const PrepareRequest& o) {
       result.stages.push_back(std::move(t));
     }
   }
+  if (o.articulated) {
+    StageTimer timer("articulated transfer mesh");
+    if (!state->skeleton) throw InputError("--articulated", "needs an organ table that names the bones the grid holds (or a --parts grid)");
+    const ArticulatedMeshOptions options;
+    state->articulatedMeshes.push_back({articulatedMeshOptionsKey(options), buildArticulatedMesh(working, *o.organs, *state->skeleton, options)});
+    result.stages.push_back(timer.stop());
+  }
   state->recording = false;
   result.state = std::move(*state);
   return result;

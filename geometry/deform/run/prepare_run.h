@@ -4,7 +4,7 @@
 // the skeleton, then for each pose (or for none) the cage pipeline's
 // pre-processing with the options deformGrid would give it
 // (deformPipelineOptions), each cage, envelope and transfer mesh recorded
-// once. `deform`, `render --pose` and `view` then take them (--prepared).
+// once, and on request the articulated transfer mesh. `deform`, `render --pose` and `view` then take them (--prepared).
 
 #include "geometry/deform/pose/pose.h"
 #include "geometry/deform/prepared_state.h"
@@ -31,6 +31,9 @@ struct PrepareRequest {
   std::vector<LimbSeparation> extraSeparations;  // beside each pose's, as deform --separate
   double dilationMm = CageOptions{}.dilationMm;
   int vertices = CageOptions{}.targetVertices;
+  // Also the transfer mesh that resolves the skeleton (deform --articulated),
+  // from the stored skeleton; needs an organ table that names the bones.
+  bool articulated = false;
 };
 
 struct PrepareResult {

@@ -4,6 +4,7 @@
 #include "geometry/deform/articulated_pose.h"
 #include "geometry/deform/solve/contact.h"
 #include "geometry/deform/pose/joint_pose.h"
+#include "geometry/deform/prepared_state.h"
 #include "geometry/synth.h"
 
 #include <gtest/gtest.h>
@@ -44,6 +45,50 @@ const ArticularBody* bodyOf(const ArticulatedMesh& m, JointId id) {
   for (const ArticularBody& b : m.bodies)
     if (b.joint == id) return &b;
   return nullptr;
+}
+
+// `prepare --articulated` stores the mesh whole: what reads back is what
+// was built, found by its options' key and by no other.
+TEST(ArticulatedMesh, APreparedStateHoldsItWhole) {
+  const Figure& f = figure();
+  PreparedState state;
+  state.articulatedMeshes.push_back({articulatedMeshOptionsKey({}), f.mesh});
+  const PreparedState back = PreparedState::fromBytes(state.bytes(), "figure.vxprep");
+  ASSERT_EQ(back.articulatedMeshes.size(), 1u);
+  const PreparedArticulatedMesh* found = back.findArticulatedMesh(articulatedMeshOptionsKey({}));
+  ASSERT_NE(found, nullptr);
+  const ArticulatedMesh& m = found->mesh;
+  const ArticulatedMesh& built = f.mesh;
+  EXPECT_EQ(m.mesh.positions, built.mesh.positions);
+  EXPECT_EQ(m.mesh.tets, built.mesh.tets);
+  EXPECT_EQ(m.mesh.labels, built.mesh.labels);
+  EXPECT_EQ(m.mesh.labelNames, built.mesh.labelNames);
+  ASSERT_EQ(m.bodies.size(), built.bodies.size());
+  ASSERT_FALSE(built.bodies.empty());
+  for (std::size_t b = 0; b < m.bodies.size(); ++b) {
+    const ArticularBody &x = m.bodies[b], &y = built.bodies[b];
+    EXPECT_TRUE(x.joint == y.joint && x.shape == y.shape && x.owner == y.owner && x.other == y.other) << b;
+    EXPECT_TRUE(x.centre == y.centre && x.axis == y.axis && x.attachment == y.attachment) << b;
+    EXPECT_TRUE(x.radius == y.radius && x.halfLength == y.halfLength && x.attachmentHalfAngleDeg == y.attachmentHalfAngleDeg) << b;
+  }
+  ASSERT_EQ(m.cuts.size(), built.cuts.size());
+  for (std::size_t c = 0; c < m.cuts.size(); ++c) {
+    EXPECT_EQ(m.cuts[c].splitVertices, built.cuts[c].splitVertices);
+    EXPECT_EQ(m.cuts[c].cutFaces, built.cuts[c].cutFaces);
+  }
+  EXPECT_EQ(m.limbCut.splitVertices, built.limbCut.splitVertices);
+  EXPECT_EQ(m.role, built.role);
+  EXPECT_EQ(m.vertexPart, built.vertexPart);
+  EXPECT_EQ(m.vertexBody, built.vertexBody);
+  EXPECT_EQ(m.rigidVertices, built.rigidVertices);
+  EXPECT_EQ(m.splitEdges, built.splitEdges);
+  EXPECT_EQ(m.snappedVertices, built.snappedVertices);
+  ASSERT_EQ(m.bodySurfaces.size(), built.bodySurfaces.size());
+  for (std::size_t b = 0; b < m.bodySurfaces.size(); ++b) EXPECT_TRUE(m.bodySurfaces[b] == built.bodySurfaces[b]) << b;
+  ArticulatedMeshOptions other;
+  other.elbowAttachmentHalfAngleDeg += 1.0;
+  EXPECT_EQ(back.findArticulatedMesh(articulatedMeshOptionsKey(other)), nullptr);
+  EXPECT_NE(back.summary().find("articulated transfer mesh"), std::string::npos);
 }
 
 TEST(ArticulatedMesh, BallJointsAndHingesGetTheirBodies) {
