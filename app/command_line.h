@@ -34,6 +34,13 @@ void addViewCommand(CLI::App& app);
 // line on a terminal and printing every 10% otherwise.
 void installStderrProgress(bool quiet);
 
+// Memory a stage frees stays with the allocator for the next (deform,
+// prepare, view): their stages each take grids and lattice states of a few
+// to tens of MB, which would otherwise go back to the kernel and return page
+// by page, one page fault each (docs/BENCHMARKS.md, "Page faults"). Not for
+// mesh and remesh, whose peak memory it raised (1.52 to 1.67 GB on the AM).
+void retainFreedMemory();
+
 // A subcommand whose first argument is a label grid (any format the readers
 // know), required, into `grid`.
 CLI::App* addGridSubcommand(CLI::App& app, const std::string& name, const std::string& description, std::string& grid);

@@ -56,6 +56,7 @@ std::string tablePath(const DeformOptions& o) {
 }
 
 void deform(const DeformOptions& o) {
+  retainFreedMemory();
   installStderrProgress(o.quiet);
   checkOutputPath(o.run.output, OutputKind::Grid, "--output");
   checkOutputPath(o.report, OutputKind::Json, "--report");

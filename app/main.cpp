@@ -5,16 +5,9 @@
 #include "geometry/error.h"
 
 #include <cstdio>
-#include <malloc.h>
 #include <new>
 
 int main(int argc, char** argv) {
-  // Memory a stage frees stays with the allocator for the next: a deform's
-  // stages each take grids and lattice states of a few to tens of MB, which
-  // would otherwise go back to the kernel and return page by page, one page
-  // fault each (docs/BENCHMARKS.md, "Page faults").
-  mallopt(M_MMAP_THRESHOLD, 32 << 20);
-  mallopt(M_TRIM_THRESHOLD, 1 << 30);
   CLI::App app{"voxmorph: segmented volumes to multi-material tet meshes, posed grids and images"};
   app.name("voxmorph");
   app.require_subcommand(1);

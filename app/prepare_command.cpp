@@ -37,6 +37,7 @@ struct PrepareOptions {
 };
 
 void prepare(const PrepareOptions& o) {
+  retainFreedMemory();
   installStderrProgress(o.quiet);
   const auto t0 = std::chrono::steady_clock::now();
   checkOutputPath(o.output, OutputKind::Prepared, "--output");

@@ -39,6 +39,7 @@ void addViewCommand(CLI::App& app) {
   cmd->callback([o, maxMemoryMb] {
     if (o->offscreen && o->script.empty()) throw UsageError("--offscreen", "needs a --script (an offscreen session takes no input)");
     checkGridFitsMemory(o->grid, *maxMemoryMb, kPosedMemory, "pose it interactively", "the viewer needs the whole grid in memory");
+    retainFreedMemory();
     runViewer(*o);
   });
 #else
