@@ -54,7 +54,6 @@ Tri tetFace(const Tet& t, int k) {
   return {t[kFace[k][0]], t[kFace[k][1]], t[kFace[k][2]]};
 }
 
-
 VertexTets vertexTets(std::span<const Tet> tets, std::size_t vertexCount) {
   VertexTets out;
   out.start.assign(vertexCount + 1, 0);

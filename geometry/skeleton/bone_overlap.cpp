@@ -82,8 +82,7 @@ std::vector<BoneOverlap> BoneOverlapIndex::under(std::span<const Joint> joints, 
       // wrist's) leaves its shell out; the rigid map between two parts that share a joint fixes its
       // centre, so the shell is the same in both parts' frames.
       const std::optional<JointId> between = jointBetween(Part(a), Part(b));
-      const auto found = between ? std::find_if(joints.begin(), joints.end(), [&](const Joint& j) { return j.id == *between; }) : joints.end();
-      const Joint* joint = found != joints.end() ? &*found : nullptr;
+      const Joint* joint = between ? findJoint(joints, *between) : nullptr;
       const double shell = joint && joint->radius > 0.0 ? joint->radius + slack : -1.0;
       // At a wrist, the faces that meet at rest are left out as well: the
       // carpals roll on the radius, and their staircases cross as the hand

@@ -575,6 +575,12 @@ std::optional<JointId> jointMoving(Part part) {
   return std::nullopt;
 }
 
+const Joint* findJoint(std::span<const Joint> joints, JointId id) {
+  for (const Joint& j : joints)
+    if (j.id == id) return &j;
+  return nullptr;
+}
+
 std::optional<JointId> jointBetween(Part a, Part b) {
   for (const JointKind& k : kKinds)
     if ((k.parent == a && k.child == b) || (k.parent == b && k.child == a)) return k.id;

@@ -125,6 +125,9 @@ struct Joint {
   Eigen::Matrix3d rotation(const std::array<double, kDofCount>& degrees) const;
 };
 
+// The joint `id` among `joints` (nullptr when absent).
+const Joint* findJoint(std::span<const Joint> joints, JointId id);
+
 struct SphereFit {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   double radius = 0.0;

@@ -16,11 +16,7 @@ json vec(const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); 
 
 }  // namespace
 
-const Joint* Skeleton::joint(JointId id) const {
-  for (const Joint& j : joints)
-    if (j.id == id) return &j;
-  return nullptr;
-}
+const Joint* Skeleton::joint(JointId id) const { return findJoint(joints, id); }
 
 const Joint* Skeleton::nearestJoint(const Eigen::Vector3d& p) const {
   const Joint* best = nullptr;

@@ -37,12 +37,6 @@ const PoseJoint* anglesOf(const std::vector<PoseJoint>& angles, JointId id) {
 
 bool turned(const PoseJoint* a) { return a && std::any_of(a->degrees.begin(), a->degrees.end(), [](double d) { return d != 0.0; }); }
 
-const Joint* findJoint(const std::vector<Joint>& joints, JointId id) {
-  for (const Joint& j : joints)
-    if (j.id == id) return &j;
-  return nullptr;
-}
-
 // Whether `part` hangs below `ancestor` (or is it).
 bool below(Part part, Part ancestor) {
   for (Part p = part; p != Part::None; p = parentPart(p))

@@ -314,8 +314,9 @@ LabelVolumeCorrection preserveLabelVolumes(LabelGrid& posed, const LabelGrid& so
       std::array<float, 8> weights;
       for (std::int32_t x = 0; x < nx; ++x) {
         const std::uint32_t s = state[r * nx + x];
+        const std::int64_t voxel = out.index(x, y, z);
         if (s == kNoTet) {
-          if (fillGapsFirst) open[std::size_t(out.index(x, y, z))] = posed.data()[out.index(x, y, z)] == 0;
+          if (fillGapsFirst) open[std::size_t(voxel)] = posed.data()[voxel] == 0;
           continue;
         }
         const std::int32_t t = slab.tets[s];
@@ -323,7 +324,6 @@ LabelVolumeCorrection preserveLabelVolumes(LabelGrid& posed, const LabelGrid& so
         const auto c = plan.restCorners(t);
         const Eigen::Vector3d p = lambda[0] * c[0] + lambda[1] * c[1] + lambda[2] * c[2] + lambda[3] * c[3];
         const int n = stencilLabels(source, p, labels, weights);
-        const std::int64_t voxel = out.index(x, y, z);
         const Label a = posed.data()[voxel];
         if (n == 1 && labels[0] == a) continue;
         if (still[std::size_t(t)]) {
