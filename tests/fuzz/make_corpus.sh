@@ -119,10 +119,14 @@ printf '{"joints": {"left_hip": {"flexion": 45}, "left_knee": {"flexion": 60}}, 
 "$bin" synth skeleton --size 20 -o "$tmp/sk20.nii" --organs "$tmp/sk20.dat" >/dev/null
 "$bin" parts "$tmp/sk20.nii" --organs "$tmp/sk20.dat" -o "$out/parts/other_dims.nii" -q
 cp ../app/data/viewer_session.json "$out/viewer_script/session.json"
-# Prepared states (fuzz_prepared): the stick figure without a skeleton, and
-# the skeleton figure with its skeleton and a separated arm.
+# Prepared states (fuzz_prepared): the stick figure without a skeleton, the
+# skeleton figure with its skeleton and a separated arm, and one with the
+# articulated transfer mesh.
 "$bin" synth stick --size 16 -o "$tmp/st16.nii" >/dev/null
 "$bin" prepare "$tmp/st16.nii" --vertices 12 -o "$out/prepared/stick16.vxprep" -q
 printf '{"joints": {"right_shoulder": {"abduction": 30}}}' > "$tmp/arm.json"
 "$bin" prepare "$tmp/sk24.nii" --organs "$tmp/sk24.dat" --pose "$tmp/arm.json" --vertices 24 -o "$out/prepared/skeleton24.vxprep" -q
+# ... and a larger one with its articulated transfer mesh (two articular bodies).
+"$bin" synth skeleton --size 32 -o "$tmp/sk32.nii" --organs "$tmp/sk32.dat" >/dev/null
+"$bin" prepare "$tmp/sk32.nii" --organs "$tmp/sk32.dat" --articulated --vertices 24 -o "$out/prepared/skeleton32_articulated.vxprep" -q
 find "$out" -type f | sort | xargs wc -c | tail -1
