@@ -7,6 +7,8 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <limits>
+#include <mutex>
+#include <tuple>
 
 namespace vox {
 
@@ -81,38 +83,75 @@ std::vector<std::array<std::int32_t, 4>> faceNeighbors(std::span<const Tet> tets
       highest = std::max<std::int64_t>(highest, v);
     }
   if (lowest < 0) throw InputError(source, "a tet has a negative vertex index");
-  // Face k of tet t is shared with the tets that hold its three vertices:
-  // the intersection of their vertices' tet lists (each in tet order). A
-  // face held by more than two tets names the third of them in tet order,
-  // and the error the smallest such tet: the first met in tet order.
-  const VertexTets around = vertexTets(tets, std::size_t(highest) + 1);
-  std::vector<std::int32_t> overShared(tets.size(), std::numeric_limits<std::int32_t>::max());
-  parallelFor(std::int64_t(tets.size()), 0, [&](std::int64_t ti) {
-    const auto t = std::int32_t(ti);
+  // Faces are matched within buckets by their smallest vertex: a bucket's
+  // faces sorted by their other two vertices and then by tet, so that a
+  // face's tets come in tet order. A face held by more than two tets names
+  // the third of them, and the error the smallest such tet.
+  struct Face {
+    std::int32_t b, c, tet, k;  // face k is opposite vertex k
+  };
+  const auto vertexCount = std::size_t(highest) + 1;
+  // A tet's vertices in increasing order, with their places in the tet: the
+  // face opposite the smallest has the second smallest as its smallest, the
+  // other three the smallest.
+  const auto ordered = [&](std::size_t t) {
+    std::array<std::pair<std::int32_t, std::int32_t>, 4> v;
+    for (int i = 0; i < 4; ++i) v[std::size_t(i)] = {tets[t][std::size_t(i)], i};
+    const auto order = [&](std::size_t i, std::size_t j) {
+      if (v[j] < v[i]) std::swap(v[i], v[j]);
+    };
+    order(0, 1), order(2, 3), order(0, 2), order(1, 3), order(1, 2);
+    return v;
+  };
+  std::vector<std::int64_t> start(vertexCount + 1, 0);
+  for (std::size_t t = 0; t < tets.size(); ++t) {
+    const auto v = ordered(t);
+    start[std::size_t(v[0].first) + 1] += 3;
+    start[std::size_t(v[1].first) + 1] += 1;
+  }
+  for (std::size_t v = 0; v < vertexCount; ++v) start[v + 1] += start[v];
+  std::vector<Face> faces(4 * tets.size());
+  {
+    std::vector<std::int64_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t t = 0; t < tets.size(); ++t) {
+      const auto v = ordered(t);
+      const auto tet = std::int32_t(t);
+      faces[std::size_t(fill[std::size_t(v[1].first)]++)] = {v[2].first, v[3].first, tet, v[0].second};
+      auto& at = fill[std::size_t(v[0].first)];
+      faces[std::size_t(at++)] = {v[2].first, v[3].first, tet, v[1].second};
+      faces[std::size_t(at++)] = {v[1].first, v[3].first, tet, v[2].second};
+      faces[std::size_t(at++)] = {v[1].first, v[2].first, tet, v[3].second};
+    }
+  }
+  std::mutex lock;
+  std::int32_t bad = std::numeric_limits<std::int32_t>::max();
+  parallelRanges(std::int64_t(vertexCount), workerThreads(0), [&](std::int64_t begin, std::int64_t end) {
     std::int32_t worst = std::numeric_limits<std::int32_t>::max();
-    for (int k = 0; k < 4; ++k) {
-      std::array<std::span<const std::int32_t>, 3> lists;
-      for (int i = 0, n = 0; i < 4; ++i)
-        if (i != k) lists[std::size_t(n++)] = around.of(tets[std::size_t(t)][std::size_t(i)]);
-      std::array<std::size_t, 3> at = {0, 0, 0};
-      int count = 0;
-      while (at[0] < lists[0].size() && at[1] < lists[1].size() && at[2] < lists[2].size()) {
-        const std::int32_t x = lists[0][at[0]], y = lists[1][at[1]], z = lists[2][at[2]];
-        if (x == y && y == z) {
-          if (x != t && nb[std::size_t(t)][std::size_t(k)] < 0) nb[std::size_t(t)][std::size_t(k)] = x;
-          if (++count == 3) worst = std::min(worst, x);
-          for (int l = 0; l < 3; ++l)
-            while (at[std::size_t(l)] < lists[std::size_t(l)].size() && lists[std::size_t(l)][at[std::size_t(l)]] == x) ++at[std::size_t(l)];
-          continue;
+    for (auto v = std::size_t(begin); v < std::size_t(end); ++v) {
+      const auto first = faces.begin() + start[v], last = faces.begin() + start[v + 1];
+      std::sort(first, last, [](const Face& x, const Face& y) {
+        return std::tie(x.b, x.c, x.tet, x.k) < std::tie(y.b, y.c, y.tet, y.k);
+      });
+      for (auto group = first; group != last;) {
+        auto next = group;
+        while (next != last && next->b == group->b && next->c == group->c) ++next;
+        // The group's distinct tets, in tet order (a tet that repeats a
+        // vertex holds the same face twice).
+        std::array<std::int32_t, 3> held{};
+        int count = 0;
+        for (auto f = group; f != next && count < 3; ++f)
+          if (count == 0 || f->tet != held[std::size_t(count - 1)]) held[std::size_t(count++)] = f->tet;
+        if (count == 3) worst = std::min(worst, held[2]);
+        for (auto f = group; f != next; ++f) {
+          const std::int32_t other = held[0] != f->tet ? held[0] : (count > 1 ? held[1] : -1);
+          nb[std::size_t(f->tet)][std::size_t(f->k)] = other;
         }
-        const std::int32_t top = std::max({x, y, z});
-        for (int l = 0; l < 3; ++l)
-          while (at[std::size_t(l)] < lists[std::size_t(l)].size() && lists[std::size_t(l)][at[std::size_t(l)]] < top) ++at[std::size_t(l)];
+        group = next;
       }
     }
-    overShared[std::size_t(t)] = worst;
+    const std::lock_guard<std::mutex> hold(lock);
+    bad = std::min(bad, worst);
   });
-  const std::int32_t bad = *std::min_element(overShared.begin(), overShared.end());
   if (bad != std::numeric_limits<std::int32_t>::max())
     throw InputError(source, "a face of tet " + std::to_string(bad) + " is shared by more than two tets");
   return nb;
