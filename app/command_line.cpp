@@ -11,10 +11,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <iostream>
 #include <malloc.h>
 #include <string>
+#include <string_view>
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -23,6 +25,26 @@ namespace vox::app {
 void retainFreedMemory() {
   mallopt(M_MMAP_THRESHOLD, 32 << 20);
   mallopt(M_TRIM_THRESHOLD, 1 << 30);
+}
+
+void useHugePages(int argc, char** argv) {
+  if (argc < 2) return;
+  const std::string_view command = argv[1];
+  if (command != "deform" && command != "prepare" && command != "view" && command != "render") return;
+  if (std::getenv("VOXMORPH_SMALL_PAGES") != nullptr) return;
+  const char* tunables = std::getenv("GLIBC_TUNABLES");
+  const std::string_view kTunable = "glibc.malloc.hugetlb";
+  if (tunables != nullptr && std::string_view(tunables).find(kTunable) != std::string_view::npos) return;
+  std::ifstream mode("/sys/kernel/mm/transparent_hugepage/enabled");
+  std::string line;
+  if (!std::getline(mode, line) || line.find("[madvise]") == std::string::npos) return;
+  const std::string before = tunables != nullptr ? tunables : "";
+  const std::string value = (before.empty() ? before : before + ":") + std::string(kTunable) + "=1";
+  if (::setenv("GLIBC_TUNABLES", value.c_str(), 1) != 0) return;
+  ::execv("/proc/self/exe", argv);
+  // Not started again (no /proc): on as it is, without the setting.
+  if (tunables != nullptr) ::setenv("GLIBC_TUNABLES", before.c_str(), 1);
+  else ::unsetenv("GLIBC_TUNABLES");
 }
 
 void installStderrProgress(bool quiet) {

@@ -41,6 +41,15 @@ void installStderrProgress(bool quiet);
 // mesh and remesh, whose peak memory it raised (1.52 to 1.67 GB on the AM).
 void retainFreedMemory();
 
+// deform, prepare, view and render allocate grids and lattice states of tens
+// to hundreds of MB, and fault them in 4 KiB page by page. Where the kernel
+// gives transparent huge pages on request (`madvise` mode), the process is
+// started again once with glibc's malloc asking for them
+// (GLIBC_TUNABLES=glibc.malloc.hugetlb=1, glibc 2.35 on); the same bytes come
+// out (docs/BENCHMARKS.md, "Huge pages"). VOXMORPH_SMALL_PAGES=1 turns it off.
+// Returns only when the process is not started again.
+void useHugePages(int argc, char** argv);
+
 // A subcommand whose first argument is a label grid (any format the readers
 // know), required, into `grid`.
 CLI::App* addGridSubcommand(CLI::App& app, const std::string& name, const std::string& description, std::string& grid);

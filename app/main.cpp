@@ -8,6 +8,7 @@
 #include <new>
 
 int main(int argc, char** argv) {
+  vox::app::useHugePages(argc, argv);
   CLI::App app{"voxmorph: segmented volumes to multi-material tet meshes, posed grids and images"};
   app.name("voxmorph");
   app.require_subcommand(1);

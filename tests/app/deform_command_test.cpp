@@ -16,6 +16,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 
 namespace vox {
 namespace {
@@ -136,6 +137,27 @@ PosedArm posedArm(const Stick& s, const std::string& preserveOption) {
   a.report = nlohmann::json::parse(std::ifstream(report));
   a.posed = readGrid(out);
   return a;
+}
+
+// deform starts itself again with malloc asking for huge pages where the
+// kernel gives them on request; with VOXMORPH_SMALL_PAGES=1 it does not. The
+// same arguments reach the run and the same bytes come out.
+TEST(DeformCommand, HugePagesOrNotTheSameBytes) {
+  VOX_REQUIRE_VOXMORPH();
+  const Stick s = stick();
+  const std::string pose = writeFile(s.dir + "/arm.json", kArmPose);
+  std::string bytes[2];
+  for (int small = 0; small < 2; ++small) {
+    const std::string out = s.dir + "/posed" + std::to_string(small) + ".nii.gz";
+    const auto r = test::runCommand(std::string(small ? "VOXMORPH_SMALL_PAGES=1 " : "") +
+                                    voxmorph("deform " + test::quote(s.grid) + " --pose " + test::quote(pose) + " --organs " +
+                                             test::quote(s.organs) + " -o " + test::quote(out) + " -q --force --cpu --preserve-volumes"));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    std::ifstream in(out, std::ios::binary);
+    bytes[small].assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  EXPECT_FALSE(bytes[0].empty());
+  EXPECT_EQ(bytes[0], bytes[1]);
 }
 
 TEST(DeformCommand, PreserveVolumesKeepsEachLabelNearItsDeformedVolume) {
