@@ -28,9 +28,7 @@ void retainFreedMemory() {
 }
 
 void useHugePages(int argc, char** argv) {
-  if (argc < 2) return;
-  const std::string_view command = argv[1];
-  if (command != "deform" && command != "prepare" && command != "view" && command != "render") return;
+  if (argc < 2 || argv[1][0] == '-') return;  // no subcommand: help or version
   if (std::getenv("VOXMORPH_SMALL_PAGES") != nullptr) return;
   const char* tunables = std::getenv("GLIBC_TUNABLES");
   const std::string_view kTunable = "glibc.malloc.hugetlb";

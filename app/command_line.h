@@ -41,8 +41,8 @@ void installStderrProgress(bool quiet);
 // mesh and remesh, whose peak memory it raised (1.52 to 1.67 GB on the AM).
 void retainFreedMemory();
 
-// deform, prepare, view and render allocate grids and lattice states of tens
-// to hundreds of MB, and fault them in 4 KiB page by page. Where the kernel
+// The subcommands allocate grids, lattice states and meshes of tens to
+// hundreds of MB, and fault them in 4 KiB page by page. Where the kernel
 // gives transparent huge pages on request (`madvise` mode), the process is
 // started again once with glibc's malloc asking for them
 // (GLIBC_TUNABLES=glibc.malloc.hugetlb=1, glibc 2.35 on); the same bytes come
