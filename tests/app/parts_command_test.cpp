@@ -269,6 +269,15 @@ TEST(PartsCommand, ArticulatedJointPose) {
       EXPECT_LT(std::abs(b["volume_change_percent"].get<double>()), 0.5) << b.dump();
     }
   EXPECT_TRUE(std::filesystem::exists(out));
+  // The posed grid keeps every bone label's rest voxels: bones moved rigidly
+  // are corrected to their rest volume, each side under a key of its own.
+  int boneLabels = 0;
+  for (const auto& l : j["labels"])
+    if (l["name"].get<std::string>().find(", cortical") != std::string::npos) {
+      ++boneLabels;
+      EXPECT_LE(std::abs(l["voxels_after"].get<double>() - l["voxels_before"].get<double>()), 1.0) << l.dump();
+    }
+  EXPECT_GE(boneLabels, 10);
 
   // Prepared once with the articulated transfer mesh: the same pose from
   // the state writes the same bytes, and its report says the mesh took no

@@ -12,6 +12,7 @@
 #include "geometry/io/grid_io.h"
 #include "geometry/io/mesh_io.h"
 #include "geometry/label_stats.h"
+#include "geometry/parallel.h"
 #include "geometry/raster/out_of_core.h"
 #include "geometry/raster/rasterize.h"
 #include "geometry/skeleton/body_parts.h"
@@ -300,6 +301,8 @@ struct PosedMesh {
   std::vector<Eigen::Vector3d> deformed;
   LabelGrid collisionMask;
   std::optional<TriMesh> posedCage;
+  std::optional<LabelGrid> parts;  // the body parts on the working grid, when the run has them
+  bool rigidBones = false;         // the bones moved rigidly (the articulated transfer mesh)
 };
 
 // Collisions of the posed body parts on the working grid's spacing.
@@ -368,6 +371,7 @@ PosedMesh poseByCage(const DeformGridRequest& o, const Source& source, RasterEng
   // The pipeline's grids and coordinates go before the rasterization buffers.
   out.rest = pipeline->transferMesh();
   out.deformed = pipeline->deformedTransferMesh();
+  if (o.preserveVolumes) out.parts = pipeline->bodyParts();
   pipeline.reset();
   engines.releaseInterpolation();
   return out;
@@ -456,6 +460,8 @@ PosedMesh poseArticulated(const DeformGridRequest& o, const Source& source, Defo
   report.collisions = collisionsOf(o, source, out.rest, out.deformed, sk.parts.parts, out.collisionMask);
   report.stages.push_back(collisionTimer.stop());
   if (const std::optional<std::string> fault = tissueOverlapFault(*report.collisions, o.maxTissueOverlapPercent)) refuseOrForce(o, report, *fault);
+  if (o.preserveVolumes) out.parts = sk.parts.parts;
+  out.rigidBones = true;
   return out;
 }
 
@@ -541,7 +547,18 @@ DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines)
                                   std::int64_t(rest.vertexCount()) * 48 + std::int64_t(rest.tetCount()) * 32;
     rasterBudget = std::max<std::int64_t>(std::int64_t(64) << 20, report.maxMemoryBytes - resident - kRasterOverheadBytes);
   }
-  const RasterSource raster = source.grid ? RasterSource{.grid = &*source.grid} : RasterSource{.slices = &source.outOfCore->slices()};
+  // With the volume correction and the body parts, each side's bone is
+  // rasterized and corrected under a key of its own (splitLabels), so that
+  // one humerus does not make up for the other.
+  std::vector<std::uint8_t> bones;
+  SplitLabels split;
+  if (o.preserveVolumes && source.grid && o.organs) {
+    for (const skeleton::Bone b : skeleton::boneOfLabels(*o.organs, source.grid->maxLabel())) bones.push_back(b != skeleton::Bone::None);
+    if (posedMesh.parts) split = splitLabels(*source.grid, bones, *posedMesh.parts, source.factor);
+  }
+  posedMesh.parts.reset();
+  const LabelGrid* keyed = !split.labelOf.empty() ? &split.grid : source.grid ? &*source.grid : nullptr;
+  const RasterSource raster = keyed ? RasterSource{.grid = keyed} : RasterSource{.slices = &source.outOfCore->slices()};
   const std::unique_ptr<SlabRasterizer> engine = makeRasterizer(engines, raster, rest, deformed, o.samples, rasterBudget);
   const SourceMeasures measures = measuring.get();
   report.restProjection = measures.projection;
@@ -555,15 +572,36 @@ DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines)
     report.stages.push_back(rasterTimer.stop());
     StageTimer correctionTimer("volume correction");
     // The voids the pose opened inside the body first, the bones' labels
-    // last.
-    std::vector<std::uint8_t> bones;
-    if (o.organs)
-      for (const skeleton::Bone b : skeleton::boneOfLabels(*o.organs, maxLabel)) bones.push_back(b != skeleton::Bone::None);
-    deformedVolumes = deformedLabelVolumes(*source.grid, rest, deformed);
+    // last. Bones moved rigidly keep their rest volume: where their voxels
+    // lie in tissue tets beside the bone's own, the Jacobians of those tets
+    // would count them squeezed or stretched with the tissue.
+    std::vector<std::uint8_t> behind = bones;
+    for (std::size_t k = bones.size(); k < split.labelOf.size(); ++k) behind.push_back(bones[split.labelOf[k]]);
+    const std::vector<double> keyedVolumes = deformedLabelVolumes(*keyed, rest, deformed);
     const bool toRest = o.volumeTarget == DeformGridRequest::VolumeTarget::Rest;
-    const std::vector<double> targets = toRest ? deformedLabelVolumes(*source.grid, rest, rest.positions) : deformedVolumes;
-    report.volumeCorrection = preserveLabelVolumes(posed, *source.grid, rest, deformed, targets, 0, true, bones);
+    std::vector<double> targets = keyedVolumes;
+    if (toRest || posedMesh.rigidBones) {
+      const std::vector<double> restVolumes = deformedLabelVolumes(*keyed, rest, rest.positions);
+      for (std::size_t k = 0; k < targets.size(); ++k)
+        if (toRest || (k < behind.size() && behind[k])) targets[k] = restVolumes[k];
+    }
+    report.volumeCorrection = preserveLabelVolumes(posed, *keyed, rest, deformed, targets, 0, true, behind);
     report.volumeCorrection->toRestVolumes = toRest;
+    deformedVolumes = keyedVolumes;
+    if (!split.labelOf.empty()) {
+      // The keys back to their labels.
+      std::vector<Label>& labels = posed.labels();
+      parallelRanges(std::int64_t(labels.size()), workerThreads(0), [&](std::int64_t v0, std::int64_t v1) {
+        for (std::int64_t v = v0; v < v1; ++v) {
+          Label& l = labels[std::size_t(v)];
+          if (l < split.labelOf.size()) l = split.labelOf[l];
+        }
+      });
+      deformedVolumes.assign(bones.size(), 0.0);
+      for (std::size_t k = 0; k < keyedVolumes.size(); ++k)
+        deformedVolumes[k < split.labelOf.size() ? split.labelOf[k] : k] += keyedVolumes[k];
+      split = {};
+    }
     report.stages.push_back(correctionTimer.stop());
     StageTimer writeTimer("write");
     HeldGrid held(posed);

@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
+#include <mutex>
 #include <string>
 
 namespace vox {
@@ -187,6 +189,62 @@ std::uint64_t fillGaps(LabelGrid& posed, std::span<const std::uint8_t> open, std
 }
 
 }  // namespace
+
+SplitLabels splitLabels(const LabelGrid& grid, std::span<const std::uint8_t> split, const LabelGrid& regions, int factor) {
+  const auto f = std::int64_t(std::max(factor, 1));
+  for (int a = 0; a < 3; ++a)
+    if (regions.dims()[std::size_t(a)] != (grid.dims()[std::size_t(a)] + f - 1) / f)
+      throw RuntimeFailure("splitLabels: the regions' grid is not the grid downsampled by " + std::to_string(f));
+  const auto labels = std::size_t(grid.maxLabel()) + 1, kinds = std::size_t(regions.maxLabel()) + 1;
+  if (labels * kinds > (std::size_t(1) << 24)) return {};
+  const std::int64_t nx = grid.dims()[0], ny = grid.dims()[1], nz = grid.dims()[2];
+  const auto regionOf = [&](std::int64_t i, std::int64_t j, std::int64_t k) { return regions.at(i / f, j / f, k / f); };
+  const auto flagged = [&](Label l) { return l != 0 && l < split.size() && split[l]; };
+  // Which (label, region) pairs occur, slab by slab.
+  std::vector<std::uint8_t> seen(labels * kinds, 0);
+  std::mutex lock;
+  parallelRanges(nz, workerThreads(0), [&](std::int64_t k0, std::int64_t k1) {
+    std::vector<std::uint8_t> mine(labels * kinds, 0);
+    for (std::int64_t k = k0; k < k1; ++k)
+      for (std::int64_t j = 0; j < ny; ++j)
+        for (std::int64_t i = 0; i < nx; ++i) {
+          const Label l = grid.at(i, j, k);
+          if (flagged(l)) mine[std::size_t(l) * kinds + regionOf(i, j, k)] = 1;
+        }
+    const std::lock_guard<std::mutex> hold(lock);
+    for (std::size_t x = 0; x < seen.size(); ++x) seen[x] |= mine[x];
+  }, 8);
+  SplitLabels out;
+  std::vector<Label> keyOf(labels * kinds, 0);
+  std::vector<Label> labelOf(labels);
+  for (std::size_t l = 0; l < labels; ++l) labelOf[l] = Label(l);
+  for (std::size_t l = 0; l < labels; ++l) {
+    std::size_t count = 0;
+    for (std::size_t r = 1; r < kinds; ++r) count += seen[l * kinds + r];
+    if (count < 2) continue;
+    for (std::size_t r = 1; r < kinds; ++r) {
+      if (!seen[l * kinds + r]) continue;
+      if (labelOf.size() > std::size_t(std::numeric_limits<Label>::max())) return {};
+      keyOf[l * kinds + r] = Label(labelOf.size());
+      labelOf.push_back(Label(l));
+    }
+  }
+  if (labelOf.size() == labels) return {};
+  out.grid = grid;
+  std::vector<Label>& keyed = out.grid.labels();
+  parallelRanges(nz, workerThreads(0), [&](std::int64_t k0, std::int64_t k1) {
+    for (std::int64_t k = k0; k < k1; ++k)
+      for (std::int64_t j = 0; j < ny; ++j)
+        for (std::int64_t i = 0; i < nx; ++i) {
+          Label& l = keyed[std::size_t(grid.geometry().index(i, j, k))];
+          if (!flagged(l)) continue;
+          const Label key = keyOf[std::size_t(l) * kinds + regionOf(i, j, k)];
+          if (key != 0) l = key;
+        }
+  }, 8);
+  out.labelOf = std::move(labelOf);
+  return out;
+}
 
 std::vector<double> deformedLabelVolumes(const LabelGrid& source, const TetMesh& rest,
                                          const std::vector<Eigen::Vector3d>& deformed, int threads) {

@@ -77,6 +77,20 @@ std::vector<double> deformedLabelVolumes(const TetLabelVoxels& voxels, const Tet
 std::uint64_t fillEnclosedGaps(LabelGrid& posed, const LabelGrid& source, const TetMesh& rest, const std::vector<Eigen::Vector3d>& deformed,
                                int threads = 0, std::span<const std::uint8_t> behind = {});
 
+// A label flagged in `split` (index = label) whose voxels lie in more than
+// one region of `regions` (the body parts: a left and a right humerus share
+// their labels) gets a key of its own per region, so that the correction
+// keeps each region's volume instead of balancing one against the other.
+// Keys follow grid.maxLabel() in the order of (label, region); a voxel of
+// region 0 keeps its label. `regions` is the grid downsampled by `factor`
+// (voxel (i, j, k) takes region (i/f, j/f, k/f)). Nothing is split (labelOf
+// empty) when no label spans two regions or the keys would not fit a Label.
+struct SplitLabels {
+  LabelGrid grid;              // keys where split, the labels elsewhere
+  std::vector<Label> labelOf;  // index = key or label: the label it stands for
+};
+SplitLabels splitLabels(const LabelGrid& grid, std::span<const std::uint8_t> split, const LabelGrid& regions, int factor = 1);
+
 struct LabelVolumeCorrection {
   std::uint64_t candidates = 0;   // voxels whose source neighbourhood holds another label
   std::uint64_t still = 0;        // such voxels left alone: their tet did not move (kStillFraction)

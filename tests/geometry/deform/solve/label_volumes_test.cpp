@@ -268,6 +268,41 @@ TEST(LabelVolumes, TheCorrectionFillsTheGapsAsTheFillDoes) {
   EXPECT_EQ(after.gapsFilled, 0u);
 }
 
+// A flagged label in two regions gets a key per region; a flagged label in
+// one region, an unflagged label and region 0 keep their labels; the regions
+// may be the grid downsampled.
+TEST(LabelVolumes, SplitLabelsKeyEachRegionOfAFlaggedLabel) {
+  GridGeometry g;
+  g.dims = {8, 4, 4};
+  LabelGrid grid(g, 0);
+  for (std::int64_t k = 0; k < 4; ++k)
+    for (std::int64_t j = 0; j < 4; ++j)
+      for (std::int64_t i = 0; i < 8; ++i) grid.at(i, j, k) = j < 2 ? 5 : (i < 4 ? 6 : 7);
+  GridGeometry h;
+  h.dims = {4, 2, 2};
+  LabelGrid regions(h, 0);
+  for (std::int64_t k = 0; k < 2; ++k)
+    for (std::int64_t j = 0; j < 2; ++j)
+      for (std::int64_t i = 0; i < 4; ++i) regions.at(i, j, k) = i < 2 ? 1 : 2;
+  regions.at(0, 0, 0) = 0;
+  std::vector<std::uint8_t> flagged(8, 0);
+  flagged[5] = flagged[6] = 1;
+  const SplitLabels split = splitLabels(grid, flagged, regions, 2);
+  ASSERT_EQ(split.labelOf.size(), 10u);
+  for (Label l = 0; l < 8; ++l) EXPECT_EQ(split.labelOf[l], l);
+  EXPECT_EQ(split.labelOf[8], 5);
+  EXPECT_EQ(split.labelOf[9], 5);
+  EXPECT_EQ(split.grid.at(0, 0, 0), 5);  // region 0
+  EXPECT_EQ(split.grid.at(2, 0, 0), 8);
+  EXPECT_EQ(split.grid.at(5, 1, 3), 9);
+  EXPECT_EQ(split.grid.at(1, 3, 0), 6);  // one region only
+  EXPECT_EQ(split.grid.at(5, 3, 0), 7);  // not flagged
+  // Nothing to split: labelOf empty.
+  flagged[5] = 0;
+  EXPECT_TRUE(splitLabels(grid, flagged, regions, 2).labelOf.empty());
+  EXPECT_THROW(splitLabels(grid, flagged, regions, 1), RuntimeFailure);
+}
+
 TEST(LabelVolumes, RejectsAGridOfAnotherGeometry) {
   const Scene& s = junctionSphere();
   const auto deformed = deformPositions(s.rest.positions, test::rotation(gridCentre(s.source.geometry()), {0, 0, 1}, 30.0));
