@@ -515,28 +515,23 @@ PreparedInputs preparedInputs(const std::string& grid, const std::optional<Organ
 
 // ---- lookups and refusals ---------------------------------------------
 
-const PreparedCage* PreparedState::findCage(const std::string& key) const {
-  for (const PreparedCage& c : cages)
-    if (c.key == key) return &c;
+namespace {
+
+// The stored piece whose key is `key`, or nullptr.
+template <class Piece>
+const Piece* findByKey(const std::vector<Piece>& pieces, const std::string& key) {
+  for (const Piece& p : pieces)
+    if (p.key == key) return &p;
   return nullptr;
 }
 
-const PreparedEnvelope* PreparedState::findEnvelope(const std::string& key) const {
-  for (const PreparedEnvelope& e : envelopes)
-    if (e.key == key) return &e;
-  return nullptr;
-}
+}  // namespace
 
-const PreparedTransferMesh* PreparedState::findMesh(const std::string& key) const {
-  for (const PreparedTransferMesh& m : meshes)
-    if (m.key == key) return &m;
-  return nullptr;
-}
-
+const PreparedCage* PreparedState::findCage(const std::string& key) const { return findByKey(cages, key); }
+const PreparedEnvelope* PreparedState::findEnvelope(const std::string& key) const { return findByKey(envelopes, key); }
+const PreparedTransferMesh* PreparedState::findMesh(const std::string& key) const { return findByKey(meshes, key); }
 const PreparedArticulatedMesh* PreparedState::findArticulatedMesh(const std::string& key) const {
-  for (const PreparedArticulatedMesh& m : articulatedMeshes)
-    if (m.key == key) return &m;
-  return nullptr;
+  return findByKey(articulatedMeshes, key);
 }
 
 void PreparedState::refuseCage(const PreparedCageQuery& q) const {

@@ -550,19 +550,19 @@ DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines)
   // With the volume correction and the body parts, each side's bone is
   // rasterized and corrected under a key of its own (splitLabels), so that
   // one humerus does not make up for the other.
+  const SourceMeasures measures = measuring.get();
+  report.restProjection = measures.projection;
+  const Label maxLabel = measures.maxLabel;
   std::vector<std::uint8_t> bones;
   SplitLabels split;
   if (o.preserveVolumes && source.grid && o.organs) {
-    for (const skeleton::Bone b : skeleton::boneOfLabels(*o.organs, source.grid->maxLabel())) bones.push_back(b != skeleton::Bone::None);
+    for (const skeleton::Bone b : skeleton::boneOfLabels(*o.organs, maxLabel)) bones.push_back(b != skeleton::Bone::None);
     if (posedMesh.parts) split = splitLabels(*source.grid, bones, *posedMesh.parts, source.factor);
   }
   posedMesh.parts.reset();
   const LabelGrid* keyed = !split.labelOf.empty() ? &split.grid : source.grid ? &*source.grid : nullptr;
   const RasterSource raster = keyed ? RasterSource{.grid = keyed} : RasterSource{.slices = &source.outOfCore->slices()};
   const std::unique_ptr<SlabRasterizer> engine = makeRasterizer(engines, raster, rest, deformed, o.samples, rasterBudget);
-  const SourceMeasures measures = measuring.get();
-  report.restProjection = measures.projection;
-  const Label maxLabel = measures.maxLabel;
   PosedGridMeasures after;
   std::unique_ptr<GridSliceWriter> output;  // G', committed once the whole body is measured
   std::vector<double> deformedVolumes;

@@ -4,7 +4,8 @@
 // the skeleton, then for each pose (or for none) the cage pipeline's
 // pre-processing with the options deformGrid would give it
 // (deformPipelineOptions), each cage, envelope and transfer mesh recorded
-// once, and on request the articulated transfer mesh. `deform`, `render --pose` and `view` then take them (--prepared).
+// once, and on request the articulated transfer mesh. `deform`, `render
+// --pose` and `view` then take them (--prepared).
 
 #include "geometry/deform/pose/pose.h"
 #include "geometry/deform/prepared_state.h"
