@@ -164,6 +164,10 @@ void addDeformCommand(CLI::App& app) {
                 "(sum of the transfer mesh's Jacobian determinants over its voxels), within about a voxel; "
                 "--preserve-volumes=rest: its rest volume instead, so organ masses are kept; in core only")
       ->check(CLI::IsMember({"deformed", "rest"}));
+  cmd->add_flag("!--no-skin-cover", o->run.coverSkin,
+                "With --preserve-volumes: leave bare the tissue the pose lays open (the arm parted from the trunk, a crease opened, "
+                "a thin skin stripped by the slices) instead of relabelling it skin (the organ table's 'Skin...' label nearest it; "
+                "tissue bare at rest and bone are left as they are either way)");
   cmd->add_flag("--rigid-bones", o->run.rigidBones,
                 "With body parts (a joint pose, --parts): hold each part's bones rigid (its forward-kinematics motion, else the rigid fit) "
                 "and turn the cage near each turned joint with the moving part (joint_options zone 'child' unless the pose sets it); "

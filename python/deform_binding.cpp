@@ -76,7 +76,7 @@ Provenance deformProvenance(const py::object& grid, const py::object& organs, co
 }
 
 py::tuple deform(const py::object& gridArgument, const py::object& pose, const py::object& organsArgument, const py::object& preserveVolumes,
-                 const py::object& prepared, const std::string& output, bool cpu, int samples, bool rigidBones, bool articulated, bool force,
+                 bool skinCover, const py::object& prepared, const std::string& output, bool cpu, int samples, bool rigidBones, bool articulated, bool force,
                  double maxBodyChange, double maxBoneChange, double maxBoneOverlap, double maxTissueOverlap, bool allowGrowth, std::int64_t maxMemoryMb) {
   if (!prepared.is_none() && py::isinstance<Grid>(gridArgument))
     throw py::value_error("prepared: a prepared state is checked against the grid file it was made from; give the grid as that path, not a Grid");
@@ -84,6 +84,7 @@ py::tuple deform(const py::object& gridArgument, const py::object& pose, const p
   if (!prepared.is_none()) request.prepared = py::str(prepared).cast<std::string>();
   request.preserveVolumes = false;
   request.volumeTarget = volumeTarget(preserveVolumes, request.preserveVolumes);
+  request.coverSkin = skinCover;
   const OrganArgument organs = organArgument(organsArgument);
   request.organs = organs.table;
   request.organsSource = organs.source;
@@ -249,7 +250,7 @@ PoseArgument poseArgument(const py::object& pose, const GridGeometry& grid) {
 
 void bindDeform(py::module_& m) {
   m.def("deform", &deform, py::arg("grid"), py::arg("pose"), py::kw_only(), py::arg("organs") = py::none(),
-        py::arg("preserve_volumes") = false, py::arg("prepared") = py::none(), py::arg("output") = "", py::arg("cpu") = false,
+        py::arg("preserve_volumes") = false, py::arg("skin_cover") = true, py::arg("prepared") = py::none(), py::arg("output") = "", py::arg("cpu") = false,
         py::arg("samples") = 1, py::arg("rigid_bones") = false, py::arg("articulated") = false, py::arg("force") = false,
         py::arg("max_body_change") = DeformGridRequest{}.maxBodyChangePercent,
         py::arg("max_bone_change") = DeformGridRequest{}.maxBoneChangePercent,
@@ -266,6 +267,9 @@ organs: OrganTable or its path: masses in the report, label groups for separatio
 preserve_volumes: False; True or 'deformed' fills the gaps the pose opens inside the body
     and relabels boundary voxels so each label keeps the volume the deformation gives it;
     'rest' keeps its rest volume (organ masses).
+skin_cover: with preserve_volumes, the tissue the pose lays bare (no skin within a voxel,
+    not bare at rest) is relabelled the nearest skin label; False leaves it bare (the CLI's
+    --no-skin-cover). The report's "skin_cover" counts it.
 prepared: a rest state saved by `voxmorph prepare` (.vxprep path): the skeleton, cage,
     envelope and transfer mesh are taken from it instead of rebuilt; the result is
     byte-identical. The grid must then be given as the path it was prepared from; a state

@@ -71,6 +71,7 @@ def deform(
     *,
     organs: _Organs = None,
     preserve_volumes: bool | Literal["deformed", "rest"] = False,
+    skin_cover: bool = True,
     prepared: str | PathLike[str] | None = None,
     output: str = "",
     cpu: bool = False,

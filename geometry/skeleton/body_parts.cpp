@@ -60,15 +60,6 @@ Eigen::Vector3d centreOf(const GridGeometry& g, std::int64_t v) {
   return g.voxelCenter(c[0], c[1], c[2]);
 }
 
-bool isSkin(const std::string& organName) {
-  std::string first;
-  for (const unsigned char c : organName) {
-    if (!std::isalpha(c)) break;
-    first += char(std::tolower(c));
-  }
-  return first == "skin";
-}
-
 // Min-queue of 64-bit keys that never receive a key below the last one
 // taken while they hold any (Dijkstra's keys grow): a radix heap (Ahuja,
 // Mehlhorn, Orlin, Tarjan). Bucket b holds the keys whose highest bit
@@ -380,9 +371,7 @@ BodyParts bodyParts(const LabelGrid& grid, const OrganTable& organs, const std::
     throw InputError(gridSource, "has more than 2^32 voxels, too many for the body-part assignment");
 
   std::vector<std::uint8_t> skin(std::size_t(grid.maxLabel()) + 1, 0);
-  if (options.skinBlocksPaths)
-    for (std::size_t l = 1; l < skin.size(); ++l)
-      if (const Organ* o = organs.find(int(l))) skin[l] = isSkin(o->name);
+  if (options.skinBlocksPaths) skin = skinOfLabels(organs, grid.maxLabel());
 
   std::vector<float> distance(std::size_t(g.voxelCount()), std::numeric_limits<float>::infinity());
   std::vector<std::uint8_t> owner(std::size_t(g.voxelCount()), 0);

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 
 namespace vox::skeleton {
 
@@ -84,6 +85,22 @@ std::vector<Bone> boneOfLabels(const OrganTable& organs, Label maxLabel) {
   for (const auto& [id, organ] : organs.organs())
     if (id >= 1 && id <= int(maxLabel)) bones[std::size_t(id)] = classifyBone(organ.name);
   return bones;
+}
+
+bool isSkin(const std::string& organName) {
+  std::string first;
+  for (const unsigned char c : organName) {
+    if (!std::isalpha(c)) break;
+    first += char(std::tolower(c));
+  }
+  return first == "skin";
+}
+
+std::vector<std::uint8_t> skinOfLabels(const OrganTable& organs, Label maxLabel) {
+  std::vector<std::uint8_t> skin(std::size_t(maxLabel) + 1, 0);
+  for (const auto& [id, organ] : organs.organs())
+    if (id >= 1 && id <= int(maxLabel)) skin[std::size_t(id)] = isSkin(organ.name);
+  return skin;
 }
 
 bool namesBones(const OrganTable& organs) {

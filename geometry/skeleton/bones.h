@@ -58,6 +58,11 @@ Side sideInName(const std::string& organName);
 
 // Per label of `organs` (index = label, up to maxLabel): its bone.
 std::vector<Bone> boneOfLabels(const OrganTable& organs, Label maxLabel);
+
+// Whether an organ is skin: its name's first word is "Skin" (any case).
+bool isSkin(const std::string& organName);
+// Per label of `organs` (index = label, up to maxLabel): 1 for skin.
+std::vector<std::uint8_t> skinOfLabels(const OrganTable& organs, Label maxLabel);
 // True when the table names at least one bone.
 bool namesBones(const OrganTable& organs);
 // Throws InputError(source, ...) for a table that names no bone, with the

@@ -6,7 +6,10 @@
 // joint the skeleton lacks, a parts grid of other dims) is a one-line
 // error with exit code 1 and no output file.
 
+#include "geometry/deform/solve/skin_cover.h"
 #include "geometry/io/grid_io.h"
+#include "geometry/organ_table.h"
+#include "geometry/skeleton/bones.h"
 #include "tests/support/test_environment.h"
 
 #include <gtest/gtest.h>
@@ -278,6 +281,28 @@ TEST(PartsCommand, ArticulatedJointPose) {
       EXPECT_LE(std::abs(l["voxels_after"].get<double>() - l["voxels_before"].get<double>()), 1.0) << l.dump();
     }
   EXPECT_GE(boneLabels, 10);
+  // The skin laid over what the pose bared: no more bare tissue than at
+  // rest; without the cover the elbow's turn leaves more, and the report
+  // counts what the cover relabelled.
+  {
+    const LabelGrid rest = readGrid(f.grid), posed = readGrid(out);
+    const std::vector<std::uint8_t> skin = skeleton::skinOfLabels(OrganTable::read(f.organs), rest.maxLabel());
+    const auto bare = [&skin](const LabelGrid& g) {
+      const std::vector<std::uint8_t> flags = bareVoxels(g, skin);
+      return std::count(flags.begin(), flags.end(), std::uint8_t(1));
+    };
+    ASSERT_TRUE(j.contains("skin_cover"));
+    EXPECT_LE(bare(posed), bare(rest));
+    const std::string bareOut = f.dir + "/bare.nii.gz", bareReport = f.dir + "/bare.json";
+    const auto uncovered = test::runCommand(voxmorph("deform " + test::quote(f.grid) + " --organs " + test::quote(f.organs) + " --pose " +
+                                                     test::quote(pose) + " -o " + test::quote(bareOut) + " --articulated --cpu -q" +
+                                                     " --report " + test::quote(bareReport) + " --preserve-volumes --no-skin-cover"));
+    ASSERT_EQ(uncovered.exitCode, 0) << uncovered.err;
+    EXPECT_FALSE(nlohmann::json::parse(std::ifstream(bareReport)).contains("skin_cover"));
+    const std::int64_t covered = j["skin_cover"]["covered_voxels"].get<std::int64_t>();
+    EXPECT_GT(covered, 0);
+    EXPECT_GT(bare(readGrid(bareOut)), bare(posed));
+  }
 
   // Prepared once with the articulated transfer mesh: the same pose from
   // the state writes the same bytes, and its report says the mesh took no

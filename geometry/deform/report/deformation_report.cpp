@@ -233,6 +233,9 @@ std::string deformationSummary(const DeformationReport& r) {
       << "between a label's voxels and its " << (c->toRestVolumes ? "rest" : "deformed") << " volume "
       << fixed(c->worstPercentBefore, 2) << " % -> "
       << fixed(c->worstPercentAfter, 2) << " %\n";
+  if (const auto& c = r.skinCover; c && c->bareVoxels > 0)
+    s << "  skin cover: " << c->covered << " voxels of tissue the pose bared relabelled skin, " << c->overBone
+      << " laid over " << c->boneVoxels << " voxels of bared bone; " << c->bareAtRest << " bare at rest too left as they are\n";
   if (!r.bones.empty()) {
     const BoneRigidity* strained = nullptr;
     const BoneRigidity* changed = nullptr;
@@ -338,6 +341,21 @@ std::vector<std::string> deformationWarnings(const DeformationReport& r) {
   if (r.volumeCorrection && r.volumeCorrection->gapsFilled > 0)
     w.push_back(std::to_string(r.volumeCorrection->gapsFilled) +
                 " voxels of gaps inside the body (surfaces the pose parted, covered by no tet) filled with the tissue around them");
+  if (const auto& c = r.skinCover) {
+    // The skin the cover added, against each skin label's rest voxels.
+    const LabelChange* most = nullptr;
+    double mostPercent = 0.0;
+    for (const LabelChange& l : r.labels)
+      if (l.label < c->to.size() && c->to[l.label] > 0 && l.before > 0) {
+        const double percent = 100.0 * double(c->to[l.label]) / double(l.before);
+        if (!most || percent > mostPercent) most = &l, mostPercent = percent;
+      }
+    if (most && mostPercent > kSkinCoverWarnPercent)
+      w.push_back("the skin cover added " + std::to_string(c->to[most->label]) + " voxels to " +
+                  (most->name.empty() ? "label " + std::to_string(most->label) : most->name) + " (" + fixed(mostPercent, 1) +
+                  " % of its rest voxels): where a limb turns its surface across slices thicker than the skin, the skin there is a "
+                  "voxel thick; --no-skin-cover leaves that tissue bare");
+  }
   std::string unnamed;
   std::size_t count = 0;
   for (const LabelChange& c : r.labels)

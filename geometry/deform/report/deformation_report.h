@@ -12,6 +12,7 @@
 #include "geometry/deform/report/collisions.h"
 #include "geometry/deform/solve/deformation_metrics.h"
 #include "geometry/deform/solve/label_volumes.h"
+#include "geometry/deform/solve/skin_cover.h"
 #include "geometry/deform/pipeline.h"
 #include "geometry/body_projection.h"
 #include "geometry/label_grid.h"
@@ -151,6 +152,9 @@ struct DeformationReport {
   bool forced = false;
   // --preserve-volumes: the label-volume correction of G' (label_volumes.h).
   std::optional<LabelVolumeCorrection> volumeCorrection;
+  // --preserve-volumes with an organ table that names skin: the skin laid
+  // over the tissue the pose bared (skin_cover.h).
+  std::optional<SkinCover> skinCover;
 };
 
 // Fills the mesh sizes, outliers, cuts and distortion from a deformed

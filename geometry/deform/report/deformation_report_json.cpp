@@ -237,6 +237,20 @@ std::string deformationReportJson(const DeformationReport& r) {
                                  {"deviation_after_voxels", c->deviationAfter},
                                  {"worst_label_pct_before", c->worstPercentBefore},
                                  {"worst_label_pct_after", c->worstPercentAfter}};
+  if (const auto& c = r.skinCover) {
+    nlohmann::json from = nlohmann::json::array(), to = nlohmann::json::array();
+    for (std::size_t l = 0; l < c->from.size(); ++l)
+      if (c->from[l] > 0) from.push_back({{"label", l}, {"voxels", c->from[l]}});
+    for (std::size_t l = 0; l < c->to.size(); ++l)
+      if (c->to[l] > 0) to.push_back({{"label", l}, {"voxels", c->to[l]}});
+    root["skin_cover"] = {{"bare_voxels", c->bareVoxels},
+                          {"bare_at_rest_kept", c->bareAtRest},
+                          {"bone_voxels_bare", c->boneVoxels},
+                          {"covered_voxels", c->covered},
+                          {"skin_over_bone_voxels", c->overBone},
+                          {"from", from},
+                          {"to", to}};
+  }
   return root.dump(2) + "\n";
 }
 

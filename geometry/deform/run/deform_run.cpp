@@ -7,6 +7,7 @@
 #include "geometry/deform/pose/posed_extent.h"
 #include "geometry/deform/prepared_state.h"
 #include "geometry/deform/solve/label_volumes.h"
+#include "geometry/deform/solve/skin_cover.h"
 #include "geometry/deform/solve/rigid_bones.h"
 #include "geometry/error.h"
 #include "geometry/io/grid_io.h"
@@ -603,6 +604,17 @@ DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines)
       split = {};
     }
     report.stages.push_back(correctionTimer.stop());
+    if (o.coverSkin && o.organs) {
+      StageTimer coverTimer("skin cover");
+      const std::vector<std::uint8_t> skin = skeleton::skinOfLabels(*o.organs, maxLabel);
+      if (std::find(skin.begin(), skin.end(), std::uint8_t(1)) != skin.end()) {
+        std::vector<std::uint8_t> bone = bones;
+        if (bone.empty())
+          for (const skeleton::Bone b : skeleton::boneOfLabels(*o.organs, maxLabel)) bone.push_back(b != skeleton::Bone::None);
+        report.skinCover = coverBareTissue(posed, *source.grid, rest, deformed, skin, bone);
+        report.stages.push_back(coverTimer.stop());
+      }
+    }
     StageTimer writeTimer("write");
     HeldGrid held(posed);
     output = std::make_unique<PosedGridSink>(o, held.outputGeometry(), maxLabel, &posed);

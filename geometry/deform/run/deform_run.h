@@ -68,6 +68,9 @@ struct DeformGridRequest {
   // gives it (Jacobians of the transfer mesh), or its rest volume (the
   // source's voxels), so organ masses are kept whatever the deformation does.
   enum class VolumeTarget { Deformed, Rest } volumeTarget = VolumeTarget::Deformed;
+  // With preserveVolumes and an organ table that names skin: the tissue the
+  // pose bared relabelled skin (skin_cover.h), after the correction.
+  bool coverSkin = true;
   bool rigidBones = false;   // with body parts: bones held rigid (rigid_bones.h)
   // A joint pose on the transfer mesh that resolves the skeleton
   // (articulated_mesh.h, articulated_pose.h) instead of the cage pipeline:
