@@ -900,4 +900,18 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
   return out;
 }
 
+std::vector<std::int32_t> limbGroupSides(const ArticulatedMesh& mesh, const skeleton::Skeleton& skeleton) {
+  const std::vector<Part> part = tetParts(mesh, skeleton);
+  std::vector<std::int32_t> side(mesh.mesh.vertexCount(), -2);  // -2: no tet yet
+  for (std::size_t t = 0; t < part.size(); ++t) {
+    const std::int32_t group = part[t] == Part::None ? -1 : std::int32_t(skeleton::labelGroupOf(part[t]));
+    for (const std::int32_t v : mesh.mesh.tets[t]) {
+      std::int32_t& s = side[std::size_t(v)];
+      s = s == -2 || s == group ? group : -1;
+    }
+  }
+  for (std::int32_t& s : side) s = std::max(s, -1);
+  return side;
+}
+
 }  // namespace vox

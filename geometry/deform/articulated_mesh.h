@@ -238,6 +238,11 @@ struct ArticulatedMesh {
 // under the patella), instead of leaving a gap or pressing into it.
 Eigen::Vector3d slideOnBody(const ArticulatedMesh& mesh, std::size_t body, const Eigen::Vector3d& p, const Eigen::Vector3d& rest);
 
+// Per vertex of mesh.mesh: the label group (skeleton/label_groups.h) of the
+// part its tets belong to, -1 where they belong to several or to none: the
+// sides of the limb cuts, for the contact (ContactOptions::side).
+std::vector<std::int32_t> limbGroupSides(const ArticulatedMesh& mesh, const skeleton::Skeleton& skeleton);
+
 // Whether every vertex of `t` is rigid with one and the same segment: the
 // tet moves rigidly with it (the poser leaves it out of the solve).
 bool rigidWithOneSegment(const ArticulatedMesh& mesh, const Tet& t);

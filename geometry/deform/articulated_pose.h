@@ -92,8 +92,8 @@ struct ArticulatedPoseOptions {
   // left as it is. Up to contactRounds rounds, while any is left; 0: none.
   int contactRounds = 4;
   double contactRadiusMm = 20.0;
-  double contactWeight = 100.0;
-  double contactMarginMm = 0.5;
+  double contactWeight = 1000.0;
+  double contactMarginMm = 1.0;
   ContactOptions contact;
   // Called after each step of the approach (1-based) and after the last,
   // hard step (steps + 1) with every vertex of the mesh where that step left

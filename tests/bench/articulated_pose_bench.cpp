@@ -26,7 +26,8 @@
 // --still-beyond MM (tissue this far from every moved bone held at rest;
 // 0: none; default the pose's), --hold-unmoved-bones (the unmoved parts'
 // bones held at rest in the steps, not soft targets), --no-untangle (no
-// untangling after the last step), --contact-rounds N, --contact-radius
+// untangling after the last step), --contact-rounds N, --no-contact-sides
+// (the contact by rest distance alone, not across the limb cuts' sides), --contact-radius
 // MM, --contact-weight W (the contact after it; 0 rounds: none),
 // --owner-shell V (ownerShellVoxels), --wrist-bodies (a sphere body at each wrist), --attachment-angle DEG (the bodies'
 // attachment half angle), --elbow-attachment-angle DEG (the elbows' alone), --untangle-radius MM (one radius instead of the
@@ -70,7 +71,7 @@ int usage() {
   std::fprintf(stderr,
                "usage: articulated_pose_bench GRID ORGANS POSE [--steps N] [--bone-weight W] [--sliding-weight W] [--max-iterations N] "
                "[--volume-weight L] [--direct-limit N] [--scapulae] [--wrist-bodies] [--yielding-shell V] [--yielding-hips] [--squeezed F] [--dump PREFIX] [--mesh-only] "
-               "[--knee-forward MM] [--trunk-reach MM] [--pelvis-reach MM] [--joint-clearance MM] [--still-beyond MM] [--hold-unmoved-bones] [--no-untangle] [--contact-rounds N] [--contact-radius MM] [--contact-weight W] [--owner-shell V] [--attachment-angle DEG] [--elbow-attachment-angle DEG] [--untangle-radius MM] [--whole-part-bone-clearance MM] [--whole-part-own-bone-clearance MM]\n"
+               "[--knee-forward MM] [--trunk-reach MM] [--pelvis-reach MM] [--joint-clearance MM] [--still-beyond MM] [--hold-unmoved-bones] [--no-untangle] [--contact-rounds N] [--no-contact-sides] [--contact-radius MM] [--contact-weight W] [--owner-shell V] [--attachment-angle DEG] [--elbow-attachment-angle DEG] [--untangle-radius MM] [--whole-part-bone-clearance MM] [--whole-part-own-bone-clearance MM]\n"
                "       articulated_pose_bench --figure POSE [options]\n");
   return 2;
 }
@@ -172,6 +173,7 @@ int main(int argc, char** argv) {
   using namespace vox;
   std::vector<std::string> positional;
   ArticulatedPoseOptions poseOptions;
+  bool noContactSides = false;
   ArticulatedMeshOptions meshOptions;
   bool figure = false;
   double squeezedBelow = 0.0;
@@ -209,6 +211,7 @@ int main(int argc, char** argv) {
     else if (arg == "--hold-unmoved-bones") poseOptions.holdUnmovedBones = true;
     else if (arg == "--no-untangle") poseOptions.untangleRadiiMm.clear();
     else if (arg == "--contact-rounds") poseOptions.contactRounds = std::stoi(value());
+    else if (arg == "--no-contact-sides") noContactSides = true;
     else if (arg == "--contact-radius") poseOptions.contactRadiusMm = std::stod(value());
     else if (arg == "--contact-weight") poseOptions.contactWeight = std::stod(value());
     else if (arg == "--contact-margin") poseOptions.contactMarginMm = std::stod(value());
@@ -261,6 +264,7 @@ int main(int argc, char** argv) {
       if (!dumpPrefix.empty()) dumpMesh(dumpPrefix, mesh, posed, "step" + std::to_string(step));
     };
     poseOptions.steps = stepsGiven > 0 ? stepsGiven : articulatedPoseSteps(pose.joints, poseOptions);
+    if (!noContactSides) poseOptions.contact.side = limbGroupSides(mesh, sk);
     ArticulatedPoser poser(mesh, poseOptions);
     const ArticulatedPoseReport r = poser.pose(jointMotionPath(sk, joints, pose.joints, mesh));
     std::printf("pose: %d steps, %d iterations, %.1f s; solved %zu vertices, %zu tets (still: %zu vertices held, %zu tets left out)\n",

@@ -400,6 +400,7 @@ PosedMesh poseArticulated(const DeformGridRequest& o, const Source& source, Defo
   StageTimer poseTimer("articulated pose");
   ArticulatedPoseOptions poseOptions;
   poseOptions.steps = articulatedPoseSteps(o.pose.joints, poseOptions);
+  poseOptions.contact.side = limbGroupSides(mesh, sk);
   ArticulatedPoser poser(mesh, poseOptions);
   const ArticulatedPoseReport r = poser.pose(jointMotionPath(sk, joints, o.pose.joints, mesh));
   report.stages.push_back(poseTimer.stop());

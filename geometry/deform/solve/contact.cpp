@@ -98,8 +98,9 @@ std::vector<Penetration> findPenetrations(std::span<const Eigen::Vector3d> rest,
                                           std::span<const Eigen::Vector3d> positions, std::span<const std::uint8_t> candidate,
                                           std::span<const std::uint8_t> penetrable, const ContactOptions& options) {
   const std::size_t nv = rest.size();
-  if (positions.size() != nv || candidate.size() != nv || penetrable.size() != tets.size())
-    throw InputError("contact", "the positions, candidates or penetrable flags do not match the mesh");
+  if (positions.size() != nv || candidate.size() != nv || penetrable.size() != tets.size() ||
+      !(options.side.empty() || options.side.size() == nv))
+    throw InputError("contact", "the positions, candidates, penetrable flags or sides do not match the mesh");
   if (tets.empty()) return {};
   const double apart2 = options.restSeparationMm * options.restSeparationMm;
 
@@ -159,7 +160,11 @@ std::vector<Penetration> findPenetrations(std::span<const Eigen::Vector3d> rest,
   tetCells.finish();
   faceCells.finish();
 
-  const auto apart = [&](std::int32_t v, std::int32_t u) { return (rest[std::size_t(v)] - rest[std::size_t(u)]).squaredNorm() > apart2; };
+  const std::span<const std::int32_t> side = options.side;
+  const auto apart = [&](std::int32_t v, std::int32_t u) {
+    if (!side.empty() && side[std::size_t(v)] >= 0 && side[std::size_t(u)] >= 0 && side[std::size_t(v)] != side[std::size_t(u)]) return true;
+    return (rest[std::size_t(v)] - rest[std::size_t(u)]).squaredNorm() > apart2;
+  };
   std::vector<std::optional<Penetration>> found(queries.size());
   parallelFor(std::int64_t(queries.size()), 0, [&](std::int64_t q) {
     const std::int32_t v = queries[std::size_t(q)];

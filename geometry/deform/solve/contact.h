@@ -8,8 +8,9 @@
 // contact surface instead of overlapping).
 //
 // "Apart at rest": every vertex of the tet it lies in is farther than
-// restSeparationMm from it at rest. A tet's own neighbourhood, and the two
-// coincident sides of a cut at rest, never count, however they turned.
+// restSeparationMm from it at rest, or on another side (ContactOptions::
+// side). A tet's own neighbourhood never counts, however it turned, nor do
+// the two coincident sides of a cut without sides.
 
 #include "geometry/tet_mesh.h"
 
@@ -27,6 +28,12 @@ struct ContactOptions {
   double toleranceMm = 0.1;
   // The boundary crossed is searched this far (mm) from the vertex.
   double searchMm = 60.0;
+  // Per vertex, a side (the limb group its tets lie in; -1: several, or
+  // none), or empty. Two vertices of two sides lay apart at rest whatever
+  // their distance: the two faces of a limb cut, coincident at rest, press
+  // into each other where a crease closes (the back of the thigh against
+  // the buttock, the arm against the chest's side).
+  std::vector<std::int32_t> side;
 };
 
 struct Penetration {

@@ -1,4 +1,5 @@
 #include "geometry/deform/solve/contact.h"
+#include "geometry/error.h"
 #include "geometry/deform/solve/untangle.h"
 #include "geometry/voxel_tetrahedralization.h"
 
@@ -19,14 +20,14 @@ struct TwoBlocks {
   std::vector<Eigen::Vector3d> posed;
   std::size_t lowerVertices = 0;
 
-  explicit TwoBlocks(double overlap = 1.5) {
+  explicit TwoBlocks(double overlap = 1.5, double gap = 40.0) {
     GridGeometry g;
     g.dims = {4, 4, 4};
     g.origin = Eigen::Vector3d::Constant(0.5);  // voxel corners at integers 0..4
     mesh = tetrahedralizeVoxels(LabelGrid(g, 1), {.includeBackground = false});
     lowerVertices = mesh.positions.size();
     const std::size_t tets = mesh.tets.size();
-    for (std::size_t v = 0; v < lowerVertices; ++v) mesh.positions.push_back(mesh.positions[v] + Eigen::Vector3d(0, 0, 40));
+    for (std::size_t v = 0; v < lowerVertices; ++v) mesh.positions.push_back(mesh.positions[v] + Eigen::Vector3d(0, 0, gap));
     for (std::size_t t = 0; t < tets; ++t) {
       Tet u = mesh.tets[t];
       for (auto& v : u) v += std::int32_t(lowerVertices);
@@ -34,7 +35,7 @@ struct TwoBlocks {
       mesh.labels.push_back(mesh.labels[t]);
     }
     posed = mesh.positions;
-    for (std::size_t v = lowerVertices; v < posed.size(); ++v) posed[v].z() -= 40.0 - 4.0 + overlap;
+    for (std::size_t v = lowerVertices; v < posed.size(); ++v) posed[v].z() -= gap - 4.0 + overlap;
   }
 };
 
@@ -74,6 +75,32 @@ TEST(Contact, FindsEachSidesVerticesThroughTheOtherAndTheBoundaryTheyCrossed) {
     for (const std::int32_t u : p.face) EXPECT_NE(std::size_t(u) >= b.lowerVertices, upper);
   }
   EXPECT_TRUE(std::is_sorted(found.begin(), found.end(), [](const Penetration& a, const Penetration& c) { return a.vertex < c.vertex; }));
+}
+
+TEST(Contact, TwoSidesOfACutThatTouchAtRestPressedIntoEachOther) {
+  // The blocks touch at rest (a cut's two faces, coincident): within the
+  // rest separation, so by distance alone nothing is found; as two sides,
+  // each block's vertices through the other are.
+  TwoBlocks b(1.5, 4.0);
+  const std::vector<std::uint8_t> all(b.mesh.positions.size(), 1), penetrable(b.mesh.tets.size(), 1);
+  EXPECT_TRUE(findPenetrations(b.mesh.positions, b.mesh.tets, b.posed, all, penetrable).empty());
+  ContactOptions options;
+  options.side.assign(b.mesh.positions.size(), 0);
+  for (std::size_t v = b.lowerVertices; v < options.side.size(); ++v) options.side[v] = 1;
+  const std::vector<Penetration> found = findPenetrations(b.mesh.positions, b.mesh.tets, b.posed, all, penetrable, options);
+  ASSERT_EQ(found.size(), 18u);
+  for (const Penetration& p : found) {
+    const bool upper = std::size_t(p.vertex) >= b.lowerVertices;
+    EXPECT_NEAR(p.depth, toBoxBoundary(b.posed[std::size_t(p.vertex)], upper ? 0.0 : 2.5), 1e-9) << p.vertex;
+    for (const std::int32_t u : p.face) EXPECT_NE(std::size_t(u) >= b.lowerVertices, upper);
+  }
+  // At rest the touching faces are contact, not penetration.
+  EXPECT_TRUE(findPenetrations(b.mesh.positions, b.mesh.tets, b.mesh.positions, all, penetrable, options).empty());
+  // A vertex of several sides (-1) counts by distance alone.
+  options.side.assign(b.mesh.positions.size(), -1);
+  EXPECT_TRUE(findPenetrations(b.mesh.positions, b.mesh.tets, b.posed, all, penetrable, options).empty());
+  options.side.resize(3);
+  EXPECT_THROW(findPenetrations(b.mesh.positions, b.mesh.tets, b.posed, all, penetrable, options), InputError);
 }
 
 TEST(Contact, NothingAtRestOrWithinTheRestSeparationOrWhereNotPenetrable) {
