@@ -173,6 +173,15 @@ def test_deform_is_byte_identical_to_the_cli(figure, tmp_path):
     assert sorted(os.listdir(tmp_path)) == ["cli.nii.gz", "paths.nii.gz", "python.nii.gz"]
 
 
+def test_skin_cover_off_is_the_clis_no_skin_cover(figure, tmp_path):
+    cli("deform", figure["grid"], "--organs", figure["organs"], "--pose", figure["pose"], "--cpu", "--preserve-volumes", "--force",
+        "--no-skin-cover", "-o", str(tmp_path / "cli.nii.gz"), "-q")
+    _, report = voxmorph.deform(figure["grid"], figure["pose"], organs=figure["organs"], preserve_volumes=True, skin_cover=False,
+                                cpu=True, force=True, output=str(tmp_path / "python.nii.gz"))
+    assert (tmp_path / "python.nii.gz").read_bytes() == (tmp_path / "cli.nii.gz").read_bytes()
+    assert "skin_cover" not in report
+
+
 def test_warnings_raise_as_errors_under_an_error_filter(figure, tmp_path):
     # An organ table without label 1: the run warns that its mass is left out.
     with open(figure["organs"]) as f:
@@ -384,7 +393,7 @@ def test_long_calls_release_the_gil(figure):
 
 def test_help_explains_every_argument():
     doc = voxmorph.deform.__doc__
-    for argument in ("grid", "pose", "organs", "preserve_volumes", "prepared", "output", "cpu", "samples", "rigid_bones", "force",
+    for argument in ("grid", "pose", "organs", "preserve_volumes", "skin_cover", "prepared", "output", "cpu", "samples", "rigid_bones", "force",
                      "max_body_change", "max_bone_change", "max_bone_overlap", "max_tissue_overlap", "allow_growth", "max_memory"):
         assert f"{argument}:" in doc or f"{argument}," in doc, argument
     for name in ("Grid", "OrganTable", "Posing", "mesh", "remesh", "render", "parts"):
