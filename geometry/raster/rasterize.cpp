@@ -63,6 +63,12 @@ GridGeometry deformedGridGeometry(const GridGeometry& source, const std::vector<
   return out;
 }
 
+void requireOutputGrid(const LabelGrid& posed, const GridGeometry& out) {
+  if (out.dims != posed.dims() || (out.origin - posed.origin()).norm() > 1e-6 * out.spacing.norm() ||
+      (out.spacing - posed.spacing()).norm() > 1e-9 * out.spacing.norm())
+    throw InputError("posed grid", "its geometry is not the output grid of this deformation");
+}
+
 GridGeometry sampleLattice(const GridGeometry& output, int samples) {
   GridGeometry lattice = output;
   const double k = double(samples);

@@ -45,6 +45,11 @@ struct RasterizeOptions {
 // Throws InputError("deformed positions", ...) when empty or not finite.
 GridGeometry deformedGridGeometry(const GridGeometry& source, const std::vector<Eigen::Vector3d>& deformed);
 
+// What post-processes G' in place (the volume correction, the skin cover)
+// checks first: throws InputError("posed grid", ...) unless `posed` lies on
+// `out`, the output grid of the deformation that made it.
+void requireOutputGrid(const LabelGrid& posed, const GridGeometry& out);
+
 // The lattice of the k^3 sample points of every output voxel: k times finer,
 // sample (a,b,c) of voxel (i,j,l) is lattice point (k i + a, k j + b, k l + c).
 GridGeometry sampleLattice(const GridGeometry& output, int samples);

@@ -609,10 +609,8 @@ DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines)
       StageTimer coverTimer("skin cover");
       const std::vector<std::uint8_t> skin = skeleton::skinOfLabels(*o.organs, maxLabel);
       if (std::find(skin.begin(), skin.end(), std::uint8_t(1)) != skin.end()) {
-        std::vector<std::uint8_t> bone = bones;
-        if (bone.empty())
-          for (const skeleton::Bone b : skeleton::boneOfLabels(*o.organs, maxLabel)) bone.push_back(b != skeleton::Bone::None);
-        report.skinCover = coverBareTissue(posed, *source.grid, rest, deformed, skin, bone);
+        // bones: flagged above (the correction runs in core with the organ table)
+        report.skinCover = coverBareTissue(posed, *source.grid, rest, deformed, skin, bones);
         report.stages.push_back(coverTimer.stop());
       }
     }

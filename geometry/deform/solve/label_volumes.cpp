@@ -51,13 +51,6 @@ int stencilLabels(const LabelGrid& source, const Eigen::Vector3d& p, std::array<
   return n;
 }
 
-// `posed` must be the output grid G' of the plan it is corrected by.
-void requireOutputGrid(const LabelGrid& posed, const GridGeometry& out) {
-  if (out.dims != posed.dims() || (out.origin - posed.origin()).norm() > 1e-6 * out.spacing.norm() ||
-      (out.spacing - posed.spacing()).norm() > 1e-9 * out.spacing.norm())
-    throw InputError("posed grid", "its geometry is not the output grid of this deformation");
-}
-
 double worstPercent(std::span<const std::int64_t> counts, std::span<const double> targets) {
   double worst = 0.0;
   for (std::size_t l = 1; l < targets.size(); ++l)

@@ -1,6 +1,5 @@
 #include "geometry/deform/solve/skin_cover.h"
 
-#include "geometry/error.h"
 #include "geometry/parallel.h"
 #include "geometry/raster/lattice_tets.h"
 #include "geometry/raster/rasterize.h"
@@ -37,10 +36,6 @@ Label nearestSkin(const LabelGrid& grid, std::span<const std::uint8_t> skin, std
   }
   return 0;
 }
-
-}  // namespace
-
-namespace {
 
 constexpr std::uint8_t kBare = 1, kBoneInAir = 2;
 
@@ -79,8 +74,7 @@ std::vector<std::uint8_t> surfaceFlags(const LabelGrid& grid, std::span<const st
 }  // namespace
 
 std::vector<std::uint8_t> bareVoxels(const LabelGrid& grid, std::span<const std::uint8_t> skin, int threads) {
-  std::vector<std::uint8_t> flags = surfaceFlags(grid, skin, {}, threads);
-  return flags;
+  return surfaceFlags(grid, skin, {}, threads);  // without bone flags: kBare or 0
 }
 
 SkinCover coverBareTissue(LabelGrid& posed, const LabelGrid& source, const TetMesh& rest, const std::vector<Eigen::Vector3d>& deformed,
@@ -89,9 +83,7 @@ SkinCover coverBareTissue(LabelGrid& posed, const LabelGrid& source, const TetMe
   if (std::find(skin.begin(), skin.end(), std::uint8_t(1)) == skin.end()) return result;
   const RasterizationPlan plan(source.geometry(), rest, deformed, 1);
   const GridGeometry& out = plan.output();
-  if (out.dims != posed.dims() || (out.origin - posed.origin()).norm() > 1e-6 * out.spacing.norm() ||
-      (out.spacing - posed.spacing()).norm() > 1e-9 * out.spacing.norm())
-    throw InputError("posed grid", "its geometry is not the output grid of this deformation");
+  requireOutputGrid(posed, out);
 
   // bare: the posed surface's flags, then per flagged voxel 1 (as at rest:
   // left) or 2 (to cover).
