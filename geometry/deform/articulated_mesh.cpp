@@ -4,6 +4,7 @@
 #include "geometry/deform/solve/injective_solve.h"
 #include "geometry/distance_transform.h"
 #include "geometry/error.h"
+#include "geometry/raster/lattice_tets.h"
 #include "geometry/scalar_grid.h"
 #include "geometry/skeleton/bones.h"
 #include "geometry/tri_mesh.h"
@@ -97,6 +98,43 @@ bool rigidWithOneSegment(const ArticulatedMesh& mesh, const Tet& t) {
   for (const std::int32_t v : t)
     if (mesh.role[std::size_t(v)] != VertexRole::Rigid || mesh.vertexPart[std::size_t(v)] != mesh.vertexPart[std::size_t(t[0])]) return false;
   return true;
+}
+
+namespace {
+
+// Whether a bone voxel of `part` at p is left to the soft tissue: a trunk or
+// pelvis bone beyond the reach of every joint.
+bool leftToTissue(Part part, const Eigen::Vector3d& p, const skeleton::Skeleton& skeleton, const ArticulatedMeshOptions& options) {
+  if (part != Part::Trunk && part != Part::Pelvis) return false;
+  const double reach = part == Part::Trunk ? options.trunkBoneReachMm : options.pelvisBoneReachMm;
+  for (const skeleton::Joint& joint : skeleton.joints)
+    if ((p - joint.centre).squaredNorm() < reach * reach) return false;
+  return true;
+}
+
+}  // namespace
+
+std::vector<Part> tissueBoneParts(const ArticulatedMesh& mesh, const LabelGrid& grid, const OrganTable& organs,
+                                  const skeleton::Skeleton& skeleton, const ArticulatedMeshOptions& options) {
+  const TetMesh& m = mesh.mesh;
+  std::vector<Part> out(m.vertexCount(), Part::None);
+  const LabelGrid boneParts = bonePartGrid(grid, organs, skeleton);
+  const GridGeometry& g = grid.geometry();
+  const std::vector<LatticeTet> tets = latticeTets(g, m.positions, m.tets);
+  const std::int64_t slice = g.sliceVoxels();
+  forEachLocatedSlab(tets, g, slabSlicesHolding(kSlabPoints / 2, slice), 0, [&](const SlabTets& slab, const std::uint32_t* state) {
+    for (std::int64_t r = 0; r < std::int64_t(slab.z1 - slab.z0) * slice; ++r) {
+      if (state[r] == kNoTet) continue;
+      const std::int64_t voxel = std::int64_t(slab.z0) * slice + r;
+      if (Part(boneParts.labels()[std::size_t(voxel)]) != Part::Pelvis) continue;
+      const Eigen::Vector3d p = g.voxelCenter(voxel % g.dims[0], (voxel / g.dims[0]) % g.dims[1], voxel / slice);
+      const Tet& t = m.tets[std::size_t(slab.tets[state[r]])];
+      if (!leftToTissue(Part::Pelvis, p, skeleton, options) || rigidWithOneSegment(mesh, t)) continue;
+      for (const std::int32_t v : t) out[std::size_t(v)] = Part::Pelvis;
+    }
+    throwIfCancelled();
+  });
+  return out;
 }
 
 LabelGrid bonePartGrid(const LabelGrid& grid, const OrganTable& organs, const skeleton::Skeleton& skeleton) {
@@ -538,7 +576,8 @@ constexpr double kDefaultHeadRadiusMm = 24.0;  // where a joint has no fitted he
 
 // The limb cuts (see the header): tets relabelled by label group for the
 // cut, their tags restored after it (the cut keeps the tets' order).
-CutReport cutLimbs(ArticulatedMesh& out, const skeleton::Skeleton& skeleton, double marginRadii) {
+CutReport cutLimbs(ArticulatedMesh& out, const skeleton::Skeleton& skeleton, double marginRadii, ArticulatedMeshOptions::LegTrunkCut legTrunk,
+                    double behindMm) {
   const std::vector<Part> part = tetParts(out, skeleton);
   const std::vector<std::int32_t> tags = out.mesh.labels;
   std::vector<std::int32_t>& group = out.mesh.labels;
@@ -597,10 +636,17 @@ CutReport cutLimbs(ArticulatedMesh& out, const skeleton::Skeleton& skeleton, dou
     if (!top[std::size_t(limb)]) continue;
     for (int other = 1; other <= kLabelGroupCount; ++other) {
       if (other == limb || (top[std::size_t(other)] && other < limb)) continue;
+      using enum ArticulatedMeshOptions::LegTrunkCut;
+      const bool legTrunkPair = (limb == int(LabelGroup::RightLeg) || limb == int(LabelGroup::LeftLeg)) && other == int(LabelGroup::Trunk);
+      if (legTrunkPair && legTrunk == None) continue;
+      const bool frontOnly = legTrunkPair && legTrunk == Front;
       CutSides sides;
       sides.sideA = [other](std::int32_t l) { return l == other; };
       sides.sideB = [limb](std::int32_t l) { return l == limb; };
-      sides.inRegion = [&, limb](const Eigen::Vector3d& p) { return beyond(limb, p); };
+      sides.inRegion = [&, limb, frontOnly](const Eigen::Vector3d& p) {
+        const skeleton::Joint* hip = top[std::size_t(limb)];
+        return beyond(limb, p) && (!frontOnly || (p - hip->centre).dot(hip->anterior) > -behindMm);
+      };
       const CutReport r = cutTransferMesh(out.mesh, sides);
       total.cutFaces += r.cutFaces;
       total.duplicatedVertices += r.duplicatedVertices;
@@ -627,8 +673,6 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
   // Tags: the bones that move against each other resolved, the rest soft;
   // the distal parts (head, hands, feet) rigid whole but near their joint.
   LabelGrid tags(g, 0);
-  const double trunkReach2 = options.trunkBoneReachMm * options.trunkBoneReachMm;
-  const double pelvisReach2 = options.pelvisBoneReachMm * options.pelvisBoneReachMm;
   const double clear2 = options.jointClearanceMm * options.jointClearanceMm;
   const LabelGrid& parts = skeleton.parts.parts;
   const bool scapula = options.movingScapulae;
@@ -687,11 +731,7 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
             const double d = (p - b.centre).norm();
             if (d > b.radius && d < b.radius + shell) part = Part::None;
           }
-        bool resolved = part != Part::None && part != Part::Trunk && part != Part::Pelvis;
-        if (part == Part::Trunk || part == Part::Pelvis) {
-          const double reach2 = part == Part::Trunk ? trunkReach2 : pelvisReach2;
-          for (const skeleton::Joint& joint : skeleton.joints) resolved = resolved || (p - joint.centre).squaredNorm() < reach2;
-        }
+        const bool resolved = part != Part::None && !leftToTissue(part, p, skeleton, options);
         tags.labels()[std::size_t(v)] = Label(resolved ? kBoneTag + std::int32_t(part) : kSoftTissueTag);
         out.resolvedBoneVoxels += resolved && boneParts.labels()[std::size_t(v)] != 0;
       }
@@ -763,7 +803,7 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
     out.cuts.push_back(cutTransferMesh(out.mesh, sides));
   }
 
-  if (options.limbCutMarginRadii > 0) out.limbCut = cutLimbs(out, skeleton, options.limbCutMarginRadii);
+  if (options.limbCutMarginRadii > 0) out.limbCut = cutLimbs(out, skeleton, options.limbCutMarginRadii, options.legTrunkCut, options.legTrunkCutBehindMm);
 
   // The cut's vertices onto the body's surface: the mesher puts them on
   // some interface, but where a bone's surface runs within a tet of the

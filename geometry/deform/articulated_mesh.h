@@ -35,8 +35,11 @@
 //    limbCutMarginRadii head radii down the limb from the joint that carries it (the
 //    shoulder, the hip), the mesh is cut between them (cutTransferMesh), so
 //    a turn parts them instead of tearing tets; at the joint the tissue stays
-//    joined. A tet's group is that of its part (the skeleton's part at its
-//    centroid for tissue, its bone's or body's part otherwise).
+//    joined. A leg is cut from the trunk in front of its hip (the groin) and
+//    only a little behind it (legTrunkCut): under the buttock the phantom's
+//    tissue is one, which a flexed hip stretches. A tet's group is that of
+//    its part (the skeleton's part at its centroid for tissue, its bone's or
+//    body's part otherwise).
 //  - Vertex roles. A vertex of a bone or body tet of exactly one part is
 //    Rigid: its part's rigid motion places it (a hard constraint: a posed
 //    voxel that maps back into a bone copies that bone). A vertex on the
@@ -186,6 +189,18 @@ struct ArticulatedMeshOptions {
   // Limb cuts start this many joint radii (the humeral or femoral head's)
   // down the limb from its shoulder or hip (<= 0: no limb cuts).
   double limbCutMarginRadii = 1.5;
+  // Where a leg is cut from the trunk: nowhere; in front of the plane
+  // legTrunkCutBehindMm behind its hip's centre (normal to the hip's
+  // anterior axis: the groin, which a flexed hip closes); or all round.
+  // Under the buttock the phantom's thigh and buttock are one tissue, which
+  // a flexed hip stretches: cut there, the seated pose opened a notch under
+  // the AF's buttock; cut nowhere, the flexed thighs pressed the groin into
+  // the lower abdomen (the bladder and sigmoid colon 3.6 % under their
+  // volume) (docs/BENCHMARKS.md, "The bones left to the tissue held; the
+  // buttock joined to the thigh").
+  enum class LegTrunkCut : std::uint8_t { None, Front, All };
+  LegTrunkCut legTrunkCut = LegTrunkCut::Front;
+  double legTrunkCutBehindMm = 40.0;
   // Each scapula its own rigid segment, turned by its shoulder's rhythm
   // (segmentMotions); false: the trunk's (docs/POSES.md: not yet the
   // default, the tissue between the scapula and the ribs has no sliding
@@ -257,6 +272,20 @@ std::vector<ArticularBody> articularBodies(const LabelGrid& grid, const LabelGri
 // InputError("grid", ...) for a grid without foreground.
 ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& organs, const skeleton::Skeleton& skeleton,
                                      const ArticulatedMeshOptions& options = {});
+
+// Per vertex of mesh.mesh: Part::Pelvis where a tet around it (one not
+// rigid with one segment) holds at rest a voxel of the pelvis' bones that
+// the mesh leaves to the soft tissue (the sacrum and the iliac wings beyond
+// options.pelvisBoneReachMm of every joint), None elsewhere. The poser
+// holds such a vertex at rest while the pose leaves the pelvis where it is
+// (ArticulatedPoseOptions::tissueBoneParts), so the flexed thighs do not
+// drag those bones through the buttock. The trunk's bones left to the
+// tissue (ribs, spine) are not held: the ribs lie in the tissue that a
+// turning shoulder moves (held too, the AF phone call's arm cartilage lost
+// more of its volume: docs/BENCHMARKS.md, "The bones left to the tissue
+// held; the buttock joined to the thigh").
+std::vector<skeleton::Part> tissueBoneParts(const ArticulatedMesh& mesh, const LabelGrid& grid, const OrganTable& organs,
+                                            const skeleton::Skeleton& skeleton, const ArticulatedMeshOptions& options = {});
 
 // Per voxel of `grid`: the body part of a bone voxel (organ table names,
 // bones.h, and the skeleton's part grid), 0 elsewhere.

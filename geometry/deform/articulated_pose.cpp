@@ -78,13 +78,15 @@ void ArticulatedPoser::prepare(std::span<const Eigen::Isometry3d> motions) {
   approachSoftBones_.clear();
   for (std::vector<std::int32_t>& owned : partConstrained_) owned.clear();
   bridgingTets_ = stillTets_ = 0;
-  // Still vertices: the bones of segments the pose does not move, and the
-  // tissue farther than stillBeyondMm from every moved segment's bone.
+  // Still vertices: the bones of segments the pose does not move, the
+  // tissue farther than stillBeyondMm from every moved segment's bone, and
+  // the tissue that carries the bones of an unmoved part (tissueBoneParts).
   const bool stillOn = options_.stillBeyondMm > 0.0;
-  std::array<bool, kSegmentCount + 1> moving{};
+  std::array<bool, kSegmentCount + 1> turned{}, moving{};
   for (int p = 1; p <= kSegmentCount; ++p) {
     const Eigen::Isometry3d mp = partMotionAt(motions, skeleton::Part(p), 1.0);
-    moving[std::size_t(p)] = !stillOn || (mp.linear() - Eigen::Matrix3d::Identity()).norm() > 1e-12 || mp.translation().norm() > 1e-9;
+    turned[std::size_t(p)] = (mp.linear() - Eigen::Matrix3d::Identity()).norm() > 1e-12 || mp.translation().norm() > 1e-9;
+    moving[std::size_t(p)] = !stillOn || turned[std::size_t(p)];
   }
   std::vector<std::uint8_t> still(nv, 0);
   if (stillOn) {
@@ -95,6 +97,10 @@ void ArticulatedPoser::prepare(std::span<const Eigen::Isometry3d> motions) {
     for (std::size_t v = 0; v < nv; ++v)
       still[v] = mesh_.role[v] == VertexRole::Rigid ? !moving[std::size_t(mesh_.vertexPart[v])] : dist[v] > options_.stillBeyondMm;
   }
+  // The bones left to the tissue, of the parts the pose does not move.
+  const std::vector<skeleton::Part>& carried = options_.tissueBoneParts;
+  for (std::size_t v = 0; v < std::min(nv, carried.size()); ++v)
+    if (mesh_.role[v] == VertexRole::Free && carried[v] != skeleton::Part::None && !turned[std::size_t(carried[v])]) still[v] = 1;
 
   std::vector<std::int32_t> index(nv, -1);
   std::vector<Tet> tets;

@@ -73,6 +73,12 @@ struct ArticulatedPoseOptions {
   // pose's thighs fall behind their motions and far more tets invert
   // (docs/BENCHMARKS.md, "Still tissue").
   bool holdUnmovedBones = false;
+  // Per mesh vertex (empty: none): the part whose bones, left to the soft
+  // tissue, its tets carry (tissueBoneParts, articulated_mesh.h: the
+  // pelvis'). A free vertex of a part the pose does not move is still (held
+  // at rest in every step) wherever it lies, so the sacrum and the iliac
+  // wings beside the turning thighs keep their shape.
+  std::vector<skeleton::Part> tissueBoneParts;
   InjectiveSolveOptions solve;
   // Untangling after the last step: the free and sliding tissue within
   // each radius (mm along the mesh's edges) of the inverted tets, in turn,

@@ -467,13 +467,14 @@ std::string articulatedMeshOptionsKey(const ArticulatedMeshOptions& o) {
   for (const double v : {o.fineSizeVoxels, o.coarseSizeMm, o.gradingMm, o.trunkBoneReachMm, o.pelvisBoneReachMm, o.jointClearanceMm,
                          o.wholePartBoneClearanceMm, o.wholePartOwnBoneClearanceMm, o.bodyMarginVoxels, o.minBodyRadiusVoxels,
                          o.attachmentHalfAngleDeg, o.elbowAttachmentHalfAngleDeg, o.ownerShellVoxels, o.hingeOwnerReachMm,
-                         o.yieldingShellVoxels, o.limbCutMarginRadii})
+                         o.yieldingShellVoxels, o.limbCutMarginRadii, o.legTrunkCutBehindMm})
     k += " " + exact(v);
   k += " whole";
   for (const skeleton::Part p : o.rigidWholeParts) k += " " + std::to_string(int(p));
   k += " yielding";
   for (const skeleton::JointId j : o.yieldingShellJoints) k += " " + std::to_string(int(j));
   for (const bool b : {o.wristBodies, o.movingScapulae, o.movingPatellae}) k += b ? " 1" : " 0";
+  k += " legs " + std::to_string(int(o.legTrunkCut));
   return k + " mesh " + transferMeshOptionsKey(o.transferMesh);
 }
 

@@ -29,7 +29,11 @@
 // untangling after the last step), --contact-rounds N, --no-contact-sides
 // (the contact by rest distance alone, not across the limb cuts' sides), --contact-radius
 // MM, --contact-weight W (the contact after it; 0 rounds: none),
-// --owner-shell V (ownerShellVoxels), --wrist-bodies (a sphere body at each wrist), --attachment-angle DEG (the bodies'
+// --owner-shell V (ownerShellVoxels), --wrist-bodies (a sphere body at each wrist),
+// --leg-trunk-cut none|front|all (where each leg is cut from the trunk),
+// --leg-trunk-behind MM (front: how far behind the hip's centre),
+// --no-tissue-bones-held (the trunk's and pelvis' bones left to the tissue
+// solved with it, not held at rest: tissueBoneParts), --attachment-angle DEG (the bodies'
 // attachment half angle), --elbow-attachment-angle DEG (the elbows' alone), --untangle-radius MM (one radius instead of the
 // pose's), --whole-part-bone-clearance MM (the
 // hands', feet's and head's tissue this near another part's bone soft; 0:
@@ -70,7 +74,7 @@ double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>
 int usage() {
   std::fprintf(stderr,
                "usage: articulated_pose_bench GRID ORGANS POSE [--steps N] [--bone-weight W] [--sliding-weight W] [--max-iterations N] "
-               "[--volume-weight L] [--direct-limit N] [--scapulae] [--wrist-bodies] [--yielding-shell V] [--yielding-hips] [--squeezed F] [--dump PREFIX] [--mesh-only] "
+               "[--volume-weight L] [--direct-limit N] [--scapulae] [--wrist-bodies] [--leg-trunk-cut none|front|all] [--leg-trunk-behind MM] [--no-tissue-bones-held] [--yielding-shell V] [--yielding-hips] [--squeezed F] [--dump PREFIX] [--mesh-only] "
                "[--knee-forward MM] [--trunk-reach MM] [--pelvis-reach MM] [--joint-clearance MM] [--still-beyond MM] [--hold-unmoved-bones] [--no-untangle] [--contact-rounds N] [--no-contact-sides] [--contact-radius MM] [--contact-weight W] [--owner-shell V] [--attachment-angle DEG] [--elbow-attachment-angle DEG] [--untangle-radius MM] [--whole-part-bone-clearance MM] [--whole-part-own-bone-clearance MM]\n"
                "       articulated_pose_bench --figure POSE [options]\n");
   return 2;
@@ -173,7 +177,7 @@ int main(int argc, char** argv) {
   using namespace vox;
   std::vector<std::string> positional;
   ArticulatedPoseOptions poseOptions;
-  bool noContactSides = false;
+  bool noContactSides = false, noTissueBonesHeld = false;
   ArticulatedMeshOptions meshOptions;
   bool figure = false;
   double squeezedBelow = 0.0;
@@ -204,6 +208,12 @@ int main(int argc, char** argv) {
     else if (arg == "--knee-forward") kneeForwardMm = std::stod(value());
     else if (arg == "--scapulae") meshOptions.movingScapulae = true;
     else if (arg == "--wrist-bodies") meshOptions.wristBodies = true;
+    else if (arg == "--leg-trunk-cut") {
+      const std::string v = value();
+      using enum ArticulatedMeshOptions::LegTrunkCut;
+      meshOptions.legTrunkCut = v == "none" ? None : v == "all" ? All : Front;
+    } else if (arg == "--leg-trunk-behind") meshOptions.legTrunkCutBehindMm = std::stod(value());
+    else if (arg == "--no-tissue-bones-held") noTissueBonesHeld = true;
     else if (arg == "--yielding-shell") meshOptions.yieldingShellVoxels = std::stod(value());
     else if (arg == "--trunk-reach") meshOptions.trunkBoneReachMm = std::stod(value());
     else if (arg == "--pelvis-reach") meshOptions.pelvisBoneReachMm = std::stod(value());
@@ -265,6 +275,7 @@ int main(int argc, char** argv) {
     };
     poseOptions.steps = stepsGiven > 0 ? stepsGiven : articulatedPoseSteps(pose.joints, poseOptions);
     if (!noContactSides) poseOptions.contact.side = limbGroupSides(mesh, sk);
+    if (!noTissueBonesHeld) poseOptions.tissueBoneParts = tissueBoneParts(mesh, grid, organs, sk, meshOptions);
     ArticulatedPoser poser(mesh, poseOptions);
     const ArticulatedPoseReport r = poser.pose(jointMotionPath(sk, joints, pose.joints, mesh));
     std::printf("pose: %d steps, %d iterations, %.1f s; solved %zu vertices, %zu tets (still: %zu vertices held, %zu tets left out)\n",

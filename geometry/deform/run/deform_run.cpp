@@ -401,6 +401,7 @@ PosedMesh poseArticulated(const DeformGridRequest& o, const Source& source, Defo
   ArticulatedPoseOptions poseOptions;
   poseOptions.steps = articulatedPoseSteps(o.pose.joints, poseOptions);
   poseOptions.contact.side = limbGroupSides(mesh, sk);
+  poseOptions.tissueBoneParts = tissueBoneParts(mesh, grid, *o.organs, sk, meshOptions);
   ArticulatedPoser poser(mesh, poseOptions);
   const ArticulatedPoseReport r = poser.pose(jointMotionPath(sk, joints, o.pose.joints, mesh));
   report.stages.push_back(poseTimer.stop());

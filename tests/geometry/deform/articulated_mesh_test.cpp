@@ -47,6 +47,27 @@ const ArticularBody* bodyOf(const ArticulatedMesh& m, JointId id) {
   return nullptr;
 }
 
+// A leg is cut from the trunk in front of its hip (the groin, which a
+// flexed hip closes), not far behind it, where the thigh's tissue and the
+// buttock's are one tissue that the flexed hip stretches.
+TEST(ArticulatedMesh, ALegIsCutFromTheTrunkInFrontOfItsHip) {
+  const Figure& f = figure();
+  ASSERT_EQ(ArticulatedMeshOptions{}.legTrunkCut, ArticulatedMeshOptions::LegTrunkCut::Front);
+  // The figure's thighs touch its trunk only about the hips: the cuts from
+  // the hips' centres down.
+  std::array<std::size_t, 3> faces{};
+  for (const auto cut : {ArticulatedMeshOptions::LegTrunkCut::None, ArticulatedMeshOptions::LegTrunkCut::Front,
+                         ArticulatedMeshOptions::LegTrunkCut::All}) {
+    ArticulatedMeshOptions options;
+    options.limbCutMarginRadii = 0.01;
+    options.legTrunkCut = cut;
+    options.legTrunkCutBehindMm = 0.0;
+    faces[std::size_t(cut)] = buildArticulatedMesh(f.grid, f.organs, f.skeleton, options).limbCut.cutFaces;
+  }
+  EXPECT_LT(faces[0], faces[1]);
+  EXPECT_LT(faces[1], faces[2]);
+}
+
 // `prepare --articulated` stores the mesh whole: what reads back is what
 // was built, found by its options' key and by no other.
 TEST(ArticulatedMesh, APreparedStateHoldsItWhole) {
@@ -651,6 +672,50 @@ TEST(ArticulatedPose, TissueFarFromTheMovedBonesStaysAtRest) {
   EXPECT_EQ(every.stillVertices, 0u);
   EXPECT_EQ(every.stillTets, 0u);
   EXPECT_GT(every.solvedTets, r.solvedTets);
+}
+
+// The pelvis' bones beyond the joints' reach are left to the soft tissue;
+// the tissue around them is held where it is while the pose leaves the
+// pelvis where it is, so a stride's thighs do not drag them.
+TEST(ArticulatedPose, ThePelvisBonesLeftToTheTissueStayWhereThePelvisStays) {
+  const Figure& f = figure();
+  ArticulatedMeshOptions reach;
+  reach.trunkBoneReachMm = reach.pelvisBoneReachMm = 0.0;
+  const std::vector<Part> carried = tissueBoneParts(f.mesh, f.grid, f.organs, f.skeleton, reach);
+  ASSERT_EQ(carried.size(), f.mesh.mesh.vertexCount());
+  std::size_t held = 0;
+  for (std::size_t v = 0; v < carried.size(); ++v) {
+    EXPECT_TRUE(carried[v] == Part::None || carried[v] == Part::Pelvis) << "vertex " << v;
+    held += carried[v] != Part::None && f.mesh.role[v] == VertexRole::Free;
+  }
+  EXPECT_GT(held, 0u);
+  // With the default reach the figure's pelvis lies within reach of its
+  // hips: fewer vertices are held than with no reach.
+  const std::vector<Part> defaults = tissueBoneParts(f.mesh, f.grid, f.organs, f.skeleton);
+  EXPECT_LT(std::size_t(std::count_if(defaults.begin(), defaults.end(), [](Part p) { return p != Part::None; })),
+            std::size_t(std::count_if(carried.begin(), carried.end(), [](Part p) { return p != Part::None; })));
+
+  const skeleton::PartMotions motions =
+      figureMotions(f.skeleton, {jointAngles(JointId::RightHip, 30.0), jointAngles(JointId::LeftHip, -20.0)});
+  ArticulatedPoseOptions options;
+  options.stillBeyondMm = 0.0;  // every other tissue vertex solved
+  options.tissueBoneParts = carried;
+  ArticulatedPoser poser(f.mesh, options);
+  const ArticulatedPoseReport r = poser.pose(motions);
+  EXPECT_EQ(r.invertedTets, 0u);
+  EXPECT_TRUE(r.reachedTargets);
+  EXPECT_GE(r.stillVertices, held);
+  ArticulatedPoseOptions free = options;
+  free.tissueBoneParts.clear();
+  ArticulatedPoser dragged(f.mesh, free);
+  dragged.pose(motions);
+  std::size_t moved = 0;
+  for (std::size_t v = 0; v < carried.size(); ++v) {
+    if (carried[v] == Part::None || f.mesh.role[v] != VertexRole::Free) continue;
+    EXPECT_EQ(poser.positions()[v], f.mesh.mesh.positions[v]) << "vertex " << v;
+    moved += (dragged.positions()[v] - f.mesh.mesh.positions[v]).norm() > 1e-3;
+  }
+  EXPECT_GT(moved, 0u);
 }
 
 // A pose that turns no joint leaves the mesh at rest: nothing is solved,
