@@ -275,7 +275,14 @@ int main(int argc, char** argv) {
     };
     poseOptions.steps = stepsGiven > 0 ? stepsGiven : articulatedPoseSteps(pose.joints, poseOptions);
     if (!noContactSides) poseOptions.contact.side = limbGroupSides(mesh, sk);
-    if (!noTissueBonesHeld) poseOptions.tissueBoneParts = tissueBoneParts(mesh, grid, organs, sk, meshOptions);
+    if (!noTissueBonesHeld) {
+      const auto t2 = Clock::now();
+      poseOptions.tissueBoneParts = tissueBoneParts(mesh, grid, organs, sk, meshOptions);
+      std::printf("pelvis' bones left to the tissue: %zu vertices held, found in %.2f s\n",
+                  std::size_t(std::count_if(poseOptions.tissueBoneParts.begin(), poseOptions.tissueBoneParts.end(),
+                                            [](skeleton::Part p) { return p != skeleton::Part::None; })),
+                  secondsSince(t2));
+    }
     ArticulatedPoser poser(mesh, poseOptions);
     const ArticulatedPoseReport r = poser.pose(jointMotionPath(sk, joints, pose.joints, mesh));
     std::printf("pose: %d steps, %d iterations, %.1f s; solved %zu vertices, %zu tets (still: %zu vertices held, %zu tets left out)\n",
