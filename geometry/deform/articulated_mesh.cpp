@@ -659,6 +659,78 @@ CutReport cutLimbs(ArticulatedMesh& out, const skeleton::Skeleton& skeleton, dou
   return total;
 }
 
+// The bone-gap cuts (ArticulatedMeshOptions::boneGapJoints): tets about
+// each joint relabelled by side for the cut (the parent's bone and the
+// tissue nearer it, the child's and the tissue nearer it), their tags
+// restored after it. A face is cut where the two bones' nearest rigid
+// vertices lie within `gap` of each other through it.
+CutReport cutBoneGaps(ArticulatedMesh& out, const skeleton::Skeleton& skeleton, const ArticulatedMeshOptions& options) {
+  CutReport total;
+  if (options.boneGapMm <= 0.0) return total;
+  const std::vector<std::int32_t> tags = out.mesh.labels;
+  const auto partOfTag = [&](std::int32_t tag) {
+    if (tag > kBoneTag && tag <= kBoneTag + kSegmentCount) return Part(tag - kBoneTag);
+    for (const ArticularBody& b : out.bodies)
+      if (b.tag() == tag) return b.owner;
+    return Part::None;
+  };
+  for (const JointId id : options.boneGapJoints) {
+    const skeleton::Joint* joint = skeleton.joint(id);
+    if (!joint) continue;
+    const Part parent = joint->kind().parent, child = joint->kind().child;
+    const Eigen::Vector3d centre = joint->centre;
+    const double reach = options.boneGapReachMm, gap = options.boneGapMm;
+    // The two bones' vertices about the joint.
+    std::array<std::vector<Eigen::Vector3d>, 2> bone;
+    std::vector<std::uint8_t> seen(out.mesh.vertexCount(), 0);
+    for (std::size_t t = 0; t < out.mesh.tetCount(); ++t) {
+      const Part p = partOfTag(tags[t]);
+      if (p != parent && p != child) continue;
+      for (const std::int32_t v : out.mesh.tets[t]) {
+        const Eigen::Vector3d& x = out.mesh.positions[std::size_t(v)];
+        const std::uint8_t bit = p == parent ? 1 : 2;
+        if ((seen[std::size_t(v)] & bit) || (x - centre).norm() > reach + gap) continue;
+        seen[std::size_t(v)] |= bit;
+        bone[p == parent ? 0 : 1].push_back(x);
+      }
+    }
+    if (bone[0].empty() || bone[1].empty()) continue;
+    const auto distance = [&](int side, const Eigen::Vector3d& p) {
+      double d2 = std::numeric_limits<double>::infinity();
+      for (const Eigen::Vector3d& x : bone[std::size_t(side)]) d2 = std::min(d2, (x - p).squaredNorm());
+      return std::sqrt(d2);
+    };
+    std::vector<std::int32_t>& side = out.mesh.labels;
+    for (std::size_t t = 0; t < side.size(); ++t) {
+      Eigen::Vector3d c = Eigen::Vector3d::Zero();
+      for (const std::int32_t v : out.mesh.tets[t]) c += 0.25 * out.mesh.positions[std::size_t(v)];
+      const Part p = partOfTag(tags[t]);
+      std::int32_t s = 0;
+      if ((c - centre).norm() <= reach) {
+        if (p == parent) s = 1;
+        else if (p == child) s = 2;
+        else if (tags[t] == kSoftTissueTag) {
+          const double dp = distance(0, c), dc = distance(1, c);
+          if (std::min(dp, dc) < gap) s = dp <= dc ? 1 : 2;
+        }
+      }
+      side[t] = s;
+    }
+    CutSides sides;
+    sides.sideA = [](std::int32_t l) { return l == 1; };
+    sides.sideB = [](std::int32_t l) { return l == 2; };
+    sides.inRegion = [&](const Eigen::Vector3d& p) { return (p - centre).norm() <= reach && distance(0, p) + distance(1, p) <= gap; };
+    const CutReport r = cutTransferMesh(out.mesh, sides);
+    out.mesh.labels = tags;
+    total.cutFaces += r.cutFaces;
+    total.duplicatedVertices += r.duplicatedVertices;
+    total.openedRimFaces += r.openedRimFaces;
+    total.contactVertices += r.contactVertices;
+    total.splitVertices.insert(total.splitVertices.end(), r.splitVertices.begin(), r.splitVertices.end());
+  }
+  return total;
+}
+
 }  // namespace
 
 ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& organs, const skeleton::Skeleton& skeleton,
@@ -804,6 +876,7 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
   }
 
   if (options.limbCutMarginRadii > 0) out.limbCut = cutLimbs(out, skeleton, options.limbCutMarginRadii, options.legTrunkCut, options.legTrunkCutBehindMm);
+  out.boneGapCut = cutBoneGaps(out, skeleton, options);
 
   // The cut's vertices onto the body's surface: the mesher puts them on
   // some interface, but where a bone's surface runs within a tet of the

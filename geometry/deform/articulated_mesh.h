@@ -210,6 +210,18 @@ struct ArticulatedMeshOptions {
   // the femur's trochlea as its knee bends (segmentMotions); false: the
   // lower leg's.
   bool movingPatellae = true;
+  // Bone-gap cuts: at these joints, where the resolved bones of the joint's
+  // two parts lie within boneGapMm of each other and within boneGapReachMm
+  // of the joint's centre, the tissue between them is cut along the surface
+  // midway between the two bones (each tet goes with the nearer bone), so
+  // that each side moves with its own bone and the two slide over each
+  // other as the joint turns. At the wrist, turned about the carpus, the
+  // carpals pass within a millimetre of the radius' end, across tissue a
+  // tet or two thick that no placement of its vertices keeps positive
+  // (docs/BENCHMARKS.md, "Bone-gap cuts at the wrists"). 0: none.
+  std::vector<skeleton::JointId> boneGapJoints = {skeleton::JointId::RightWrist, skeleton::JointId::LeftWrist};
+  double boneGapMm = 0.0;
+  double boneGapReachMm = 40.0;
   // The mesher's options; the articulated mesh rebuilds the mesh for every
   // uncovered centre (no caps): the hard postures' solves were measured on
   // that mesh, and a mesh with caps instead changes them (the seated pose
@@ -225,6 +237,7 @@ struct ArticulatedMesh {
   std::vector<ArticularBody> bodies;
   std::vector<CutReport> cuts;  // per body
   CutReport limbCut;            // between the limbs and the groups they touch
+  CutReport boneGapCut;         // between two parts' bones across a narrow gap (boneGapJoints)
   std::vector<VertexRole> role;                 // per vertex
   std::vector<skeleton::Part> vertexPart;       // per vertex: the part of a Rigid vertex, else None
   std::vector<std::int8_t> vertexBody;          // per vertex: the body (index) a Sliding vertex stays on, else -1
