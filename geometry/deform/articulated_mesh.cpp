@@ -572,6 +572,15 @@ std::vector<Part> tetParts(const ArticulatedMesh& out, const skeleton::Skeleton&
   return result;
 }
 
+// Adds one cut's counts and split vertices to `total`.
+void addCut(CutReport& total, const CutReport& r) {
+  total.cutFaces += r.cutFaces;
+  total.duplicatedVertices += r.duplicatedVertices;
+  total.openedRimFaces += r.openedRimFaces;
+  total.contactVertices += r.contactVertices;
+  total.splitVertices.insert(total.splitVertices.end(), r.splitVertices.begin(), r.splitVertices.end());
+}
+
 constexpr double kDefaultHeadRadiusMm = 24.0;  // where a joint has no fitted head
 
 // The limb cuts (see the header): tets relabelled by label group for the
@@ -647,12 +656,7 @@ CutReport cutLimbs(ArticulatedMesh& out, const skeleton::Skeleton& skeleton, dou
         const skeleton::Joint* hip = top[std::size_t(limb)];
         return beyond(limb, p) && (!frontOnly || (p - hip->centre).dot(hip->anterior) > -behindMm);
       };
-      const CutReport r = cutTransferMesh(out.mesh, sides);
-      total.cutFaces += r.cutFaces;
-      total.duplicatedVertices += r.duplicatedVertices;
-      total.openedRimFaces += r.openedRimFaces;
-      total.contactVertices += r.contactVertices;
-      total.splitVertices.insert(total.splitVertices.end(), r.splitVertices.begin(), r.splitVertices.end());
+      addCut(total, cutTransferMesh(out.mesh, sides));
     }
   }
   out.mesh.labels = tags;
@@ -720,13 +724,8 @@ CutReport cutBoneGaps(ArticulatedMesh& out, const skeleton::Skeleton& skeleton, 
     sides.sideA = [](std::int32_t l) { return l == 1; };
     sides.sideB = [](std::int32_t l) { return l == 2; };
     sides.inRegion = [&](const Eigen::Vector3d& p) { return (p - centre).norm() <= reach && distance(0, p) + distance(1, p) <= gap; };
-    const CutReport r = cutTransferMesh(out.mesh, sides);
+    addCut(total, cutTransferMesh(out.mesh, sides));
     out.mesh.labels = tags;
-    total.cutFaces += r.cutFaces;
-    total.duplicatedVertices += r.duplicatedVertices;
-    total.openedRimFaces += r.openedRimFaces;
-    total.contactVertices += r.contactVertices;
-    total.splitVertices.insert(total.splitVertices.end(), r.splitVertices.begin(), r.splitVertices.end());
   }
   return total;
 }

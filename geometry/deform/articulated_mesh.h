@@ -218,7 +218,7 @@ struct ArticulatedMeshOptions {
   // other as the joint turns. At the wrist, turned about the carpus, the
   // carpals pass within a millimetre of the radius' end, across tissue a
   // tet or two thick that no placement of its vertices keeps positive
-  // (docs/BENCHMARKS.md, "Bone-gap cuts at the wrists"). 0: none.
+  // (docs/BENCHMARKS.md, "Where the AF phone call's wrist folds"). 0: none.
   std::vector<skeleton::JointId> boneGapJoints = {skeleton::JointId::RightWrist, skeleton::JointId::LeftWrist};
   double boneGapMm = 0.0;
   double boneGapReachMm = 40.0;
