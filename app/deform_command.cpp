@@ -172,10 +172,16 @@ void addDeformCommand(CLI::App& app) {
                 "With body parts (a joint pose, --parts): hold each part's bones rigid (its forward-kinematics motion, else the rigid fit) "
                 "and turn the cage near each turned joint with the moving part (joint_options zone 'child' unless the pose sets it); "
                 "the tissue between bones turning against each other may fold (docs/POSES.md)");
-  cmd->add_flag("--articulated", o->run.articulated,
-                "A joint pose on the transfer mesh that resolves the skeleton: bones moved by their parts' motions exactly, "
-                "shoulders, hips, elbows and knees sliding, the soft tissue by an injective solve (no cage, no refinement); "
-                "a pose it cannot reach without inverting a tet is refused unless --force (docs/POSES.md)");
+  CLI::Option* articulated = cmd->add_flag("--articulated", o->run.articulated,
+                                           "A joint pose on the transfer mesh that resolves the skeleton: bones moved by their parts' motions exactly, "
+                                           "shoulders, hips, elbows and knees sliding, the soft tissue by an injective solve (no cage, no refinement); "
+                                           "a pose it cannot reach without inverting a tet is refused unless --force (docs/POSES.md)");
+  cmd->add_option("--bone-gap", o->run.boneGapMm,
+                  "With --articulated: cut the tissue between the forearm's and the hand's bones where they lie within this gap of "
+                  "each other near the wrist, so the carpals slide past the radius as the wrist turns, mm (0: none; docs/POSES.md)")
+      ->capture_default_str()
+      ->check(numberIn(0, 100, "mm"))
+      ->needs(articulated);
   cmd->add_option("--max-body-change", o->run.maxBodyChangePercent,
                   "Refuse (write nothing) when the whole body's volume changes by more than this, %")
       ->capture_default_str()

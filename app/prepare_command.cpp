@@ -111,8 +111,12 @@ void addPrepareCommand(CLI::App& app) {
   cmd->add_option("--vertices", o->run.vertices, "Automatic cage: vertices after QEM (the runs give the same)")
       ->capture_default_str()
       ->check(integerIn(8, 100000));
-  cmd->add_flag("--articulated", o->run.articulated,
-                "Also the transfer mesh that resolves the skeleton, for deform --articulated (needs an organ table that names the bones)");
+  CLI::Option* articulated = cmd->add_flag("--articulated", o->run.articulated,
+                                           "Also the transfer mesh that resolves the skeleton, for deform --articulated (needs an organ table that names the bones)");
+  cmd->add_option("--bone-gap", o->run.boneGapMm, "With --articulated: the bone-gap cut at the wrists, as deform --bone-gap (the runs give the same), mm")
+      ->capture_default_str()
+      ->check(numberIn(0, 100, "mm"))
+      ->needs(articulated);
   cmd->add_flag("-q,--quiet", o->quiet, "No progress or summary");
   cmd->callback([o] { prepare(*o); });
 }

@@ -76,7 +76,7 @@ Provenance deformProvenance(const py::object& grid, const py::object& organs, co
 }
 
 py::tuple deform(const py::object& gridArgument, const py::object& pose, const py::object& organsArgument, const py::object& preserveVolumes,
-                 bool skinCover, const py::object& prepared, const std::string& output, bool cpu, int samples, bool rigidBones, bool articulated, bool force,
+                 bool skinCover, const py::object& prepared, const std::string& output, bool cpu, int samples, bool rigidBones, bool articulated, double boneGap, bool force,
                  double maxBodyChange, double maxBoneChange, double maxBoneOverlap, double maxTissueOverlap, bool allowGrowth, std::int64_t maxMemoryMb) {
   if (!prepared.is_none() && py::isinstance<Grid>(gridArgument))
     throw py::value_error("prepared: a prepared state is checked against the grid file it was made from; give the grid as that path, not a Grid");
@@ -91,6 +91,9 @@ py::tuple deform(const py::object& gridArgument, const py::object& pose, const p
   request.samples = samples;
   request.rigidBones = rigidBones;
   request.articulated = articulated;
+  if (boneGap != 0.0 && !articulated) throw py::value_error("bone_gap: needs articulated=True");
+  if (!(boneGap >= 0.0 && boneGap <= 100.0)) throw py::value_error("bone_gap: " + std::to_string(boneGap) + " mm is not in [0, 100]");
+  request.boneGapMm = boneGap;
   request.force = force;
   request.maxBodyChangePercent = maxBodyChange;
   request.maxBoneChangePercent = maxBoneChange;
@@ -251,7 +254,8 @@ PoseArgument poseArgument(const py::object& pose, const GridGeometry& grid) {
 void bindDeform(py::module_& m) {
   m.def("deform", &deform, py::arg("grid"), py::arg("pose"), py::kw_only(), py::arg("organs") = py::none(),
         py::arg("preserve_volumes") = false, py::arg("skin_cover") = true, py::arg("prepared") = py::none(), py::arg("output") = "", py::arg("cpu") = false,
-        py::arg("samples") = 1, py::arg("rigid_bones") = false, py::arg("articulated") = false, py::arg("force") = false,
+        py::arg("samples") = 1, py::arg("rigid_bones") = false, py::arg("articulated") = false,
+        py::arg("bone_gap") = DeformGridRequest{}.boneGapMm, py::arg("force") = false,
         py::arg("max_body_change") = DeformGridRequest{}.maxBodyChangePercent,
         py::arg("max_bone_change") = DeformGridRequest{}.maxBoneChangePercent,
         py::arg("max_bone_overlap") = DeformGridRequest{}.maxBoneOverlapPercent,
@@ -279,9 +283,9 @@ output: also write the posed grid to this file (atomically: nothing is left on e
 cpu: rasterize with the CPU reference instead of the GPU (the GPU falls back to the CPU
     with a RuntimeWarning when none is usable).
 samples: k, k^3 samples per output voxel (majority label).
-rigid_bones, articulated, force, max_body_change, max_bone_change, max_bone_overlap,
+rigid_bones, articulated, bone_gap, force, max_body_change, max_bone_change, max_bone_overlap,
     max_tissue_overlap, allow_growth, max_memory: as the CLI's --rigid-bones, --articulated,
-    --force, --max-body-change (%), --max-bone-change (%), --max-bone-overlap (%: a joint pose
+    --bone-gap (mm, with articulated), --force, --max-body-change (%), --max-bone-change (%), --max-bone-overlap (%: a joint pose
     pressing two parts' bones through each other), --max-tissue-overlap (%: two parts' tissue
     through each other, of the body), --allow-growth and --max-memory (MB; 0: in core).
 

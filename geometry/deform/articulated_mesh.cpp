@@ -17,6 +17,7 @@
 #include <numbers>
 #include <numeric>
 #include <tuple>
+#include <unordered_map>
 
 namespace vox {
 
@@ -699,9 +700,25 @@ CutReport cutBoneGaps(ArticulatedMesh& out, const skeleton::Skeleton& skeleton, 
       }
     }
     if (bone[0].empty() || bone[1].empty()) continue;
+    // Each side's vertices in cubes of the gap's size: the 27 cubes about a
+    // point hold every vertex within the gap of it. The distance is exact
+    // up to the gap and more than the gap beyond it, all the cut compares.
+    const auto cube = [gap](const Eigen::Vector3d& x, int dx, int dy, int dz) {
+      const auto c = [&](int a, int d) { return (std::int64_t(std::floor(x[a] / gap)) + d) & 0x1fffff; };
+      return (c(0, dx) << 42) | (c(1, dy) << 21) | c(2, dz);
+    };
+    std::array<std::unordered_map<std::int64_t, std::vector<Eigen::Vector3d>>, 2> cubes;
+    for (std::size_t s = 0; s < 2; ++s)
+      for (const Eigen::Vector3d& x : bone[s]) cubes[s][cube(x, 0, 0, 0)].push_back(x);
     const auto distance = [&](int side, const Eigen::Vector3d& p) {
       double d2 = std::numeric_limits<double>::infinity();
-      for (const Eigen::Vector3d& x : bone[std::size_t(side)]) d2 = std::min(d2, (x - p).squaredNorm());
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) {
+            const auto found = cubes[std::size_t(side)].find(cube(p, dx, dy, dz));
+            if (found == cubes[std::size_t(side)].end()) continue;
+            for (const Eigen::Vector3d& x : found->second) d2 = std::min(d2, (x - p).squaredNorm());
+          }
       return std::sqrt(d2);
     };
     std::vector<std::int32_t>& side = out.mesh.labels;

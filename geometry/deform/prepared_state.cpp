@@ -190,6 +190,7 @@ void putArticulatedMesh(SectionPacker& p, const ArticulatedMesh& m) {
   p.put(std::uint64_t(m.cuts.size()));
   for (const CutReport& c : m.cuts) putCutReport(p, c);
   putCutReport(p, m.limbCut);
+  putCutReport(p, m.boneGapCut);
   std::vector<std::uint8_t> role(m.role.size()), part(m.vertexPart.size());
   for (std::size_t v = 0; v < role.size(); ++v) role[v] = std::uint8_t(m.role[v]);
   for (std::size_t v = 0; v < part.size(); ++v) part[v] = std::uint8_t(m.vertexPart[v]);
@@ -230,6 +231,7 @@ ArticulatedMesh getArticulatedMesh(SectionUnpacker& u, const std::string& source
   const std::size_t cuts = u.getCount(4 * 8 + 8);
   for (std::size_t i = 0; i < cuts; ++i) m.cuts.push_back(getCutReport(u, nv));
   m.limbCut = getCutReport(u, nv);
+  m.boneGapCut = getCutReport(u, nv);
   const std::vector<std::uint8_t> role = u.getVector<std::uint8_t>(), part = u.getVector<std::uint8_t>();
   m.vertexBody = u.getVector<std::int8_t>();
   if (role.size() != nv || part.size() != nv || m.vertexBody.size() != nv) u.invalid("per-vertex arrays of another length than the mesh's");
@@ -467,12 +469,14 @@ std::string articulatedMeshOptionsKey(const ArticulatedMeshOptions& o) {
   for (const double v : {o.fineSizeVoxels, o.coarseSizeMm, o.gradingMm, o.trunkBoneReachMm, o.pelvisBoneReachMm, o.jointClearanceMm,
                          o.wholePartBoneClearanceMm, o.wholePartOwnBoneClearanceMm, o.bodyMarginVoxels, o.minBodyRadiusVoxels,
                          o.attachmentHalfAngleDeg, o.elbowAttachmentHalfAngleDeg, o.ownerShellVoxels, o.hingeOwnerReachMm,
-                         o.yieldingShellVoxels, o.limbCutMarginRadii, o.legTrunkCutBehindMm})
+                         o.yieldingShellVoxels, o.limbCutMarginRadii, o.legTrunkCutBehindMm, o.boneGapMm, o.boneGapReachMm})
     k += " " + exact(v);
   k += " whole";
   for (const skeleton::Part p : o.rigidWholeParts) k += " " + std::to_string(int(p));
   k += " yielding";
   for (const skeleton::JointId j : o.yieldingShellJoints) k += " " + std::to_string(int(j));
+  k += " gaps";
+  for (const skeleton::JointId j : o.boneGapJoints) k += " " + std::to_string(int(j));
   for (const bool b : {o.wristBodies, o.movingScapulae, o.movingPatellae}) k += b ? " 1" : " 0";
   k += " legs " + std::to_string(int(o.legTrunkCut));
   return k + " mesh " + transferMeshOptionsKey(o.transferMesh);

@@ -52,7 +52,7 @@ namespace vox {
 
 class SectionFile;
 
-inline constexpr std::uint32_t kPreparedStateVersion = 1;
+inline constexpr std::uint32_t kPreparedStateVersion = 2;
 
 // What a prepared state was made from, and what a run that takes it gives.
 struct PreparedInputs {

@@ -327,6 +327,20 @@ TEST(PartsCommand, ArticulatedJointPose) {
   EXPECT_GT(built, 0.0);
   EXPECT_GE(taken, 0.0);
   EXPECT_LT(taken, 0.5 * built);
+  // The bone-gap cut is one of the mesh's options: a state prepared without
+  // it holds no mesh for a run with it (built, with a warning); without
+  // --articulated the option is a usage error.
+  EXPECT_EQ(a["bone_gap_cut_faces"].get<int>(), 0);
+  const std::string gapOut = f.dir + "/gap.nii.gz";
+  const auto gapFromState = test::runCommand(voxmorph("deform " + test::quote(f.grid) + " --organs " + test::quote(f.organs) + " --pose " +
+                                                      test::quote(pose) + " -o " + test::quote(gapOut) +
+                                                      " --articulated --cpu -q --bone-gap 2 --prepared " + test::quote(state)));
+  ASSERT_EQ(gapFromState.exitCode, 0) << gapFromState.err;
+  EXPECT_NE(gapFromState.err.find("holds no articulated transfer mesh"), std::string::npos) << gapFromState.err;
+  const auto gapAlone = test::runCommand(voxmorph("deform " + test::quote(f.grid) + " --organs " + test::quote(f.organs) + " --pose " +
+                                                  test::quote(pose) + " -o " + test::quote(f.dir + "/x.nii.gz") + " --cpu -q --bone-gap 2"));
+  EXPECT_EQ(gapAlone.exitCode, 2);
+  EXPECT_NE(gapAlone.err.find("--bone-gap"), std::string::npos) << gapAlone.err;
 
   const std::string selections = writeFile(f.dir + "/box.json", R"({"selections": [{"name": "b", "box": {"min": [0, 0, 0], "max": [10, 10, 10]}, "fixed": true}]})");
   const auto noJoints = test::runCommand(voxmorph("deform " + test::quote(f.grid) + " --organs " + test::quote(f.organs) + " --pose " +

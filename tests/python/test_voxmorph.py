@@ -445,3 +445,7 @@ def test_a_bad_pose_is_a_valueerror_with_the_cli_message(figure):
         voxmorph.deform(grid, {"joints": {"right_hip": {"abduction": -30}}}, organs=figure["organs"], cpu=True)
     with pytest.raises(ValueError, match=r"^pose: a pose with joints or body parts needs the grid's organ table \(--organs\) to find the bones$"):
         voxmorph.Posing(grid, {"joints": {"right_shoulder": {"abduction": 30}}})
+    with pytest.raises(ValueError, match=r"^bone_gap: needs articulated=True$"):
+        voxmorph.deform(grid, {"joints": {"right_wrist": {"flexion": 30}}}, organs=figure["organs"], cpu=True, bone_gap=5)
+    with pytest.raises(ValueError, match=r"^bone_gap: -1\.0+ mm is not in \[0, 100\]$"):
+        voxmorph.deform(grid, {"joints": {"right_wrist": {"flexion": 30}}}, organs=figure["organs"], cpu=True, articulated=True, bone_gap=-1)

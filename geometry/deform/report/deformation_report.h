@@ -114,7 +114,7 @@ struct DeformationReport {
   // With --articulated: the transfer mesh that resolves the skeleton
   // (articulated_mesh.h) and its posing (articulated_pose.h).
   struct Articulated {
-    std::size_t vertices = 0, tets = 0, bodies = 0, bodyCutFaces = 0, limbCutFaces = 0;
+    std::size_t vertices = 0, tets = 0, bodies = 0, bodyCutFaces = 0, limbCutFaces = 0, boneGapCutFaces = 0;
     std::size_t rigidVertices = 0, slidingVertices = 0, solvedVertices = 0, solvedTets = 0;
     std::size_t stillVertices = 0, stillTets = 0;  // held at rest: far from every moved bone (ArticulatedPoseOptions::stillBeyondMm)
     int steps = 0, iterations = 0;

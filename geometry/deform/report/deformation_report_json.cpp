@@ -183,6 +183,7 @@ std::string deformationReportJson(const DeformationReport& r) {
                            {"articular_bodies", a->bodies},
                            {"body_cut_faces", a->bodyCutFaces},
                            {"limb_cut_faces", a->limbCutFaces},
+                           {"bone_gap_cut_faces", a->boneGapCutFaces},
                            {"rigid_vertices", a->rigidVertices},
                            {"sliding_vertices", a->slidingVertices},
                            {"solved_vertices", a->solvedVertices},

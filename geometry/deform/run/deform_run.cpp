@@ -390,7 +390,8 @@ PosedMesh poseArticulated(const DeformGridRequest& o, const Source& source, Defo
   report.stages.push_back(skeletonTimer.stop());
   if (const auto fault = skeleton::bonesThroughEachOther(sk, joints, o.pose.joints, o.maxBoneOverlapPercent)) refuseOrForce(o, report, *fault);
   StageTimer meshTimer("articulated transfer mesh");
-  const ArticulatedMeshOptions meshOptions;
+  ArticulatedMeshOptions meshOptions;
+  meshOptions.boneGapMm = o.boneGapMm;
   const PreparedArticulatedMesh* stored = prepared ? prepared->findArticulatedMesh(articulatedMeshOptionsKey(meshOptions)) : nullptr;
   if (prepared && !stored)
     warn(o, prepared->source + ": holds no articulated transfer mesh (voxmorph prepare --articulated adds it); building it");
@@ -411,6 +412,7 @@ PosedMesh poseArticulated(const DeformGridRequest& o, const Source& source, Defo
   a.bodies = mesh.bodies.size();
   for (const CutReport& c : mesh.cuts) a.bodyCutFaces += c.cutFaces;
   a.limbCutFaces = mesh.limbCut.cutFaces;
+  a.boneGapCutFaces = mesh.boneGapCut.cutFaces;
   for (const std::size_t n : mesh.rigidVertices) a.rigidVertices += n;
   a.slidingVertices = r.slidingVertices;
   a.solvedVertices = r.solvedVertices;

@@ -16,6 +16,7 @@
 // pipeline, spooled to an unlinked raw temporary when compressed) and G' is
 // rasterized from source windows under the budget.
 
+#include "geometry/deform/articulated_mesh.h"
 #include "geometry/deform/solve/adaptive_refinement.h"
 #include "geometry/deform/report/deformation_report.h"
 #include "geometry/deform/pose/joint_pose.h"
@@ -78,6 +79,9 @@ struct DeformGridRequest {
   // the soft tissue by the injective solve; no cage, no refinement. A pose
   // the solve cannot reach without inverting a tet is refused (unless force).
   bool articulated = false;
+  // With articulated: the bone-gap cut at the wrists (ArticulatedMeshOptions
+  // boneGapMm, mm; 0: none). Part of the prepared mesh's key.
+  double boneGapMm = ArticulatedMeshOptions{}.boneGapMm;
   bool allowGrowth = false;  // accept a posed grid of more than 8x the source's voxels (posed_extent.h)
   // Physically wrong results are refused with nothing written: a bone whose
   // volume (through the transfer mesh, report.bones) changes by more than

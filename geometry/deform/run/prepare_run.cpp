@@ -95,7 +95,8 @@ PrepareResult prepareRestState(const PrepareRequest& o) {
   if (o.articulated) {
     StageTimer timer("articulated transfer mesh");
     if (!state->skeleton) throw InputError("--articulated", "needs an organ table that names the bones the grid holds (or a --parts grid)");
-    const ArticulatedMeshOptions options;
+    ArticulatedMeshOptions options;
+    options.boneGapMm = o.boneGapMm;
     state->articulatedMeshes.push_back({articulatedMeshOptionsKey(options), buildArticulatedMesh(working, *o.organs, *state->skeleton, options)});
     result.stages.push_back(timer.stop());
   }

@@ -35,6 +35,7 @@ struct PrepareRequest {
   // Also the transfer mesh that resolves the skeleton (deform --articulated),
   // from the stored skeleton; needs an organ table that names the bones.
   bool articulated = false;
+  double boneGapMm = ArticulatedMeshOptions{}.boneGapMm;  // its bone-gap cut, as deform --bone-gap
 };
 
 struct PrepareResult {
