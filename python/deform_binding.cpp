@@ -91,7 +91,7 @@ py::tuple deform(const py::object& gridArgument, const py::object& pose, const p
   request.samples = samples;
   request.rigidBones = rigidBones;
   request.articulated = articulated;
-  if (boneGap != 0.0 && !articulated) throw py::value_error("bone_gap: needs articulated=True");
+  if (boneGap != DeformGridRequest{}.boneGapMm && !articulated) throw py::value_error("bone_gap: needs articulated=True");
   if (!(boneGap >= 0.0 && boneGap <= 100.0)) throw py::value_error("bone_gap: " + std::to_string(boneGap) + " mm is not in [0, 100]");
   request.boneGapMm = boneGap;
   request.force = force;
@@ -285,7 +285,7 @@ cpu: rasterize with the CPU reference instead of the GPU (the GPU falls back to 
 samples: k, k^3 samples per output voxel (majority label).
 rigid_bones, articulated, bone_gap, force, max_body_change, max_bone_change, max_bone_overlap,
     max_tissue_overlap, allow_growth, max_memory: as the CLI's --rigid-bones, --articulated,
-    --bone-gap (mm, with articulated), --force, --max-body-change (%), --max-bone-change (%), --max-bone-overlap (%: a joint pose
+    --bone-gap (mm; another than the default needs articulated), --force, --max-body-change (%), --max-bone-change (%), --max-bone-overlap (%: a joint pose
     pressing two parts' bones through each other), --max-tissue-overlap (%: two parts' tissue
     through each other, of the body), --allow-growth and --max-memory (MB; 0: in core).
 

@@ -78,7 +78,7 @@ def deform(
     samples: int = 1,
     rigid_bones: bool = False,
     articulated: bool = False,
-    bone_gap: float = 0.0,
+    bone_gap: float = 10.0,
     force: bool = False,
     max_body_change: float = 2.0,
     max_bone_change: float = 10.0,

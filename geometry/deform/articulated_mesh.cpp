@@ -1,6 +1,7 @@
 #include "geometry/deform/articulated_mesh.h"
 
 #include "geometry/cancellation.h"
+#include "geometry/deform/solve/contact.h"
 #include "geometry/deform/solve/injective_solve.h"
 #include "geometry/distance_transform.h"
 #include "geometry/error.h"
@@ -679,6 +680,12 @@ CutReport cutBoneGaps(ArticulatedMesh& out, const skeleton::Skeleton& skeleton, 
       if (b.tag() == tag) return b.owner;
     return Part::None;
   };
+  // The vertices on the mesh's surface: a tet that touches it stays uncut,
+  // so the cut is a slit inside the tissue and the skin stays closed.
+  std::vector<std::uint8_t> surface(out.mesh.vertexCount(), 0);
+  if (options.boneGapKeepsSkin)
+    for (const auto& f : boundaryFaces(out.mesh.tets, out.mesh.vertexCount()))
+      for (const std::int32_t v : f) surface[std::size_t(v)] = 1;
   for (const JointId id : options.boneGapJoints) {
     const skeleton::Joint* joint = skeleton.joint(id);
     if (!joint) continue;
@@ -723,6 +730,11 @@ CutReport cutBoneGaps(ArticulatedMesh& out, const skeleton::Skeleton& skeleton, 
     };
     std::vector<std::int32_t>& side = out.mesh.labels;
     for (std::size_t t = 0; t < side.size(); ++t) {
+      if (options.boneGapKeepsSkin && std::any_of(out.mesh.tets[t].begin(), out.mesh.tets[t].end(),
+                                                  [&](std::int32_t v) { return surface[std::size_t(v)]; })) {
+        side[t] = 0;
+        continue;
+      }
       Eigen::Vector3d c = Eigen::Vector3d::Zero();
       for (const std::int32_t v : out.mesh.tets[t]) c += 0.25 * out.mesh.positions[std::size_t(v)];
       const Part p = partOfTag(tags[t]);

@@ -218,10 +218,16 @@ struct ArticulatedMeshOptions {
   // other as the joint turns. At the wrist, turned about the carpus, the
   // carpals pass within a millimetre of the radius' end, across tissue a
   // tet or two thick that no placement of its vertices keeps positive
-  // (docs/BENCHMARKS.md, "Where the AF phone call's wrist folds"). 0: none.
+  // (docs/BENCHMARKS.md, "Where the AF phone call's wrist folds"; the cut's
+  // figures: "The bone-gap cut at the wrists, by default"). 0: none
+  // (deform --bone-gap 0).
   std::vector<skeleton::JointId> boneGapJoints = {skeleton::JointId::RightWrist, skeleton::JointId::LeftWrist};
-  double boneGapMm = 0.0;
+  double boneGapMm = 10.0;
   double boneGapReachMm = 40.0;
+  // The tets that touch the mesh's surface (the skin, and the faces of the
+  // cuts before it) are left out of the bone-gap cut: a slit inside the
+  // tissue, the skin closed over it. false: the cut may reach the skin.
+  bool boneGapKeepsSkin = true;
   // The mesher's options; the articulated mesh rebuilds the mesh for every
   // uncovered centre (no caps): the hard postures' solves were measured on
   // that mesh, and a mesh with caps instead changes them (the seated pose

@@ -477,7 +477,7 @@ std::string articulatedMeshOptionsKey(const ArticulatedMeshOptions& o) {
   for (const skeleton::JointId j : o.yieldingShellJoints) k += " " + std::to_string(int(j));
   k += " gaps";
   for (const skeleton::JointId j : o.boneGapJoints) k += " " + std::to_string(int(j));
-  for (const bool b : {o.wristBodies, o.movingScapulae, o.movingPatellae}) k += b ? " 1" : " 0";
+  for (const bool b : {o.wristBodies, o.movingScapulae, o.movingPatellae, o.boneGapKeepsSkin}) k += b ? " 1" : " 0";
   k += " legs " + std::to_string(int(o.legTrunkCut));
   return k + " mesh " + transferMeshOptionsKey(o.transferMesh);
 }

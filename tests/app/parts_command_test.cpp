@@ -327,16 +327,18 @@ TEST(PartsCommand, ArticulatedJointPose) {
   EXPECT_GT(built, 0.0);
   EXPECT_GE(taken, 0.0);
   EXPECT_LT(taken, 0.5 * built);
-  // The bone-gap cut is one of the mesh's options: a state prepared without
-  // it holds no mesh for a run with it (built, with a warning); without
-  // --articulated the option is a usage error.
-  EXPECT_EQ(a["bone_gap_cut_faces"].get<int>(), 0);
-  const std::string gapOut = f.dir + "/gap.nii.gz";
+  // The bone-gap cut is one of the mesh's options: a state prepared with the
+  // default holds no mesh for a run without the cut (built, with a
+  // warning; the report counts no cut face); without --articulated the
+  // option is a usage error.
+  ASSERT_TRUE(a.contains("bone_gap_cut_faces"));
+  const std::string gapOut = f.dir + "/gap.nii.gz", gapReport = f.dir + "/gap.json";
   const auto gapFromState = test::runCommand(voxmorph("deform " + test::quote(f.grid) + " --organs " + test::quote(f.organs) + " --pose " +
-                                                      test::quote(pose) + " -o " + test::quote(gapOut) +
-                                                      " --articulated --cpu -q --bone-gap 2 --prepared " + test::quote(state)));
+                                                      test::quote(pose) + " -o " + test::quote(gapOut) + " --report " + test::quote(gapReport) +
+                                                      " --articulated --cpu -q --bone-gap 0 --prepared " + test::quote(state)));
   ASSERT_EQ(gapFromState.exitCode, 0) << gapFromState.err;
   EXPECT_NE(gapFromState.err.find("holds no articulated transfer mesh"), std::string::npos) << gapFromState.err;
+  EXPECT_EQ(nlohmann::json::parse(std::ifstream(gapReport))["articulated"]["bone_gap_cut_faces"].get<int>(), 0);
   const auto gapAlone = test::runCommand(voxmorph("deform " + test::quote(f.grid) + " --organs " + test::quote(f.organs) + " --pose " +
                                                   test::quote(pose) + " -o " + test::quote(f.dir + "/x.nii.gz") + " --cpu -q --bone-gap 2"));
   EXPECT_EQ(gapAlone.exitCode, 2);

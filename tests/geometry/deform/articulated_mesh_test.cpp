@@ -865,6 +865,7 @@ TEST(ArticulatedPose, ABoneGapCutLetsTheCarpalsPassTheRadius) {
   ArticulatedMeshOptions options;
   options.wholePartBoneClearanceMm = 0.0;
   options.wholePartOwnBoneClearanceMm = 0.0;
+  options.boneGapMm = 0.0;
   const ArticulatedMesh uncut = buildArticulatedMesh(f.grid, f.organs, f.skeleton, options);
   options.boneGapMm = 3.0 * spacing;
   options.boneGapReachMm = 6.0 * spacing;
