@@ -755,6 +755,8 @@ CutReport cutBoneGaps(ArticulatedMesh& out, const skeleton::Skeleton& skeleton, 
     sides.inRegion = [&](const Eigen::Vector3d& p) { return (p - centre).norm() <= reach && distance(0, p) + distance(1, p) <= gap; };
     addCut(total, cutTransferMesh(out.mesh, sides));
     out.mesh.labels = tags;
+    // The copies the cut added lie inside the tissue, off the surface.
+    surface.resize(out.mesh.vertexCount(), 0);
   }
   return total;
 }
