@@ -285,9 +285,10 @@ cpu: rasterize with the CPU reference instead of the GPU (the GPU falls back to 
 samples: k, k^3 samples per output voxel (majority label).
 rigid_bones, articulated, bone_gap, force, max_body_change, max_bone_change, max_bone_overlap,
     max_tissue_overlap, allow_growth, max_memory: as the CLI's --rigid-bones, --articulated,
-    --bone-gap (mm; another than the default needs articulated), --force, --max-body-change (%), --max-bone-change (%), --max-bone-overlap (%: a joint pose
-    pressing two parts' bones through each other), --max-tissue-overlap (%: two parts' tissue
-    through each other, of the body), --allow-growth and --max-memory (MB; 0: in core).
+    --bone-gap (mm; another than the default needs articulated), --force, --max-body-change
+    (%), --max-bone-change (%), --max-bone-overlap (%: a joint pose pressing two parts'
+    bones through each other), --max-tissue-overlap (%: two parts' tissue through each
+    other, of the body), --allow-growth and --max-memory (MB; 0: in core).
 
 The report dict is the CLI's JSON report (--report); its provenance lists the inputs given
 as paths (and a pose dict's JSON text) with their SHA-256, while a Grid in memory, which has

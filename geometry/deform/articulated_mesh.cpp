@@ -1,6 +1,7 @@
 #include "geometry/deform/articulated_mesh.h"
 
 #include "geometry/cancellation.h"
+#include "geometry/cell_index.h"
 #include "geometry/deform/solve/contact.h"
 #include "geometry/deform/solve/injective_solve.h"
 #include "geometry/distance_transform.h"
@@ -18,7 +19,6 @@
 #include <numbers>
 #include <numeric>
 #include <tuple>
-#include <unordered_map>
 
 namespace vox {
 
@@ -707,25 +707,21 @@ CutReport cutBoneGaps(ArticulatedMesh& out, const skeleton::Skeleton& skeleton, 
       }
     }
     if (bone[0].empty() || bone[1].empty()) continue;
-    // Each side's vertices in cubes of the gap's size: the 27 cubes about a
-    // point hold every vertex within the gap of it. The distance is exact
-    // up to the gap and more than the gap beyond it, all the cut compares.
-    const auto cube = [gap](const Eigen::Vector3d& x, int dx, int dy, int dz) {
-      const auto c = [&](int a, int d) { return (std::int64_t(std::floor(x[a] / gap)) + d) & 0x1fffff; };
-      return (c(0, dx) << 42) | (c(1, dy) << 21) | c(2, dz);
-    };
-    std::array<std::unordered_map<std::int64_t, std::vector<Eigen::Vector3d>>, 2> cubes;
-    for (std::size_t s = 0; s < 2; ++s)
-      for (const Eigen::Vector3d& x : bone[s]) cubes[s][cube(x, 0, 0, 0)].push_back(x);
+    // Each side's vertices in cells of the gap's size: a query of the box
+    // [p - gap, p + gap] finds every vertex within the gap of p. The
+    // distance is exact up to the gap and more than the gap beyond it, all
+    // the cut compares.
+    const Eigen::Vector3d origin = centre - Eigen::Vector3d::Constant(reach + gap), g = Eigen::Vector3d::Constant(gap);
+    std::array<CellIndex, 2> cells{CellIndex(gap, origin), CellIndex(gap, origin)};
+    for (std::size_t s = 0; s < 2; ++s) {
+      for (std::size_t i = 0; i < bone[s].size(); ++i) cells[s].add(std::int32_t(i), bone[s][i], bone[s][i]);
+      cells[s].finish();
+    }
     const auto distance = [&](int side, const Eigen::Vector3d& p) {
       double d2 = std::numeric_limits<double>::infinity();
-      for (int dx = -1; dx <= 1; ++dx)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dz = -1; dz <= 1; ++dz) {
-            const auto found = cubes[std::size_t(side)].find(cube(p, dx, dy, dz));
-            if (found == cubes[std::size_t(side)].end()) continue;
-            for (const Eigen::Vector3d& x : found->second) d2 = std::min(d2, (x - p).squaredNorm());
-          }
+      cells[std::size_t(side)].forEachIn(p - g, p + g, [&](std::int32_t i) {
+        d2 = std::min(d2, (bone[std::size_t(side)][std::size_t(i)] - p).squaredNorm());
+      });
       return std::sqrt(d2);
     };
     std::vector<std::int32_t>& side = out.mesh.labels;
