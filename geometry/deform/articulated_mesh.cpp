@@ -680,12 +680,34 @@ CutReport cutBoneGaps(ArticulatedMesh& out, const skeleton::Skeleton& skeleton, 
       if (b.tag() == tag) return b.owner;
     return Part::None;
   };
-  // The vertices on the mesh's surface: a tet that touches it stays uncut,
-  // so the cut is a slit inside the tissue and the skin stays closed.
+  // The vertices on the skin: a tet that touches it stays uncut, so the cut
+  // is a slit inside the tissue and the skin stays closed. The skin is the
+  // mesh's boundary less the faces of the cuts before this one, whose two
+  // sides lie on each other (the copies of a cut vertex keep its place
+  // until the snapping after the cuts): a tet beside a sliding cut may be
+  // cut (the olecranon's tissue from the humerus' in its fossa).
   std::vector<std::uint8_t> surface(out.mesh.vertexCount(), 0);
-  if (options.boneGapKeepsSkin)
-    for (const auto& f : boundaryFaces(out.mesh.tets, out.mesh.vertexCount()))
-      for (const std::int32_t v : f) surface[std::size_t(v)] = 1;
+  if (options.boneGapKeepsSkin) {
+    const std::vector<std::array<std::int32_t, 3>> faces = boundaryFaces(out.mesh.tets, out.mesh.vertexCount());
+    using Key = std::array<double, 9>;
+    const auto key = [&](const std::array<std::int32_t, 3>& f) {
+      std::array<std::array<double, 3>, 3> p;
+      for (std::size_t k = 0; k < 3; ++k) {
+        const Eigen::Vector3d& x = out.mesh.positions[std::size_t(f[k])];
+        p[k] = {x.x(), x.y(), x.z()};
+      }
+      std::sort(p.begin(), p.end());
+      return Key{p[0][0], p[0][1], p[0][2], p[1][0], p[1][1], p[1][2], p[2][0], p[2][1], p[2][2]};
+    };
+    std::vector<std::pair<Key, std::size_t>> keys(faces.size());
+    for (std::size_t i = 0; i < faces.size(); ++i) keys[i] = {key(faces[i]), i};
+    std::sort(keys.begin(), keys.end());
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      const bool twin = (i > 0 && keys[i - 1].first == keys[i].first) || (i + 1 < keys.size() && keys[i + 1].first == keys[i].first);
+      if (!twin)
+        for (const std::int32_t v : faces[keys[i].second]) surface[std::size_t(v)] = 1;
+    }
+  }
   for (const JointId id : options.boneGapJoints) {
     const skeleton::Joint* joint = skeleton.joint(id);
     if (!joint) continue;

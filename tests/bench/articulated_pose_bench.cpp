@@ -11,7 +11,8 @@
 //
 // Options: --steps N (pose steps; default the run's, articulatedPoseSteps),
 // --bone-weight W,
-// --sliding-weight W (the sliding vertices' pull onto their bodies),
+// --sliding-weight W (the sliding vertices' pull onto their bodies), --sliding-release MM (not
+// pulled back from farther than MM),
 // --max-iterations N (SLIM iterations per step), --volume-weight L (lambda),
 // --direct-limit N (unknowns up to which CHOLMOD factorizes every
 // iteration), --scapulae (moving
@@ -158,7 +159,8 @@ void squeezedTets(const vox::ArticulatedMesh& mesh, const vox::skeleton::Skeleto
 }  // namespace
 
 // The mesh as raw arrays for numpy (np.fromfile): PREFIX.tets (int32 x4),
-// PREFIX.tags (int32), PREFIX.roles and PREFIX.parts (uint8 per vertex),
+// PREFIX.tags (int32), PREFIX.roles and PREFIX.parts (uint8 per vertex), PREFIX.bodies (int8 per
+// vertex: the body a sliding vertex stays on, else -1),
 // PREFIX.WHICH (float64 x3 per vertex: rest, stepN after the pose's step N, or posed positions).
 void dumpMesh(const std::string& prefix, const vox::ArticulatedMesh& mesh, std::span<const Eigen::Vector3d> positions,
               const std::string& which) {
@@ -173,6 +175,7 @@ void dumpMesh(const std::string& prefix, const vox::ArticulatedMesh& mesh, std::
   write("tags", mesh.mesh.labels.data(), mesh.mesh.labels.size() * sizeof(std::int32_t));
   write("roles", mesh.role.data(), mesh.role.size());
   write("parts", mesh.vertexPart.data(), mesh.vertexPart.size());
+  write("bodies", mesh.vertexBody.data(), mesh.vertexBody.size());
 }
 
 int main(int argc, char** argv) {
@@ -197,6 +200,7 @@ int main(int argc, char** argv) {
     else if (arg == "--steps") stepsGiven = std::stoi(value());
     else if (arg == "--bone-weight") poseOptions.boneWeight = std::stod(value());
     else if (arg == "--sliding-weight") poseOptions.slidingWeight = std::stod(value());
+    else if (arg == "--sliding-release") poseOptions.slidingReleaseMm = std::stod(value());
     else if (arg == "--max-iterations") poseOptions.solve.maxIterations = std::stoi(value());
     else if (arg == "--volume-weight") poseOptions.solve.volumeWeight = std::stod(value());
     else if (arg == "--direct-limit") poseOptions.solve.directSolveLimit = std::stoll(value());

@@ -6,6 +6,7 @@
 #include "geometry/deform/pose/joint_pose.h"
 #include "geometry/deform/prepared_state.h"
 #include "geometry/synth.h"
+#include "geometry/tri_mesh.h"
 
 #include <gtest/gtest.h>
 
@@ -15,6 +16,7 @@
 #include <cstdio>
 #include <functional>
 #include <limits>
+#include <map>
 #include <numbers>
 #include <set>
 #include <span>
@@ -866,27 +868,64 @@ TEST(ArticulatedPose, ALargeTurnTakesMoreSteps) {
 
 // How many of `split` (vertices of `cut`) lie where a vertex of `uncut`'s
 // surface lies: the same mesh before the cut, so the skin opened there.
-std::size_t splitOnTheSkin(const ArticulatedMesh& uncut, const ArticulatedMesh& cut, std::span<const std::int32_t> split) {
-  std::set<std::array<double, 3>> skin;
-  for (const auto& f : boundaryFaces(uncut.mesh.tets, uncut.mesh.vertexCount()))
-    for (const std::int32_t v : f) {
-      const Eigen::Vector3d& x = uncut.mesh.positions[std::size_t(v)];
-      skin.insert({x.x(), x.y(), x.z()});
+// The places of the vertices of `uncut`'s boundary faces: on the skin, or
+// on a cut's faces, where the face's centroid lies on another boundary face
+// (the cut's other side, which may be split where this one is not).
+std::set<std::array<double, 3>> boundaryPlaces(const ArticulatedMesh& uncut, bool skin) {
+  const std::vector<std::array<std::int32_t, 3>> faces = boundaryFaces(uncut.mesh.tets, uncut.mesh.vertexCount());
+  const auto& x = uncut.mesh.positions;
+  const double h = 8.0;
+  std::map<std::array<int, 3>, std::vector<std::size_t>> cells;
+  const auto cellOf = [h](const Eigen::Vector3d& p) {
+    return std::array<int, 3>{int(std::floor(p.x() / h)), int(std::floor(p.y() / h)), int(std::floor(p.z() / h))};
+  };
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    Eigen::Vector3d lo = x[std::size_t(faces[i][0])], hi = lo;
+    for (const std::int32_t v : faces[i]) {
+      lo = lo.cwiseMin(x[std::size_t(v)]);
+      hi = hi.cwiseMax(x[std::size_t(v)]);
     }
+    const std::array<int, 3> a = cellOf(lo), b = cellOf(hi);
+    for (int i0 = a[0]; i0 <= b[0]; ++i0)
+      for (int i1 = a[1]; i1 <= b[1]; ++i1)
+        for (int i2 = a[2]; i2 <= b[2]; ++i2) cells[{i0, i1, i2}].push_back(i);
+  }
+  std::set<std::array<double, 3>> places;
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    const Eigen::Vector3d c = (x[std::size_t(faces[i][0])] + x[std::size_t(faces[i][1])] + x[std::size_t(faces[i][2])]) / 3.0;
+    bool onAnother = false;
+    for (const std::size_t j : cells[cellOf(c)])
+      onAnother = onAnother || (j != i && (nearestPointOnTriangle(c, x[std::size_t(faces[j][0])], x[std::size_t(faces[j][1])],
+                                                                  x[std::size_t(faces[j][2])]) - c).norm() < 1e-9);
+    if (onAnother == skin) continue;
+    for (const std::int32_t v : faces[i]) places.insert({x[std::size_t(v)].x(), x[std::size_t(v)].y(), x[std::size_t(v)].z()});
+  }
+  return places;
+}
+
+// How many of `split` (vertices of `cut`) lie on `uncut`'s skin, or on its
+// cuts' faces.
+std::size_t splitOn(const ArticulatedMesh& uncut, const ArticulatedMesh& cut, std::span<const std::int32_t> split, bool skin) {
+  const std::set<std::array<double, 3>> places = boundaryPlaces(uncut, skin);
   std::size_t n = 0;
   for (const std::int32_t v : split) {
     const Eigen::Vector3d& x = cut.mesh.positions[std::size_t(v)];
-    n += skin.contains({x.x(), x.y(), x.z()});
+    n += places.contains({x.x(), x.y(), x.z()});
   }
   return n;
+}
+
+std::size_t splitOnTheSkin(const ArticulatedMesh& uncut, const ArticulatedMesh& cut, std::span<const std::int32_t> split) {
+  return splitOn(uncut, cut, split, true);
 }
 
 // A wrist turned with the hand's bones rigid beside the forearm's carries
 // the carpals across the radius' end through tissue a tet or two thick.
 // The bone-gap cut parts that tissue between the two bones, so each side
 // moves with its own bone and the tissue between them is squeezed less. By
-// default the tets that touch the surface stay uncut: the cut is a slit
-// and the skin stays closed (no vertex of the skin split).
+// default the tets that touch the skin stay uncut: the cut is a slit and
+// the skin stays closed (no vertex of the skin split); without that rule
+// the cut takes more faces.
 TEST(ArticulatedPose, ABoneGapCutLetsTheCarpalsPassTheRadius) {
   const Figure& f = figure();
   const double spacing = f.grid.geometry().spacing.maxCoeff();
@@ -894,6 +933,7 @@ TEST(ArticulatedPose, ABoneGapCutLetsTheCarpalsPassTheRadius) {
   options.wholePartBoneClearanceMm = 0.0;
   options.wholePartOwnBoneClearanceMm = 0.0;
   options.boneGapMm = 0.0;
+  options.boneGapJoints = {JointId::RightWrist, JointId::LeftWrist};
   const ArticulatedMesh uncut = buildArticulatedMesh(f.grid, f.organs, f.skeleton, options);
   options.boneGapMm = 3.0 * spacing;
   options.boneGapReachMm = 6.0 * spacing;
@@ -907,7 +947,6 @@ TEST(ArticulatedPose, ABoneGapCutLetsTheCarpalsPassTheRadius) {
   EXPECT_NO_THROW(cut.mesh.validate("bone-gap cut mesh"));
   EXPECT_NO_THROW(slit.mesh.validate("bone-gap slit mesh"));
   EXPECT_EQ(splitOnTheSkin(uncut, slit, slit.boneGapCut.splitVertices), 0u);
-  EXPECT_GT(splitOnTheSkin(uncut, cut, cut.boneGapCut.splitVertices), 0u);
   // Every vertex split lies about a wrist, within the cut's reach.
   const Eigen::Vector3d right = f.skeleton.joint(JointId::RightWrist)->centre, left = f.skeleton.joint(JointId::LeftWrist)->centre;
   for (const std::int32_t v : cut.boneGapCut.splitVertices) {
@@ -927,6 +966,38 @@ TEST(ArticulatedPose, ABoneGapCutLetsTheCarpalsPassTheRadius) {
   EXPECT_TRUE(after.reachedTargets);
   EXPECT_GT(after.minRelativeVolume, 2.0 * before.minRelativeVolume);
   EXPECT_LE(after.invertedTets, before.invertedTets);
+}
+
+// At the elbows the bone-gap cut runs beside the elbow's sliding cut (the
+// olecranon's tissue parted from the humerus' in its fossa): the tets that
+// touch the sliding cut's faces may be cut, those that touch the skin may
+// not. By default both wrists and elbows are cut.
+TEST(ArticulatedMesh, TheBoneGapCutAtTheElbowsRunsBesideTheSlidingCutNotToTheSkin) {
+  const Figure& f = figure();
+  const double spacing = f.grid.geometry().spacing.maxCoeff();
+  ArticulatedMeshOptions options;
+  const std::vector<JointId> joints = options.boneGapJoints;
+  for (const JointId j : {JointId::RightElbow, JointId::LeftElbow, JointId::RightWrist, JointId::LeftWrist})
+    EXPECT_NE(std::find(joints.begin(), joints.end(), j), joints.end()) << skeleton::jointKind(j).name;
+  options.boneGapMm = 0.0;
+  const ArticulatedMesh uncut = buildArticulatedMesh(f.grid, f.organs, f.skeleton, options);
+  options.boneGapMm = 3.0 * spacing;
+  options.boneGapReachMm = 6.0 * spacing;
+  options.boneGapJoints = {JointId::RightElbow, JointId::LeftElbow};
+  const ArticulatedMesh slit = buildArticulatedMesh(f.grid, f.organs, f.skeleton, options);
+  EXPECT_NO_THROW(slit.mesh.validate("bone-gap slit mesh at the elbows"));
+  const std::size_t onSkin = splitOn(uncut, slit, slit.boneGapCut.splitVertices, true);
+  const std::size_t onCuts = splitOn(uncut, slit, slit.boneGapCut.splitVertices, false);
+  std::printf("bone-gap cut at the elbows: %zu faces, %zu vertices split, %zu of them on the cuts' faces, %zu on the skin\n",
+              slit.boneGapCut.cutFaces, slit.boneGapCut.splitVertices.size(), onCuts, onSkin);
+  EXPECT_GT(slit.boneGapCut.cutFaces, 0u);
+  EXPECT_EQ(onSkin, 0u);
+  EXPECT_GT(onCuts, 0u);
+  const Eigen::Vector3d right = f.skeleton.joint(JointId::RightElbow)->centre, left = f.skeleton.joint(JointId::LeftElbow)->centre;
+  for (const std::int32_t v : slit.boneGapCut.splitVertices) {
+    const Eigen::Vector3d& x = slit.mesh.positions[std::size_t(v)];
+    EXPECT_LE(std::min((x - right).norm(), (x - left).norm()), options.boneGapReachMm + spacing) << v;
+  }
 }
 
 }  // namespace
