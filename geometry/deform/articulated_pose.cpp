@@ -281,10 +281,7 @@ void ArticulatedPoser::targets(const InjectiveSolver& solver, std::span<const Ei
     const auto v = std::size_t(solved_[std::size_t(i)]);
     const auto b = std::size_t(mesh_.vertexBody[v]);
     const skeleton::Part owner = mesh_.bodies[b].owner;
-    const Eigen::Vector3d local = now[std::size_t(owner)].inverse() * current[std::size_t(i)];
-    const Eigen::Vector3d onBody = slideOnBody(mesh_, b, local, rest[v]);
-    const bool released = options_.slidingReleaseMm > 0.0 && (onBody - local).norm() > options_.slidingReleaseMm;
-    positions_[v] = partMotionAt(motions, owner, 1.0) * (released ? local : onBody);
+    positions_[v] = partMotionAt(motions, owner, 1.0) * slideOnBody(mesh_, b, now[std::size_t(owner)].inverse() * current[std::size_t(i)], rest[v]);
   }
   for (std::size_t s = 0; s < sliding_.size(); ++s) slidingTargets_[s] = positions_[std::size_t(solved_[std::size_t(sliding_[s])])];
 }
@@ -473,9 +470,7 @@ std::size_t ArticulatedPoser::freeWithin(std::span<const double> dist, double ra
     if (!movable[v] || dist[v] > radius) continue;
     free[v] = 1;
     ++moved;
-    if (mesh_.role[v] == VertexRole::Sliding &&
-        (options_.slidingReleaseMm <= 0.0 || (onBodies[v] - positions_[v]).norm() <= options_.slidingReleaseMm))
-      anchors.push_back({std::int32_t(v), onBodies[v], options_.slidingWeight});
+    if (mesh_.role[v] == VertexRole::Sliding) anchors.push_back({std::int32_t(v), onBodies[v], options_.slidingWeight});
   }
   return moved;
 }

@@ -53,12 +53,6 @@ struct ArticulatedPoseOptions {
   // within blendMm of it too.
   double blendMm = 40.0;
   double slidingWeight = 20.0;  // soft pull of a sliding vertex onto its body (w_k of the solve)
-  // A sliding vertex the tissue has carried farther than this from its
-  // body's surface (mm, in the owner's frame) is not pulled back: it left
-  // the surface with the bone it lies on (the olecranon out of the
-  // humerus' fossa as the elbow flexes), and a pull across the gap folds
-  // the tissue over that bone. <= 0: always pulled.
-  double slidingReleaseMm = 0.0;
   // The steps hold the bones by stiff soft targets of this weight (w_k); a
   // last step puts them on their motions exactly (hard constraints).
   double boneWeight = 1e4;

@@ -11,8 +11,7 @@
 //
 // Options: --steps N (pose steps; default the run's, articulatedPoseSteps),
 // --bone-weight W,
-// --sliding-weight W (the sliding vertices' pull onto their bodies), --sliding-release MM (not
-// pulled back from farther than MM),
+// --sliding-weight W (the sliding vertices' pull onto their bodies),
 // --max-iterations N (SLIM iterations per step), --volume-weight L (lambda),
 // --direct-limit N (unknowns up to which CHOLMOD factorizes every
 // iteration), --scapulae (moving
@@ -200,7 +199,6 @@ int main(int argc, char** argv) {
     else if (arg == "--steps") stepsGiven = std::stoi(value());
     else if (arg == "--bone-weight") poseOptions.boneWeight = std::stod(value());
     else if (arg == "--sliding-weight") poseOptions.slidingWeight = std::stod(value());
-    else if (arg == "--sliding-release") poseOptions.slidingReleaseMm = std::stod(value());
     else if (arg == "--max-iterations") poseOptions.solve.maxIterations = std::stoi(value());
     else if (arg == "--volume-weight") poseOptions.solve.volumeWeight = std::stod(value());
     else if (arg == "--direct-limit") poseOptions.solve.directSolveLimit = std::stoll(value());
