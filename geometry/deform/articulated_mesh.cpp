@@ -665,6 +665,37 @@ CutReport cutLimbs(ArticulatedMesh& out, const skeleton::Skeleton& skeleton, dou
   return total;
 }
 
+// Per tet of `mesh`: whether its piece of the mesh (tets joined through
+// faces) holds no tet of a bone or a body (`tags`) and no vertex of a
+// sliding cut's outer side (`sliding`): tissue that nothing would place.
+std::vector<std::uint8_t> tissueOnly(const TetMesh& mesh, std::span<const std::int32_t> tags, std::span<const std::uint8_t> sliding) {
+  const std::vector<std::array<std::int32_t, 4>> neighbours = faceNeighbors(mesh, "articulated transfer mesh");
+  std::vector<std::uint8_t> seen(mesh.tetCount(), 0), alone(mesh.tetCount(), 0);
+  std::vector<std::int32_t> stack, members;
+  for (std::size_t seed = 0; seed < mesh.tetCount(); ++seed) {
+    if (seen[seed]) continue;
+    bool held = false;
+    members.clear();
+    stack.assign(1, std::int32_t(seed));
+    seen[seed] = 1;
+    while (!stack.empty()) {
+      const std::int32_t t = stack.back();
+      stack.pop_back();
+      members.push_back(t);
+      held = held || tags[std::size_t(t)] != kSoftTissueTag;
+      for (const std::int32_t v : mesh.tets[std::size_t(t)]) held = held || (std::size_t(v) < sliding.size() && sliding[std::size_t(v)]);
+      for (const std::int32_t n : neighbours[std::size_t(t)])
+        if (n >= 0 && !seen[std::size_t(n)]) {
+          seen[std::size_t(n)] = 1;
+          stack.push_back(n);
+        }
+    }
+    if (!held)
+      for (const std::int32_t t : members) alone[std::size_t(t)] = 1;
+  }
+  return alone;
+}
+
 // The bone-gap cuts (ArticulatedMeshOptions::boneGapJoints): tets about
 // each joint relabelled by side for the cut (the parent's bone and the
 // tissue nearer it, the child's and the tissue nearer it), their tags
@@ -680,14 +711,16 @@ CutReport cutBoneGaps(ArticulatedMesh& out, const skeleton::Skeleton& skeleton, 
       if (b.tag() == tag) return b.owner;
     return Part::None;
   };
-  // The vertices on the skin: a tet that touches it stays uncut, so the cut
-  // is a slit inside the tissue and the skin stays closed. The skin is the
-  // mesh's boundary less the faces of the cuts before this one, whose two
-  // sides lie on each other (the copies of a cut vertex keep its place
-  // until the snapping after the cuts): a tet beside a sliding cut may be
-  // cut (the olecranon's tissue from the humerus' in its fossa).
+  // The vertices on the mesh's surface: a tet that touches it stays uncut,
+  // so the cut is a slit inside the tissue and the skin stays closed. With
+  // boneGapBesideCuts the skin alone: the boundary less the faces of the
+  // cuts before this one, whose two sides lie on each other (the copies of
+  // a cut vertex keep its place until the snapping after the cuts).
   std::vector<std::uint8_t> surface(out.mesh.vertexCount(), 0);
-  if (options.boneGapKeepsSkin) {
+  if (options.boneGapKeepsSkin && !options.boneGapBesideCuts) {
+    for (const auto& f : boundaryFaces(out.mesh.tets, out.mesh.vertexCount()))
+      for (const std::int32_t v : f) surface[std::size_t(v)] = 1;
+  } else if (options.boneGapKeepsSkin) {
     const std::vector<std::array<std::int32_t, 3>> faces = boundaryFaces(out.mesh.tets, out.mesh.vertexCount());
     using Key = std::array<double, 9>;
     const auto key = [&](const std::array<std::int32_t, 3>& f) {
@@ -771,7 +804,46 @@ CutReport cutBoneGaps(ArticulatedMesh& out, const skeleton::Skeleton& skeleton, 
     sides.sideA = [](std::int32_t l) { return l == 1; };
     sides.sideB = [](std::int32_t l) { return l == 2; };
     sides.inRegion = [&](const Eigen::Vector3d& p) { return (p - centre).norm() <= reach && distance(0, p) + distance(1, p) <= gap; };
-    addCut(total, cutTransferMesh(out.mesh, sides));
+    if (!options.boneGapBesideCuts) {
+      addCut(total, cutTransferMesh(out.mesh, sides));
+      out.mesh.labels = tags;
+      surface.resize(out.mesh.vertexCount(), 0);
+      continue;
+    }
+    // Beside the other cuts this one may close a piece of tissue off from
+    // every bone, body and sliding surface (nothing would place its
+    // vertices): its tets stay out of the cut, and those of the cut that
+    // share a vertex with it (a piece may be cut off where the cut splits a
+    // vertex that its tets share with the cut's), and the cut is made again.
+    const TetMesh uncut = out.mesh;
+    std::vector<std::uint8_t> sliding(uncut.vertexCount(), 0);
+    for (const CutReport& c : out.cuts)
+      for (const std::int32_t v : c.splitVertices) sliding[std::size_t(v)] = 1;
+    const std::vector<std::uint8_t> aloneBefore = tissueOnly(uncut, tags, sliding);
+    for (;;) {
+      const CutReport report = cutTransferMesh(out.mesh, sides);
+      const std::vector<std::uint8_t> alone = tissueOnly(out.mesh, tags, sliding);
+      std::vector<std::uint8_t> near(uncut.vertexCount(), 0);
+      bool cutOff = false;
+      for (std::size_t t = 0; t < alone.size(); ++t)
+        if (alone[t] && !aloneBefore[t]) {
+          cutOff = true;
+          for (const std::int32_t v : uncut.tets[t]) near[std::size_t(v)] = 1;
+        }
+      std::vector<std::int32_t> labels = out.mesh.labels;
+      bool changed = false;
+      for (std::size_t t = 0; cutOff && t < labels.size(); ++t)
+        if (labels[t] != 0 && std::any_of(uncut.tets[t].begin(), uncut.tets[t].end(), [&](std::int32_t v) { return near[std::size_t(v)] != 0; })) {
+          labels[t] = 0;
+          changed = true;
+        }
+      if (!changed) {  // none cut off, or nothing of the cut beside it
+        addCut(total, report);
+        break;
+      }
+      out.mesh = uncut;
+      out.mesh.labels = std::move(labels);
+    }
     out.mesh.labels = tags;
     // The copies the cut added lie inside the tissue, off the surface.
     surface.resize(out.mesh.vertexCount(), 0);

@@ -219,21 +219,22 @@ struct ArticulatedMeshOptions {
   // carpals pass within a millimetre of the radius' end, across tissue a
   // tet or two thick that no placement of its vertices keeps positive
   // (docs/BENCHMARKS.md, "Where the AF phone call's wrist folds"; the cut's
-  // figures: "The bone-gap cut at the wrists, by default"). At the elbow
-  // the olecranon lies in the humerus' fossa, in the attachment of the
-  // elbow's body, joined to the humerus by tissue a few millimetres thick
-  // that the flexed elbow stretches thirty-fold and folds over the
-  // olecranon ("The bone-gap cut at the elbows"). 0: none (deform
-  // --bone-gap 0).
-  std::vector<skeleton::JointId> boneGapJoints = {skeleton::JointId::RightWrist, skeleton::JointId::LeftWrist,
-                                                  skeleton::JointId::RightElbow, skeleton::JointId::LeftElbow};
+  // figures: "The bone-gap cut at the wrists, by default"). The elbows and
+  // hips with boneGapBesideCuts: docs/BENCHMARKS.md, "The bone-gap cut at
+  // the elbows and the hips". 0: none (deform --bone-gap 0).
+  std::vector<skeleton::JointId> boneGapJoints = {skeleton::JointId::RightWrist, skeleton::JointId::LeftWrist};
   double boneGapMm = 10.0;
   double boneGapReachMm = 40.0;
-  // The tets that touch the skin (the mesh's surface less the faces of the
-  // cuts before) are left out of the bone-gap cut: a slit inside the
-  // tissue, the skin closed over it; a tet beside a sliding or limb cut
-  // may be cut. false: the cut may reach the skin.
+  // The tets that touch the mesh's surface (the skin, and the faces of the
+  // cuts before it) are left out of the bone-gap cut: a slit inside the
+  // tissue, the skin closed over it. false: the cut may reach the skin.
   bool boneGapKeepsSkin = true;
+  // With boneGapKeepsSkin: the skin alone is kept, not the faces of the
+  // cuts before, so a tet beside a sliding or limb cut may be cut (the
+  // olecranon's tissue from the humerus' in its fossa); where that would
+  // close a piece of tissue off from every bone, body and sliding surface,
+  // that piece's tets and the cut's beside it stay uncut.
+  bool boneGapBesideCuts = false;
   // The mesher's options; the articulated mesh rebuilds the mesh for every
   // uncovered centre (no caps): the hard postures' solves were measured on
   // that mesh, and a mesh with caps instead changes them (the seated pose

@@ -478,9 +478,7 @@ std::string articulatedMeshOptionsKey(const ArticulatedMeshOptions& o) {
   k += " gaps";
   for (const skeleton::JointId j : o.boneGapJoints) k += " " + std::to_string(int(j));
   for (const bool b : {o.wristBodies, o.movingScapulae, o.movingPatellae, o.boneGapKeepsSkin}) k += b ? " 1" : " 0";
-  // The bone-gap cut keeps the skin alone uncut, not the faces of the cuts
-  // before it (a state of the rule before has another key).
-  if (o.boneGapKeepsSkin) k += " skin-only";
+  if (o.boneGapBesideCuts) k += " beside-cuts";
   k += " legs " + std::to_string(int(o.legTrunkCut));
   return k + " mesh " + transferMeshOptionsKey(o.transferMesh);
 }

@@ -76,7 +76,7 @@ double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>
 int usage() {
   std::fprintf(stderr,
                "usage: articulated_pose_bench GRID ORGANS POSE [--steps N] [--bone-weight W] [--sliding-weight W] [--max-iterations N] "
-               "[--volume-weight L] [--direct-limit N] [--scapulae] [--wrist-bodies] [--bone-gap MM] [--bone-gap-reach MM] [--bone-gap-joints J,J...] [--bone-gap-opens-skin] [--leg-trunk-cut none|front|all] [--leg-trunk-behind MM] [--no-tissue-bones-held] [--yielding-shell V] [--yielding-hips] [--squeezed F] [--dump PREFIX] [--mesh-only] "
+               "[--volume-weight L] [--direct-limit N] [--scapulae] [--wrist-bodies] [--bone-gap MM] [--bone-gap-reach MM] [--bone-gap-joints J,J...] [--bone-gap-opens-skin] [--bone-gap-beside-cuts] [--leg-trunk-cut none|front|all] [--leg-trunk-behind MM] [--no-tissue-bones-held] [--yielding-shell V] [--yielding-hips] [--squeezed F] [--dump PREFIX] [--mesh-only] "
                "[--knee-forward MM] [--trunk-reach MM] [--pelvis-reach MM] [--joint-clearance MM] [--still-beyond MM] [--hold-unmoved-bones] [--no-untangle] [--contact-rounds N] [--no-contact-sides] [--contact-radius MM] [--contact-weight W] [--owner-shell V] [--attachment-angle DEG] [--elbow-attachment-angle DEG] [--untangle-radius MM] [--whole-part-bone-clearance MM] [--whole-part-own-bone-clearance MM]\n"
                "       articulated_pose_bench --figure POSE [options]\n");
   return 2;
@@ -215,6 +215,7 @@ int main(int argc, char** argv) {
     else if (arg == "--bone-gap") meshOptions.boneGapMm = std::stod(value());
     else if (arg == "--bone-gap-reach") meshOptions.boneGapReachMm = std::stod(value());
     else if (arg == "--bone-gap-opens-skin") meshOptions.boneGapKeepsSkin = false;
+    else if (arg == "--bone-gap-beside-cuts") meshOptions.boneGapBesideCuts = true;
     else if (arg == "--bone-gap-joints") {
       meshOptions.boneGapJoints.clear();
       std::stringstream names(value());

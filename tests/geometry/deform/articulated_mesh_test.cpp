@@ -968,24 +968,60 @@ TEST(ArticulatedPose, ABoneGapCutLetsTheCarpalsPassTheRadius) {
   EXPECT_LE(after.invertedTets, before.invertedTets);
 }
 
-// At the elbows the bone-gap cut runs beside the elbow's sliding cut (the
-// olecranon's tissue parted from the humerus' in its fossa): the tets that
-// touch the sliding cut's faces may be cut, those that touch the skin may
-// not. By default both wrists and elbows are cut.
+// How many pieces of the mesh (tets joined through faces) hold no tet of a
+// bone or a body and no rigid or sliding vertex: tissue that nothing places.
+std::size_t tissueOnlyPieces(const ArticulatedMesh& m) {
+  const std::vector<std::array<std::int32_t, 4>> neighbours = faceNeighbors(m.mesh);
+  std::vector<std::uint8_t> seen(m.mesh.tetCount(), 0);
+  std::size_t pieces = 0;
+  for (std::size_t seed = 0; seed < m.mesh.tetCount(); ++seed) {
+    if (seen[seed]) continue;
+    bool held = false;
+    std::vector<std::int32_t> stack = {std::int32_t(seed)};
+    seen[seed] = 1;
+    while (!stack.empty()) {
+      const std::int32_t t = stack.back();
+      stack.pop_back();
+      held = held || m.mesh.labels[std::size_t(t)] != kSoftTissueTag;
+      for (const std::int32_t v : m.mesh.tets[std::size_t(t)]) held = held || m.role[std::size_t(v)] != VertexRole::Free;
+      for (const std::int32_t n : neighbours[std::size_t(t)])
+        if (n >= 0 && !seen[std::size_t(n)]) {
+          seen[std::size_t(n)] = 1;
+          stack.push_back(n);
+        }
+    }
+    pieces += !held;
+  }
+  return pieces;
+}
+
+// With boneGapBesideCuts the bone-gap cut at the elbows runs beside the
+// elbow's sliding cut (the olecranon's tissue parted from the humerus' in
+// its fossa): the tets that touch the sliding cut's faces may be cut, those
+// that touch the skin may not, and no piece of tissue is cut off from every
+// bone, body and sliding surface. By default the wrists alone are cut.
 TEST(ArticulatedMesh, TheBoneGapCutAtTheElbowsRunsBesideTheSlidingCutNotToTheSkin) {
   const Figure& f = figure();
   const double spacing = f.grid.geometry().spacing.maxCoeff();
   ArticulatedMeshOptions options;
-  const std::vector<JointId> joints = options.boneGapJoints;
-  for (const JointId j : {JointId::RightElbow, JointId::LeftElbow, JointId::RightWrist, JointId::LeftWrist})
-    EXPECT_NE(std::find(joints.begin(), joints.end(), j), joints.end()) << skeleton::jointKind(j).name;
+  EXPECT_EQ(options.boneGapJoints, (std::vector<JointId>{JointId::RightWrist, JointId::LeftWrist}));
+  EXPECT_FALSE(options.boneGapBesideCuts);
   options.boneGapMm = 0.0;
   const ArticulatedMesh uncut = buildArticulatedMesh(f.grid, f.organs, f.skeleton, options);
   options.boneGapMm = 3.0 * spacing;
   options.boneGapReachMm = 6.0 * spacing;
   options.boneGapJoints = {JointId::RightElbow, JointId::LeftElbow};
+  options.boneGapBesideCuts = true;
   const ArticulatedMesh slit = buildArticulatedMesh(f.grid, f.organs, f.skeleton, options);
   EXPECT_NO_THROW(slit.mesh.validate("bone-gap slit mesh at the elbows"));
+  // Beside the other cuts, the bone-gap cut cuts no piece of tissue off
+  // from every bone, body and sliding surface (at the elbows, and with the
+  // wrists and hips too).
+  EXPECT_EQ(tissueOnlyPieces(uncut), 0u);
+  EXPECT_EQ(tissueOnlyPieces(slit), 0u);
+  ArticulatedMeshOptions all = options;
+  all.boneGapJoints = {JointId::RightWrist, JointId::LeftWrist, JointId::RightElbow, JointId::LeftElbow, JointId::RightHip, JointId::LeftHip};
+  EXPECT_EQ(tissueOnlyPieces(buildArticulatedMesh(f.grid, f.organs, f.skeleton, all)), 0u);
   const std::size_t onSkin = splitOn(uncut, slit, slit.boneGapCut.splitVertices, true);
   const std::size_t onCuts = splitOn(uncut, slit, slit.boneGapCut.splitVertices, false);
   std::printf("bone-gap cut at the elbows: %zu faces, %zu vertices split, %zu of them on the cuts' faces, %zu on the skin\n",
