@@ -4,6 +4,7 @@
 #include "geometry/cell_index.h"
 #include "geometry/deform/solve/contact.h"
 #include "geometry/deform/solve/injective_solve.h"
+#include "geometry/disjoint_sets.h"
 #include "geometry/distance_transform.h"
 #include "geometry/error.h"
 #include "geometry/raster/lattice_tets.h"
@@ -670,30 +671,51 @@ CutReport cutLimbs(ArticulatedMesh& out, const skeleton::Skeleton& skeleton, dou
 // sliding cut's outer side (`sliding`): tissue that nothing would place.
 std::vector<std::uint8_t> tissueOnly(const TetMesh& mesh, std::span<const std::int32_t> tags, std::span<const std::uint8_t> sliding) {
   const std::vector<std::array<std::int32_t, 4>> neighbours = faceNeighbors(mesh, "articulated transfer mesh");
-  std::vector<std::uint8_t> seen(mesh.tetCount(), 0), alone(mesh.tetCount(), 0);
-  std::vector<std::int32_t> stack, members;
-  for (std::size_t seed = 0; seed < mesh.tetCount(); ++seed) {
-    if (seen[seed]) continue;
-    bool held = false;
-    members.clear();
-    stack.assign(1, std::int32_t(seed));
-    seen[seed] = 1;
-    while (!stack.empty()) {
-      const std::int32_t t = stack.back();
-      stack.pop_back();
-      members.push_back(t);
-      held = held || tags[std::size_t(t)] != kSoftTissueTag;
-      for (const std::int32_t v : mesh.tets[std::size_t(t)]) held = held || (std::size_t(v) < sliding.size() && sliding[std::size_t(v)]);
-      for (const std::int32_t n : neighbours[std::size_t(t)])
-        if (n >= 0 && !seen[std::size_t(n)]) {
-          seen[std::size_t(n)] = 1;
-          stack.push_back(n);
-        }
-    }
-    if (!held)
-      for (const std::int32_t t : members) alone[std::size_t(t)] = 1;
+  DisjointSets pieces(mesh.tetCount());
+  for (std::size_t t = 0; t < mesh.tetCount(); ++t)
+    for (const std::int32_t n : neighbours[t])
+      if (n >= 0) pieces.unite(std::int32_t(t), n);
+  const std::vector<std::int32_t> piece = pieces.representatives();
+  std::vector<std::uint8_t> held(mesh.tetCount(), 0), alone(mesh.tetCount(), 0);
+  for (std::size_t t = 0; t < mesh.tetCount(); ++t) {
+    bool h = tags[t] != kSoftTissueTag;
+    for (const std::int32_t v : mesh.tets[t]) h = h || (std::size_t(v) < sliding.size() && sliding[std::size_t(v)]);
+    if (h) held[std::size_t(piece[t])] = 1;
   }
+  for (std::size_t t = 0; t < mesh.tetCount(); ++t) alone[t] = !held[std::size_t(piece[t])];
   return alone;
+}
+
+// One joint's bone-gap cut (boneGapBesideCuts) that closes no piece of
+// tissue off from every bone, body and sliding surface (nothing would place
+// its vertices): such a piece's tets stay out of the cut, and those of the
+// cut that share a vertex with it (a piece may be cut off where the cut
+// splits a vertex that its tets share with the cut's), and the cut is made
+// again. mesh.labels holds the cut's sides.
+CutReport cutKeepingTissueHeld(ArticulatedMesh& out, const CutSides& sides, std::span<const std::int32_t> tags) {
+  const TetMesh uncut = out.mesh;
+  std::vector<std::uint8_t> sliding(uncut.vertexCount(), 0);
+  for (const CutReport& c : out.cuts)
+    for (const std::int32_t v : c.splitVertices) sliding[std::size_t(v)] = 1;
+  const std::vector<std::uint8_t> aloneBefore = tissueOnly(uncut, tags, sliding);
+  for (;;) {
+    const CutReport report = cutTransferMesh(out.mesh, sides);
+    const std::vector<std::uint8_t> alone = tissueOnly(out.mesh, tags, sliding);
+    std::vector<std::uint8_t> near(uncut.vertexCount(), 0);
+    for (std::size_t t = 0; t < alone.size(); ++t)
+      if (alone[t] && !aloneBefore[t])
+        for (const std::int32_t v : uncut.tets[t]) near[std::size_t(v)] = 1;
+    std::vector<std::int32_t> labels = out.mesh.labels;
+    bool changed = false;
+    for (std::size_t t = 0; t < labels.size(); ++t)
+      if (labels[t] != 0 && std::any_of(uncut.tets[t].begin(), uncut.tets[t].end(), [&](std::int32_t v) { return near[std::size_t(v)] != 0; })) {
+        labels[t] = 0;
+        changed = true;
+      }
+    if (!changed) return report;  // none cut off, or nothing of the cut beside it
+    out.mesh = uncut;
+    out.mesh.labels = std::move(labels);
+  }
 }
 
 // The bone-gap cuts (ArticulatedMeshOptions::boneGapJoints): tets about
@@ -804,46 +826,7 @@ CutReport cutBoneGaps(ArticulatedMesh& out, const skeleton::Skeleton& skeleton, 
     sides.sideA = [](std::int32_t l) { return l == 1; };
     sides.sideB = [](std::int32_t l) { return l == 2; };
     sides.inRegion = [&](const Eigen::Vector3d& p) { return (p - centre).norm() <= reach && distance(0, p) + distance(1, p) <= gap; };
-    if (!options.boneGapBesideCuts) {
-      addCut(total, cutTransferMesh(out.mesh, sides));
-      out.mesh.labels = tags;
-      surface.resize(out.mesh.vertexCount(), 0);
-      continue;
-    }
-    // Beside the other cuts this one may close a piece of tissue off from
-    // every bone, body and sliding surface (nothing would place its
-    // vertices): its tets stay out of the cut, and those of the cut that
-    // share a vertex with it (a piece may be cut off where the cut splits a
-    // vertex that its tets share with the cut's), and the cut is made again.
-    const TetMesh uncut = out.mesh;
-    std::vector<std::uint8_t> sliding(uncut.vertexCount(), 0);
-    for (const CutReport& c : out.cuts)
-      for (const std::int32_t v : c.splitVertices) sliding[std::size_t(v)] = 1;
-    const std::vector<std::uint8_t> aloneBefore = tissueOnly(uncut, tags, sliding);
-    for (;;) {
-      const CutReport report = cutTransferMesh(out.mesh, sides);
-      const std::vector<std::uint8_t> alone = tissueOnly(out.mesh, tags, sliding);
-      std::vector<std::uint8_t> near(uncut.vertexCount(), 0);
-      bool cutOff = false;
-      for (std::size_t t = 0; t < alone.size(); ++t)
-        if (alone[t] && !aloneBefore[t]) {
-          cutOff = true;
-          for (const std::int32_t v : uncut.tets[t]) near[std::size_t(v)] = 1;
-        }
-      std::vector<std::int32_t> labels = out.mesh.labels;
-      bool changed = false;
-      for (std::size_t t = 0; cutOff && t < labels.size(); ++t)
-        if (labels[t] != 0 && std::any_of(uncut.tets[t].begin(), uncut.tets[t].end(), [&](std::int32_t v) { return near[std::size_t(v)] != 0; })) {
-          labels[t] = 0;
-          changed = true;
-        }
-      if (!changed) {  // none cut off, or nothing of the cut beside it
-        addCut(total, report);
-        break;
-      }
-      out.mesh = uncut;
-      out.mesh.labels = std::move(labels);
-    }
+    addCut(total, options.boneGapBesideCuts ? cutKeepingTissueHeld(out, sides, tags) : cutTransferMesh(out.mesh, sides));
     out.mesh.labels = tags;
     // The copies the cut added lie inside the tissue, off the surface.
     surface.resize(out.mesh.vertexCount(), 0);
