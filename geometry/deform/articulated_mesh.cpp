@@ -291,8 +291,15 @@ namespace {
 // The patella's motion (segmentMotions): in the thigh's rest frame it
 // turns about the knee's axis by psi, between none and the lower leg's
 // turn, at its rest height above the femur's profile there, the psi that
-// keeps its ligament's length (its centre to the tibia's nearest rigid
-// vertex below the knee's centre) best.
+// keeps its ligament's length (its apex to the tibial tuberosity) best
+// and the patella at least half its rest clearance from the lower leg's
+// bone: the ligament's length alone varies by a millimetre or two over the
+// last quarter of the turn, and the psi that fits it to a tenth turned the
+// AM's seated patella with its tibia, onto the tibial plateau's front
+// (1.3 mm from it, 15.5 mm at rest) across the fat pad between them.
+constexpr double kPatellaLegReachMm = 150.0;  // the lower leg's bone this near the knee's centre
+constexpr double kPatellaCellMm = 8.0;
+
 Eigen::Isometry3d patellaMotion(const skeleton::Joint& joint, const ArticulatedMesh& mesh, std::span<const Eigen::Isometry3d> motions,
                                 Part thighPart, Part legPart, int patella) {
   const Eigen::Isometry3d thigh = motions[std::size_t(thighPart)], leg = motions[std::size_t(legPart)];
@@ -340,6 +347,42 @@ Eigen::Isometry3d patellaMotion(const skeleton::Joint& joint, const ArticulatedM
   if (!std::isfinite(front)) return leg;
   const double ligament = (apex - tibia).norm();
   const Eigen::Vector3d tibiaNow = rel * tibia;
+  // The lower leg's bone about the knee, at rest and turned (the thigh's
+  // frame), in cells: the patella's clearance from it.
+  std::vector<Eigen::Vector3d> legRest, legNow;
+  for (std::size_t v = 0; v < rest.size(); ++v)
+    if (mesh.role[v] == VertexRole::Rigid && mesh.vertexPart[v] == legPart && (rest[v] - c).norm() < kPatellaLegReachMm) {
+      legRest.push_back(rest[v]);
+      legNow.push_back(rel * rest[v]);
+    }
+  const auto clearance = [](const std::vector<Eigen::Vector3d>& from, const std::vector<Eigen::Vector3d>& to, const CellIndex& cells,
+                            double cap) {
+    double d2 = cap * cap;
+    const Eigen::Vector3d box = Eigen::Vector3d::Constant(cap);
+    for (const Eigen::Vector3d& p : from)
+      cells.forEachIn(p - box, p + box, [&](std::int32_t i) { d2 = std::min(d2, (to[std::size_t(i)] - p).squaredNorm()); });
+    return std::sqrt(d2);
+  };
+  const auto cellsOf = [](const std::vector<Eigen::Vector3d>& points) {
+    Eigen::Vector3d lo = Eigen::Vector3d::Zero();
+    if (!points.empty()) {
+      lo = points.front();
+      for (const Eigen::Vector3d& p : points) lo = lo.cwiseMin(p);
+    }
+    CellIndex cells(kPatellaCellMm, lo);
+    for (std::size_t i = 0; i < points.size(); ++i) cells.add(std::int32_t(i), points[i], points[i]);
+    cells.finish();
+    return cells;
+  };
+  std::vector<Eigen::Vector3d> patellaRest;
+  for (std::size_t v = 0; v < rest.size(); ++v)
+    if (mesh.role[v] == VertexRole::Rigid && int(mesh.vertexPart[v]) == patella) patellaRest.push_back(rest[v]);
+  const CellIndex nowCells = cellsOf(legNow);
+  double restClearance2 = std::numeric_limits<double>::infinity();
+  for (const Eigen::Vector3d& p : patellaRest)
+    for (const Eigen::Vector3d& q : legRest) restClearance2 = std::min(restClearance2, (p - q).squaredNorm());
+  const double wanted = std::isfinite(restClearance2) ? 0.5 * std::sqrt(restClearance2) : 0.0;
+  std::vector<Eigen::Vector3d> patellaNow(patellaRest.size());
   // The femur's profile: per 2 degrees about the axis, the farthest rigid
   // vertex of the thigh across the patella's width.
   constexpr int kBins = 180;
@@ -378,8 +421,11 @@ Eigen::Isometry3d patellaMotion(const skeleton::Joint& joint, const ArticulatedM
     if (h < 0.0) continue;
     const Eigen::Vector3d place =
         c + axial * axis + (h + gap) * (std::cos(phi0 + psi) * e1 + std::sin(phi0 + psi) * e2);
-    const Eigen::Vector3d apexNow = place + Eigen::AngleAxisd(psi, axis) * (apex - pc);
-    const double cost = std::abs((apexNow - tibiaNow).norm() - ligament);
+    const Eigen::AngleAxisd turnPsi(psi, axis);
+    const Eigen::Vector3d apexNow = place + turnPsi * (apex - pc);
+    for (std::size_t i = 0; i < patellaRest.size(); ++i) patellaNow[i] = place + turnPsi * (patellaRest[i] - pc);
+    const double closer = wanted > 0.0 ? std::max(0.0, wanted - clearance(patellaNow, legNow, nowCells, wanted)) : 0.0;
+    const double cost = std::abs((apexNow - tibiaNow).norm() - ligament) + closer;
     if (cost < bestCost) {
       bestCost = cost;
       bestPsi = psi;
@@ -548,6 +594,72 @@ void splitBridgingEdges(ArticulatedMesh& out) {
     }
     ++out.splitEdges;
   }
+}
+
+// Every piece of the mesh (vertices joined through tets) that no rigid or
+// sliding vertex holds, tissue a bone-gap cut beside the other cuts closed
+// off (the olecranon's fat pad in the humerus' fossa), made rigid with the
+// part of the rigid vertex nearest to it at rest: it moves as one block
+// with the bone it lay against, so no tet of it inverts and none is left
+// where nothing places it. Returns the vertices so placed.
+std::size_t holdCutOffTissue(ArticulatedMesh& out) {
+  const TetMesh& m = out.mesh;
+  const std::size_t nv = m.vertexCount();
+  DisjointSets pieces(nv);
+  for (const Tet& t : m.tets)
+    for (int k = 1; k < 4; ++k) pieces.unite(t[0], t[std::size_t(k)]);
+  const std::vector<std::int32_t> piece = pieces.representatives();
+  std::vector<std::uint8_t> held(nv, 0), inTet(nv, 0);
+  for (const Tet& t : m.tets)
+    for (const std::int32_t v : t) inTet[std::size_t(v)] = 1;
+  for (std::size_t v = 0; v < nv; ++v)
+    if (out.role[v] != VertexRole::Free) held[std::size_t(piece[v])] = 1;
+  std::vector<std::int32_t> loose;
+  for (std::size_t v = 0; v < nv; ++v)
+    if (inTet[v] && !held[std::size_t(piece[v])]) loose.push_back(std::int32_t(v));
+  if (loose.empty()) return 0;
+  // The rigid vertices in cells; a piece's nearest one by boxes that grow.
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  std::vector<std::int32_t> rigid;
+  for (std::size_t v = 0; v < nv; ++v)
+    if (out.role[v] == VertexRole::Rigid) {
+      rigid.push_back(std::int32_t(v));
+      lo = lo.cwiseMin(m.positions[v]);
+    }
+  if (rigid.empty()) return 0;
+  constexpr double kCellMm = 8.0;
+  CellIndex cells(kCellMm, lo);
+  for (const std::int32_t v : rigid) cells.add(v, m.positions[std::size_t(v)], m.positions[std::size_t(v)]);
+  cells.finish();
+  // Per piece (by representative): the nearest rigid vertex found so far.
+  std::vector<std::pair<double, std::int32_t>> nearest(nv, {std::numeric_limits<double>::infinity(), -1});
+  for (const std::int32_t v : loose) {
+    const Eigen::Vector3d& p = m.positions[std::size_t(v)];
+    for (double r = kCellMm;; r *= 2.0) {
+      const Eigen::Vector3d box = Eigen::Vector3d::Constant(r);
+      std::pair<double, std::int32_t> best{std::numeric_limits<double>::infinity(), -1};
+      cells.forEachIn(p - box, p + box, [&](std::int32_t w) {
+        const double d = (m.positions[std::size_t(w)] - p).norm();
+        if (d < best.first || (d == best.first && w < best.second)) best = {d, w};
+      });
+      // Found within r: nothing outside the box is nearer.
+      if (best.second >= 0 && best.first <= r) {
+        auto& n = nearest[std::size_t(piece[std::size_t(v)])];
+        if (best.first < n.first || (best.first == n.first && best.second < n.second)) n = best;
+        break;
+      }
+      if (r > 1e6) break;
+    }
+  }
+  for (const std::int32_t v : loose) {
+    const std::int32_t w = nearest[std::size_t(piece[std::size_t(v)])].second;
+    if (w < 0) continue;
+    const Part p = out.vertexPart[std::size_t(w)];
+    out.role[std::size_t(v)] = VertexRole::Rigid;
+    out.vertexPart[std::size_t(v)] = p;
+    ++out.rigidVertices[std::size_t(p)];
+  }
+  return loose.size();
 }
 
 // The part a tet of the mesh belongs to: its bone's or body's, else the
@@ -826,7 +938,8 @@ CutReport cutBoneGaps(ArticulatedMesh& out, const skeleton::Skeleton& skeleton, 
     sides.sideA = [](std::int32_t l) { return l == 1; };
     sides.sideB = [](std::int32_t l) { return l == 2; };
     sides.inRegion = [&](const Eigen::Vector3d& p) { return (p - centre).norm() <= reach && distance(0, p) + distance(1, p) <= gap; };
-    addCut(total, options.boneGapBesideCuts ? cutKeepingTissueHeld(out, sides, tags) : cutTransferMesh(out.mesh, sides));
+    addCut(total, options.boneGapBesideCuts && !options.cutOffTissueRigid ? cutKeepingTissueHeld(out, sides, tags)
+                                                                        : cutTransferMesh(out.mesh, sides));
     out.mesh.labels = tags;
     // The copies the cut added lie inside the tissue, off the surface.
     surface.resize(out.mesh.vertexCount(), 0);
@@ -1072,6 +1185,7 @@ ArticulatedMesh buildArticulatedMesh(const LabelGrid& grid, const OrganTable& or
         out.role[std::size_t(v)] = VertexRole::Sliding;
         out.vertexBody[std::size_t(v)] = std::int8_t(b);
       }
+  if (options.boneGapBesideCuts && options.cutOffTissueRigid) out.cutOffTissueVertices = holdCutOffTissue(out);
   splitBridgingEdges(out);
   // Each body's side of its cut: its tets' faces that the cut opened.
   {

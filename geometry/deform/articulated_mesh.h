@@ -219,22 +219,33 @@ struct ArticulatedMeshOptions {
   // carpals pass within a millimetre of the radius' end, across tissue a
   // tet or two thick that no placement of its vertices keeps positive
   // (docs/BENCHMARKS.md, "Where the AF phone call's wrist folds"; the cut's
-  // figures: "The bone-gap cut at the wrists, by default"). The elbows and
-  // hips with boneGapBesideCuts: docs/BENCHMARKS.md, "The bone-gap cut at
-  // the elbows and the hips". 0: none (deform --bone-gap 0).
-  std::vector<skeleton::JointId> boneGapJoints = {skeleton::JointId::RightWrist, skeleton::JointId::LeftWrist};
+  // figures: "The bone-gap cut at the wrists, by default"). At the elbows
+  // the olecranon's tissue in the humerus' fossa, at the hips the femoral
+  // neck's beside the acetabulum's rim (docs/BENCHMARKS.md, "The bone-gap
+  // cut at the elbows and the hips", "Cut-off tissue with its nearest
+  // bone"). 0: none (deform --bone-gap 0).
+  std::vector<skeleton::JointId> boneGapJoints = {skeleton::JointId::RightWrist, skeleton::JointId::LeftWrist, skeleton::JointId::RightElbow,
+                                                  skeleton::JointId::LeftElbow,  skeleton::JointId::RightHip,  skeleton::JointId::LeftHip};
   double boneGapMm = 10.0;
   double boneGapReachMm = 40.0;
-  // The tets that touch the mesh's surface (the skin, and the faces of the
-  // cuts before it) are left out of the bone-gap cut: a slit inside the
-  // tissue, the skin closed over it. false: the cut may reach the skin.
+  // The tets that touch the mesh's surface (the skin, and without
+  // boneGapBesideCuts the faces of the cuts before it) are left out of the
+  // bone-gap cut: a slit inside the tissue, the skin closed over it. false:
+  // the cut may reach the skin.
   bool boneGapKeepsSkin = true;
   // With boneGapKeepsSkin: the skin alone is kept, not the faces of the
   // cuts before, so a tet beside a sliding or limb cut may be cut (the
   // olecranon's tissue from the humerus' in its fossa); where that would
   // close a piece of tissue off from every bone, body and sliding surface,
-  // that piece's tets and the cut's beside it stay uncut.
-  bool boneGapBesideCuts = false;
+  // cutOffTissueRigid places it; without, that piece's tets and the cut's
+  // beside it stay uncut.
+  bool boneGapBesideCuts = true;
+  // With boneGapBesideCuts: the cut may close pieces of tissue off from
+  // every bone, body and sliding surface, and each such piece moves rigidly
+  // with the part of the bone nearest to it at rest (the olecranon's fat
+  // pad with the humerus whose fossa holds it) instead of keeping its tets
+  // out of the cut.
+  bool cutOffTissueRigid = true;
   // The mesher's options; the articulated mesh rebuilds the mesh for every
   // uncovered centre (no caps): the hard postures' solves were measured on
   // that mesh, and a mesh with caps instead changes them (the seated pose
@@ -263,6 +274,9 @@ struct ArticulatedMesh {
   // Edges between vertices of two parts (tissue spanning the gap between
   // two bones in one tet) split at their midpoints, free vertices.
   std::size_t splitEdges = 0;
+  // Vertices of pieces of tissue closed off by the cuts, made rigid with
+  // the nearest bone's part (cutOffTissueRigid).
+  std::size_t cutOffTissueVertices = 0;
   // Per body: the triangles of its side of the sliding cut (rest frame).
   // At a hinge, whose body takes the owner's bone end beyond the cylinder
   // (hingeOwnerReachMm), they are the surface its sliding vertices stay on

@@ -197,7 +197,7 @@ void putArticulatedMesh(SectionPacker& p, const ArticulatedMesh& m) {
   p.putVector(role);
   p.putVector(part);
   p.putVector(m.vertexBody);
-  for (const std::size_t n : {m.conflictVertices, m.resolvedBoneVoxels, m.snappedVertices, m.unsnappedVertices, m.splitEdges})
+  for (const std::size_t n : {m.conflictVertices, m.resolvedBoneVoxels, m.snappedVertices, m.unsnappedVertices, m.splitEdges, m.cutOffTissueVertices})
     p.put(std::uint64_t(n));
   for (const std::size_t n : m.rigidVertices) p.put(std::uint64_t(n));
   p.put(std::uint64_t(m.bodySurfaces.size()));
@@ -242,7 +242,7 @@ ArticulatedMesh getArticulatedMesh(SectionUnpacker& u, const std::string& source
     m.role.push_back(VertexRole(role[v]));
     m.vertexPart.push_back(skeleton::Part(part[v]));
   }
-  for (std::size_t* n : {&m.conflictVertices, &m.resolvedBoneVoxels, &m.snappedVertices, &m.unsnappedVertices, &m.splitEdges})
+  for (std::size_t* n : {&m.conflictVertices, &m.resolvedBoneVoxels, &m.snappedVertices, &m.unsnappedVertices, &m.splitEdges, &m.cutOffTissueVertices})
     *n = std::size_t(u.get<std::uint64_t>());
   for (std::size_t& n : m.rigidVertices) n = std::size_t(u.get<std::uint64_t>());
   const std::size_t surfaces = u.getCount(8);
@@ -479,6 +479,7 @@ std::string articulatedMeshOptionsKey(const ArticulatedMeshOptions& o) {
   for (const skeleton::JointId j : o.boneGapJoints) k += " " + std::to_string(int(j));
   for (const bool b : {o.wristBodies, o.movingScapulae, o.movingPatellae, o.boneGapKeepsSkin}) k += b ? " 1" : " 0";
   if (o.boneGapBesideCuts) k += " beside-cuts";
+  if (o.cutOffTissueRigid) k += " cut-off-rigid";
   k += " legs " + std::to_string(int(o.legTrunkCut));
   return k + " mesh " + transferMeshOptionsKey(o.transferMesh);
 }

@@ -52,7 +52,7 @@ namespace vox {
 
 class SectionFile;
 
-inline constexpr std::uint32_t kPreparedStateVersion = 2;
+inline constexpr std::uint32_t kPreparedStateVersion = 3;
 
 // What a prepared state was made from, and what a run that takes it gives.
 struct PreparedInputs {

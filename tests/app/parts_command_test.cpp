@@ -354,10 +354,12 @@ TEST(PartsCommand, ArticulatedJointPose) {
   EXPECT_NE(outOfCore.err.find("--max-memory"), std::string::npos) << outOfCore.err;
   EXPECT_FALSE(std::filesystem::exists(f.dir + "/x.nii.gz"));
 
-  // The hip flexed 120 degrees presses this figure's thigh into its pelvis
-  // (over 1 % of the body overlaps): more than contact holds. Refused as
-  // physically wrong, naming the two parts and the hip, nothing written.
-  const std::string flexed = writeFile(f.dir + "/flexed.json", R"({"joints": {"right_hip": {"flexion": 120}}})");
+  // The hip flexed 120 degrees and abducted 45 presses this figure's thigh
+  // into its pelvis (over 1 % of the body overlaps; flexed alone 0.13 %,
+  // the hip's bone-gap cut parting the femoral neck's tissue from the
+  // acetabulum's): more than contact holds. Refused as physically wrong,
+  // naming the two parts and the hip, nothing written.
+  const std::string flexed = writeFile(f.dir + "/flexed.json", R"({"joints": {"right_hip": {"flexion": 120, "abduction": 45}}})");
   const std::string refusedOut = f.dir + "/flexed.nii.gz";
   const auto refused = test::runCommand(voxmorph("deform " + test::quote(f.grid) + " --organs " + test::quote(f.organs) + " --pose " +
                                                  test::quote(flexed) + " -o " + test::quote(refusedOut) + " --articulated --cpu -q"));

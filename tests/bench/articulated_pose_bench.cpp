@@ -76,7 +76,7 @@ double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>
 int usage() {
   std::fprintf(stderr,
                "usage: articulated_pose_bench GRID ORGANS POSE [--steps N] [--bone-weight W] [--sliding-weight W] [--max-iterations N] "
-               "[--volume-weight L] [--direct-limit N] [--scapulae] [--wrist-bodies] [--bone-gap MM] [--bone-gap-reach MM] [--bone-gap-joints J,J...] [--bone-gap-opens-skin] [--bone-gap-beside-cuts] [--leg-trunk-cut none|front|all] [--leg-trunk-behind MM] [--no-tissue-bones-held] [--yielding-shell V] [--yielding-hips] [--squeezed F] [--dump PREFIX] [--mesh-only] "
+               "[--volume-weight L] [--direct-limit N] [--scapulae] [--wrist-bodies] [--bone-gap MM] [--bone-gap-reach MM] [--bone-gap-joints J,J...] [--bone-gap-opens-skin] [--bone-gap-beside-cuts] [--cut-off-tissue-rigid] [--leg-trunk-cut none|front|all] [--leg-trunk-behind MM] [--no-tissue-bones-held] [--yielding-shell V] [--yielding-hips] [--squeezed F] [--dump PREFIX] [--mesh-only] "
                "[--knee-forward MM] [--trunk-reach MM] [--pelvis-reach MM] [--joint-clearance MM] [--still-beyond MM] [--hold-unmoved-bones] [--no-untangle] [--contact-rounds N] [--no-contact-sides] [--contact-radius MM] [--contact-weight W] [--owner-shell V] [--attachment-angle DEG] [--elbow-attachment-angle DEG] [--untangle-radius MM] [--whole-part-bone-clearance MM] [--whole-part-own-bone-clearance MM]\n"
                "       articulated_pose_bench --figure POSE [options]\n");
   return 2;
@@ -216,6 +216,10 @@ int main(int argc, char** argv) {
     else if (arg == "--bone-gap-reach") meshOptions.boneGapReachMm = std::stod(value());
     else if (arg == "--bone-gap-opens-skin") meshOptions.boneGapKeepsSkin = false;
     else if (arg == "--bone-gap-beside-cuts") meshOptions.boneGapBesideCuts = true;
+    else if (arg == "--cut-off-tissue-rigid") {
+      meshOptions.boneGapBesideCuts = true;
+      meshOptions.cutOffTissueRigid = true;
+    }
     else if (arg == "--bone-gap-joints") {
       meshOptions.boneGapJoints.clear();
       std::stringstream names(value());
@@ -274,8 +278,9 @@ int main(int argc, char** argv) {
     const auto t1 = Clock::now();
     const ArticulatedMesh mesh = buildArticulatedMesh(grid, organs, sk, meshOptions);
     const double meshSeconds = secondsSince(t1);
-    std::printf("mesh: %zu vertices, %zu tets, %zu bodies, built in %.1f s (skeleton %.1f s); bone-gap cut %zu faces\n", mesh.mesh.vertexCount(),
-                mesh.mesh.tetCount(), mesh.bodies.size(), meshSeconds, skeletonSeconds, mesh.boneGapCut.cutFaces);
+    std::printf("mesh: %zu vertices, %zu tets, %zu bodies, built in %.1f s (skeleton %.1f s); bone-gap cut %zu faces; %zu cut-off tissue vertices rigid\n",
+                mesh.mesh.vertexCount(), mesh.mesh.tetCount(), mesh.bodies.size(), meshSeconds, skeletonSeconds, mesh.boneGapCut.cutFaces,
+                mesh.cutOffTissueVertices);
 
     for (const ArticularBody& b : mesh.bodies) {
       std::printf("  body %s: %s radius %.1f mm", skeleton::jointKind(b.joint).name,

@@ -115,6 +115,7 @@ struct DeformationReport {
   // (articulated_mesh.h) and its posing (articulated_pose.h).
   struct Articulated {
     std::size_t vertices = 0, tets = 0, bodies = 0, bodyCutFaces = 0, limbCutFaces = 0, boneGapCutFaces = 0;
+    std::size_t cutOffTissueVertices = 0;  // tissue the cuts closed off, rigid with the nearest bone (ArticulatedMesh)
     std::size_t rigidVertices = 0, slidingVertices = 0, solvedVertices = 0, solvedTets = 0;
     std::size_t stillVertices = 0, stillTets = 0;  // held at rest: far from every moved bone (ArticulatedPoseOptions::stillBeyondMm)
     int steps = 0, iterations = 0;

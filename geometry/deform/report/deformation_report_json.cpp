@@ -184,6 +184,7 @@ std::string deformationReportJson(const DeformationReport& r) {
                            {"body_cut_faces", a->bodyCutFaces},
                            {"limb_cut_faces", a->limbCutFaces},
                            {"bone_gap_cut_faces", a->boneGapCutFaces},
+                           {"cut_off_tissue_vertices", a->cutOffTissueVertices},
                            {"rigid_vertices", a->rigidVertices},
                            {"sliding_vertices", a->slidingVertices},
                            {"solved_vertices", a->solvedVertices},

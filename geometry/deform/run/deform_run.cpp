@@ -413,6 +413,7 @@ PosedMesh poseArticulated(const DeformGridRequest& o, const Source& source, Defo
   for (const CutReport& c : mesh.cuts) a.bodyCutFaces += c.cutFaces;
   a.limbCutFaces = mesh.limbCut.cutFaces;
   a.boneGapCutFaces = mesh.boneGapCut.cutFaces;
+  a.cutOffTissueVertices = mesh.cutOffTissueVertices;
   for (const std::size_t n : mesh.rigidVertices) a.rigidVertices += n;
   a.slidingVertices = r.slidingVertices;
   a.solvedVertices = r.solvedVertices;

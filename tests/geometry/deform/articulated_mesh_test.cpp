@@ -998,14 +998,14 @@ std::size_t tissueOnlyPieces(const ArticulatedMesh& m) {
 // With boneGapBesideCuts the bone-gap cut at the elbows runs beside the
 // elbow's sliding cut (the olecranon's tissue parted from the humerus' in
 // its fossa): the tets that touch the sliding cut's faces may be cut, those
-// that touch the skin may not, and no piece of tissue is cut off from every
-// bone, body and sliding surface. By default the wrists alone are cut.
+// that touch the skin may not, and without cutOffTissueRigid (the next
+// test) no piece of tissue is cut off from every bone, body and sliding
+// surface.
 TEST(ArticulatedMesh, TheBoneGapCutAtTheElbowsRunsBesideTheSlidingCutNotToTheSkin) {
   const Figure& f = figure();
   const double spacing = f.grid.geometry().spacing.maxCoeff();
   ArticulatedMeshOptions options;
-  EXPECT_EQ(options.boneGapJoints, (std::vector<JointId>{JointId::RightWrist, JointId::LeftWrist}));
-  EXPECT_FALSE(options.boneGapBesideCuts);
+  options.cutOffTissueRigid = false;
   options.boneGapMm = 0.0;
   const ArticulatedMesh uncut = buildArticulatedMesh(f.grid, f.organs, f.skeleton, options);
   options.boneGapMm = 3.0 * spacing;
@@ -1034,6 +1034,48 @@ TEST(ArticulatedMesh, TheBoneGapCutAtTheElbowsRunsBesideTheSlidingCutNotToTheSki
     const Eigen::Vector3d& x = slit.mesh.positions[std::size_t(v)];
     EXPECT_LE(std::min((x - right).norm(), (x - left).norm()), options.boneGapReachMm + spacing) << v;
   }
+}
+
+// With cutOffTissueRigid the bone-gap cut beside the other cuts may close
+// pieces of tissue off (on this figure at every joint it cuts); each moves
+// rigidly with the part of the bone nearest to it, so nothing is left that
+// no constraint places, and the elbows bent 120 degrees and the hips 90
+// invert no tet.
+TEST(ArticulatedMesh, TissueTheBoneGapCutClosesOffMovesWithTheNearestBone) {
+  const Figure& f = figure();
+  const double spacing = f.grid.geometry().spacing.maxCoeff();
+  ArticulatedMeshOptions options;
+  EXPECT_EQ(options.boneGapJoints, (std::vector<JointId>{JointId::RightWrist, JointId::LeftWrist, JointId::RightElbow, JointId::LeftElbow,
+                                                         JointId::RightHip, JointId::LeftHip}));
+  EXPECT_TRUE(options.boneGapBesideCuts);
+  EXPECT_TRUE(options.cutOffTissueRigid);
+  options.boneGapMm = 3.0 * spacing;
+  options.boneGapReachMm = 6.0 * spacing;
+  options.boneGapJoints = {JointId::RightWrist, JointId::LeftWrist, JointId::RightElbow, JointId::LeftElbow, JointId::RightHip, JointId::LeftHip};
+  options.boneGapBesideCuts = true;
+  options.cutOffTissueRigid = true;
+  const ArticulatedMesh m = buildArticulatedMesh(f.grid, f.organs, f.skeleton, options);
+  EXPECT_NO_THROW(m.mesh.validate("bone-gap cut beside the cuts"));
+  EXPECT_GT(m.cutOffTissueVertices, 0u);
+  EXPECT_EQ(tissueOnlyPieces(m), 0u);
+  // The same cut keeping its tets out instead: none closed off, fewer faces.
+  ArticulatedMeshOptions held = options;
+  held.cutOffTissueRigid = false;
+  const ArticulatedMesh h = buildArticulatedMesh(f.grid, f.organs, f.skeleton, held);
+  EXPECT_EQ(h.cutOffTissueVertices, 0u);
+  EXPECT_GT(m.boneGapCut.cutFaces, h.boneGapCut.cutFaces);
+  std::printf("bone-gap cut beside the cuts: %zu faces, %zu vertices of cut-off tissue rigid (%zu faces keeping it held)\n",
+              m.boneGapCut.cutFaces, m.cutOffTissueVertices, h.boneGapCut.cutFaces);
+  const std::vector<PoseJoint> angles = {jointAngles(JointId::RightElbow, 120.0), jointAngles(JointId::LeftElbow, 120.0),
+                                         jointAngles(JointId::RightHip, 90.0), jointAngles(JointId::LeftHip, 90.0)};
+  const skeleton::PartMotions motions = figureMotions(f.skeleton, angles);
+  ArticulatedPoser poser(m);
+  const ArticulatedPoseReport r = poser.pose(motions);
+  EXPECT_TRUE(r.reachedTargets);
+  EXPECT_EQ(r.invertedTets, 0u);
+  const std::vector<Eigen::Vector3d>& p = poser.positions();
+  for (std::size_t v = 0; v < p.size(); ++v)
+    if (m.role[v] == VertexRole::Rigid) EXPECT_LT((p[v] - motions[std::size_t(m.vertexPart[v])] * m.mesh.positions[v]).norm(), 1e-6) << v;
 }
 
 }  // namespace
