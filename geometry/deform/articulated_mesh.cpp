@@ -292,11 +292,12 @@ namespace {
 // turns about the knee's axis by psi, between none and the lower leg's
 // turn, at its rest height above the femur's profile there, the psi that
 // keeps its ligament's length (its apex to the tibial tuberosity) best
-// and the patella at least half its rest clearance from the lower leg's
-// bone: the ligament's length alone varies by a millimetre or two over the
-// last quarter of the turn, and the psi that fits it to a tenth turned the
-// AM's seated patella with its tibia, onto the tibial plateau's front
-// (1.3 mm from it, 15.5 mm at rest) across the fat pad between them.
+// among those that keep the patella at least half its rest clearance from
+// the lower leg's bone (none: the clearest): the ligament's length alone
+// varies by a millimetre or two over the last quarter of the turn, and the
+// psi that fits it to a tenth turned the AM's seated patella with its
+// tibia, onto the tibial plateau's front (1.3 mm from it, 15.5 mm at rest)
+// across the fat pad between them.
 constexpr double kPatellaLegReachMm = 150.0;  // the lower leg's bone this near the knee's centre
 constexpr double kPatellaCellMm = 8.0;
 
@@ -414,7 +415,10 @@ Eigen::Isometry3d patellaMotion(const skeleton::Joint& joint, const ArticulatedM
   const double theta = turn.angle() * (turn.axis().dot(axis) < 0.0 ? -1.0 : 1.0);
   // psi from none to theta in half-degree steps.
   const int steps = std::max(1, int(std::ceil(std::abs(theta) / (0.5 * std::numbers::pi / 180.0))));
-  double bestPsi = 0.0, bestCost = std::numeric_limits<double>::infinity();
+  // The cost: first the millimetres short of the clearance wanted, then
+  // the ligament's error.
+  double bestPsi = 0.0;
+  std::pair<double, double> bestCost{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
   Eigen::Vector3d bestPlace = pc;
   for (int i = 0; i <= steps; ++i) {
     const double psi = theta * double(i) / double(steps), h = height(phi0 + psi);
@@ -423,9 +427,9 @@ Eigen::Isometry3d patellaMotion(const skeleton::Joint& joint, const ArticulatedM
         c + axial * axis + (h + gap) * (std::cos(phi0 + psi) * e1 + std::sin(phi0 + psi) * e2);
     const Eigen::AngleAxisd turnPsi(psi, axis);
     const Eigen::Vector3d apexNow = place + turnPsi * (apex - pc);
-    for (std::size_t i = 0; i < patellaRest.size(); ++i) patellaNow[i] = place + turnPsi * (patellaRest[i] - pc);
+    for (std::size_t k = 0; k < patellaRest.size(); ++k) patellaNow[k] = place + turnPsi * (patellaRest[k] - pc);
     const double closer = wanted > 0.0 ? std::max(0.0, wanted - clearance(patellaNow, legNow, nowCells, wanted)) : 0.0;
-    const double cost = std::abs((apexNow - tibiaNow).norm() - ligament) + closer;
+    const std::pair<double, double> cost{closer, std::abs((apexNow - tibiaNow).norm() - ligament)};
     if (cost < bestCost) {
       bestCost = cost;
       bestPsi = psi;
