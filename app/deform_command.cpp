@@ -177,8 +177,9 @@ void addDeformCommand(CLI::App& app) {
                                            "shoulders, hips, elbows and knees sliding, the soft tissue by an injective solve (no cage, no refinement); "
                                            "a pose it cannot reach without inverting a tet is refused unless --force (docs/POSES.md)");
   cmd->add_option("--bone-gap", o->run.boneGapMm,
-                  "With --articulated: cut the tissue between the forearm's and the hand's bones where they lie within this gap of "
-                  "each other near the wrist, so the carpals slide past the radius as the wrist turns, mm (0: none; docs/POSES.md)")
+                  "With --articulated: cut the tissue between the two parts' bones where they lie within this gap of each other "
+                  "near a wrist, elbow or hip, so that the carpals slide past the radius, the olecranon out of the humerus' fossa and "
+                  "the femoral neck past the acetabulum's rim as the joint turns, mm (0: none; docs/POSES.md)")
       ->capture_default_str()
       ->check(numberIn(0, 100, "mm"))
       ->needs(articulated);

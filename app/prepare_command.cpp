@@ -113,7 +113,7 @@ void addPrepareCommand(CLI::App& app) {
       ->check(integerIn(8, 100000));
   CLI::Option* articulated = cmd->add_flag("--articulated", o->run.articulated,
                                            "Also the transfer mesh that resolves the skeleton, for deform --articulated (needs an organ table that names the bones)");
-  cmd->add_option("--bone-gap", o->run.boneGapMm, "With --articulated: the bone-gap cut at the wrists, as deform --bone-gap (the runs give the same), mm")
+  cmd->add_option("--bone-gap", o->run.boneGapMm, "With --articulated: the bone-gap cut at the wrists, elbows and hips, as deform --bone-gap (the runs give the same), mm")
       ->capture_default_str()
       ->check(numberIn(0, 100, "mm"))
       ->needs(articulated);

@@ -79,7 +79,7 @@ struct DeformGridRequest {
   // the soft tissue by the injective solve; no cage, no refinement. A pose
   // the solve cannot reach without inverting a tet is refused (unless force).
   bool articulated = false;
-  // With articulated: the bone-gap cut at the wrists (ArticulatedMeshOptions
+  // With articulated: the bone-gap cuts (ArticulatedMeshOptions
   // boneGapMm, mm; 0: none). Part of the prepared mesh's key.
   double boneGapMm = ArticulatedMeshOptions{}.boneGapMm;
   bool allowGrowth = false;  // accept a posed grid of more than 8x the source's voxels (posed_extent.h)
