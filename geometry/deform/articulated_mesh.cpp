@@ -7,6 +7,7 @@
 #include "geometry/disjoint_sets.h"
 #include "geometry/distance_transform.h"
 #include "geometry/error.h"
+#include "geometry/nearest_vertex.h"
 #include "geometry/raster/lattice_tets.h"
 #include "geometry/scalar_grid.h"
 #include "geometry/skeleton/bones.h"
@@ -312,15 +313,15 @@ Eigen::Isometry3d patellaMotion(const skeleton::Joint& joint, const ArticulatedM
   const Eigen::Vector3d e2 = axis.cross(e1);
   const Eigen::Vector3d& c = joint.centre;
   const std::vector<Eigen::Vector3d>& rest = mesh.mesh.positions;
-  // The patella's centre, width along the axis, and apex (its lowest rigid
-  // vertex: the ligament's upper end).
+  // The patella's vertices, centre, width along the axis, and apex (its
+  // lowest rigid vertex: the ligament's upper end).
+  std::vector<Eigen::Vector3d> patellaRest;
   Eigen::Vector3d pc = Eigen::Vector3d::Zero(), apex = Eigen::Vector3d::Zero();
-  std::size_t n = 0;
   double lo = std::numeric_limits<double>::infinity(), hi = -lo, lowest = -lo;
   for (std::size_t v = 0; v < rest.size(); ++v)
     if (mesh.role[v] == VertexRole::Rigid && int(mesh.vertexPart[v]) == patella) {
+      patellaRest.push_back(rest[v]);
       pc += rest[v];
-      ++n;
       lo = std::min(lo, (rest[v] - c).dot(axis));
       hi = std::max(hi, (rest[v] - c).dot(axis));
       if ((rest[v] - c).dot(joint.longAxis) > lowest) {
@@ -328,8 +329,8 @@ Eigen::Isometry3d patellaMotion(const skeleton::Joint& joint, const ArticulatedM
         apex = rest[v];
       }
     }
-  if (n == 0) return leg;
-  pc /= double(n);
+  if (patellaRest.empty()) return leg;
+  pc /= double(patellaRest.size());
   // Its lower end: the tibial tuberosity, the lower leg's most anterior
   // rigid vertex between 20 and 70 mm below the knee's centre within the
   // patella's width.
@@ -348,41 +349,29 @@ Eigen::Isometry3d patellaMotion(const skeleton::Joint& joint, const ArticulatedM
   if (!std::isfinite(front)) return leg;
   const double ligament = (apex - tibia).norm();
   const Eigen::Vector3d tibiaNow = rel * tibia;
-  // The lower leg's bone about the knee, at rest and turned (the thigh's
-  // frame), in cells: the patella's clearance from it.
-  std::vector<Eigen::Vector3d> legRest, legNow;
+  // The lower leg's bone about the knee: the patella's clearance from it at
+  // rest, and from it turned (the thigh's frame, in cells) at each psi up to
+  // the clearance wanted.
+  std::vector<Eigen::Vector3d> legNow;
+  double restClearance2 = std::numeric_limits<double>::infinity();
+  Eigen::Vector3d legLo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
   for (std::size_t v = 0; v < rest.size(); ++v)
     if (mesh.role[v] == VertexRole::Rigid && mesh.vertexPart[v] == legPart && (rest[v] - c).norm() < kPatellaLegReachMm) {
-      legRest.push_back(rest[v]);
+      for (const Eigen::Vector3d& p : patellaRest) restClearance2 = std::min(restClearance2, (p - rest[v]).squaredNorm());
       legNow.push_back(rel * rest[v]);
+      legLo = legLo.cwiseMin(legNow.back());
     }
-  const auto clearance = [](const std::vector<Eigen::Vector3d>& from, const std::vector<Eigen::Vector3d>& to, const CellIndex& cells,
-                            double cap) {
-    double d2 = cap * cap;
-    const Eigen::Vector3d box = Eigen::Vector3d::Constant(cap);
-    for (const Eigen::Vector3d& p : from)
-      cells.forEachIn(p - box, p + box, [&](std::int32_t i) { d2 = std::min(d2, (to[std::size_t(i)] - p).squaredNorm()); });
+  const double wanted = std::isfinite(restClearance2) ? 0.5 * std::sqrt(restClearance2) : 0.0;
+  CellIndex legCells(kPatellaCellMm, legNow.empty() ? Eigen::Vector3d::Zero() : legLo);
+  for (std::size_t i = 0; i < legNow.size(); ++i) legCells.add(std::int32_t(i), legNow[i], legNow[i]);
+  legCells.finish();
+  const auto clearance = [&](const std::vector<Eigen::Vector3d>& patellaNow) {
+    double d2 = wanted * wanted;
+    const Eigen::Vector3d box = Eigen::Vector3d::Constant(wanted);
+    for (const Eigen::Vector3d& p : patellaNow)
+      legCells.forEachIn(p - box, p + box, [&](std::int32_t i) { d2 = std::min(d2, (legNow[std::size_t(i)] - p).squaredNorm()); });
     return std::sqrt(d2);
   };
-  const auto cellsOf = [](const std::vector<Eigen::Vector3d>& points) {
-    Eigen::Vector3d lo = Eigen::Vector3d::Zero();
-    if (!points.empty()) {
-      lo = points.front();
-      for (const Eigen::Vector3d& p : points) lo = lo.cwiseMin(p);
-    }
-    CellIndex cells(kPatellaCellMm, lo);
-    for (std::size_t i = 0; i < points.size(); ++i) cells.add(std::int32_t(i), points[i], points[i]);
-    cells.finish();
-    return cells;
-  };
-  std::vector<Eigen::Vector3d> patellaRest;
-  for (std::size_t v = 0; v < rest.size(); ++v)
-    if (mesh.role[v] == VertexRole::Rigid && int(mesh.vertexPart[v]) == patella) patellaRest.push_back(rest[v]);
-  const CellIndex nowCells = cellsOf(legNow);
-  double restClearance2 = std::numeric_limits<double>::infinity();
-  for (const Eigen::Vector3d& p : patellaRest)
-    for (const Eigen::Vector3d& q : legRest) restClearance2 = std::min(restClearance2, (p - q).squaredNorm());
-  const double wanted = std::isfinite(restClearance2) ? 0.5 * std::sqrt(restClearance2) : 0.0;
   std::vector<Eigen::Vector3d> patellaNow(patellaRest.size());
   // The femur's profile: per 2 degrees about the axis, the farthest rigid
   // vertex of the thigh across the patella's width.
@@ -428,7 +417,7 @@ Eigen::Isometry3d patellaMotion(const skeleton::Joint& joint, const ArticulatedM
     const Eigen::AngleAxisd turnPsi(psi, axis);
     const Eigen::Vector3d apexNow = place + turnPsi * (apex - pc);
     for (std::size_t k = 0; k < patellaRest.size(); ++k) patellaNow[k] = place + turnPsi * (patellaRest[k] - pc);
-    const double closer = wanted > 0.0 ? std::max(0.0, wanted - clearance(patellaNow, legNow, nowCells, wanted)) : 0.0;
+    const double closer = wanted > 0.0 ? std::max(0.0, wanted - clearance(patellaNow)) : 0.0;
     const std::pair<double, double> cost{closer, std::abs((apexNow - tibiaNow).norm() - ligament)};
     if (cost < bestCost) {
       bestCost = cost;
@@ -622,42 +611,23 @@ std::size_t holdCutOffTissue(ArticulatedMesh& out) {
   for (std::size_t v = 0; v < nv; ++v)
     if (inTet[v] && !held[std::size_t(piece[v])]) loose.push_back(std::int32_t(v));
   if (loose.empty()) return 0;
-  // The rigid vertices in cells; a piece's nearest one by boxes that grow.
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  // Per piece (by representative): its vertices' nearest rigid vertex, the
+  // nearest of them; the smaller index among equals (a cut's copies of a
+  // vertex, rigid with two parts, lie on each other).
   std::vector<std::int32_t> rigid;
   for (std::size_t v = 0; v < nv; ++v)
-    if (out.role[v] == VertexRole::Rigid) {
-      rigid.push_back(std::int32_t(v));
-      lo = lo.cwiseMin(m.positions[v]);
-    }
+    if (out.role[v] == VertexRole::Rigid) rigid.push_back(std::int32_t(v));
   if (rigid.empty()) return 0;
-  constexpr double kCellMm = 8.0;
-  CellIndex cells(kCellMm, lo);
-  for (const std::int32_t v : rigid) cells.add(v, m.positions[std::size_t(v)], m.positions[std::size_t(v)]);
-  cells.finish();
-  // Per piece (by representative): the nearest rigid vertex found so far.
+  const NearestVertex nearestRigid(m.positions, rigid);
   std::vector<std::pair<double, std::int32_t>> nearest(nv, {std::numeric_limits<double>::infinity(), -1});
   for (const std::int32_t v : loose) {
-    const Eigen::Vector3d& p = m.positions[std::size_t(v)];
-    for (double r = kCellMm;; r *= 2.0) {
-      const Eigen::Vector3d box = Eigen::Vector3d::Constant(r);
-      std::pair<double, std::int32_t> best{std::numeric_limits<double>::infinity(), -1};
-      cells.forEachIn(p - box, p + box, [&](std::int32_t w) {
-        const double d = (m.positions[std::size_t(w)] - p).norm();
-        if (d < best.first || (d == best.first && w < best.second)) best = {d, w};
-      });
-      // Found within r: nothing outside the box is nearer.
-      if (best.second >= 0 && best.first <= r) {
-        auto& n = nearest[std::size_t(piece[std::size_t(v)])];
-        if (best.first < n.first || (best.first == n.first && best.second < n.second)) n = best;
-        break;
-      }
-      if (r > 1e6) break;
-    }
+    const std::int32_t w = nearestRigid.query(m.positions[std::size_t(v)]);
+    const std::pair<double, std::int32_t> found{(m.positions[std::size_t(w)] - m.positions[std::size_t(v)]).norm(), w};
+    std::pair<double, std::int32_t>& n = nearest[std::size_t(piece[std::size_t(v)])];
+    n = std::min(n, found);
   }
   for (const std::int32_t v : loose) {
     const std::int32_t w = nearest[std::size_t(piece[std::size_t(v)])].second;
-    if (w < 0) continue;
     const Part p = out.vertexPart[std::size_t(w)];
     out.role[std::size_t(v)] = VertexRole::Rigid;
     out.vertexPart[std::size_t(v)] = p;

@@ -1,6 +1,7 @@
 #include "geometry/deform/solve/frame_deformer.h"
 
 #include "geometry/error.h"
+#include "geometry/nearest_vertex.h"
 #include "geometry/parallel.h"
 
 #include <Eigen/Dense>
@@ -19,43 +20,6 @@ using Clock = std::chrono::steady_clock;
 double millisecondsSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
-
-// Nearest-vertex queries by a sweep over the vertices sorted along x: scan
-// outwards from the query's x until the x gap alone exceeds the best distance.
-class NearestVertex {
-public:
-  NearestVertex(const std::vector<Eigen::Vector3d>& points, const std::vector<std::int32_t>& candidates)
-      : points_(points), order_(candidates) {
-    std::sort(order_.begin(), order_.end(), [&](std::int32_t a, std::int32_t b) { return points_[std::size_t(a)].x() < points_[std::size_t(b)].x(); });
-  }
-  std::int32_t query(const Eigen::Vector3d& q) const {
-    const auto start = std::lower_bound(order_.begin(), order_.end(), q.x(),
-                                        [&](std::int32_t v, double x) { return points_[std::size_t(v)].x() < x; }) -
-                       order_.begin();
-    double best = std::numeric_limits<double>::infinity();
-    std::int32_t bestVertex = -1;
-    auto visit = [&](std::ptrdiff_t k) {
-      const Eigen::Vector3d& p = points_[std::size_t(order_[std::size_t(k)])];
-      const double dx = p.x() - q.x();
-      if (dx * dx > best) return false;
-      const double d = (p - q).squaredNorm();
-      if (d < best) {
-        best = d;
-        bestVertex = order_[std::size_t(k)];
-      }
-      return true;
-    };
-    for (std::ptrdiff_t k = start; k < std::ptrdiff_t(order_.size()) && visit(k); ++k) {
-    }
-    for (std::ptrdiff_t k = start - 1; k >= 0 && visit(k); --k) {
-    }
-    return bestVertex;
-  }
-
-private:
-  const std::vector<Eigen::Vector3d>& points_;
-  std::vector<std::int32_t> order_;
-};
 
 Eigen::Vector4d barycentric(const std::vector<Eigen::Vector3d>& p, const Tet& t, const Eigen::Vector3d& q) {
   Eigen::Matrix3d e;

@@ -744,6 +744,31 @@ TEST(ArticulatedPose, APoseThatTurnsNoJointLeavesTheMeshAtRest) {
   EXPECT_EQ(poser.positions(), f.mesh.mesh.positions);
 }
 
+// The knee's frame for the patella's motion: centre, flexion axis, e1 the
+// anterior direction and down the long axis across the axis, e2 = axis x e1;
+// at(r, degrees, a) the point r from the axis at `degrees` from e1 towards
+// e2, `a` along the axis.
+struct KneeFrame {
+  explicit KneeFrame(const skeleton::Joint& knee)
+      : c(knee.centre), axis(knee.axis(skeleton::Dof::Flexion).normalized()),
+        e1((knee.anterior - knee.anterior.dot(axis) * axis).normalized()), e2(axis.cross(e1)),
+        down((knee.longAxis - knee.longAxis.dot(axis) * axis).normalized()) {}
+  Eigen::Vector3d at(double r, double degrees, double a) const {
+    const double phi = degrees * std::numbers::pi / 180.0;
+    return c + a * axis + r * (std::cos(phi) * e1 + std::sin(phi) * e2);
+  }
+  Eigen::Vector3d c, axis, e1, e2, down;
+};
+
+// Adds a vertex rigid with `segment` (no tets) to m.
+void addRigid(ArticulatedMesh& m, const Eigen::Vector3d& p, int segment) {
+  m.mesh.positions.push_back(p);
+  m.role.push_back(VertexRole::Rigid);
+  m.vertexPart.push_back(Part(segment));
+  m.vertexBody.push_back(-1);
+  ++m.rigidVertices[std::size_t(segment)];
+}
+
 // A patella slides along the femur's profile as its knee bends: relative
 // to the thigh it keeps its height above the profile and its ligament's
 // length, from its apex (its lowest vertex) to the tibial tuberosity; where
@@ -751,23 +776,12 @@ TEST(ArticulatedPose, APoseThatTurnsNoJointLeavesTheMeshAtRest) {
 TEST(ArticulatedPose, APatellaSlidesAlongTheFemurKeepingItsLigament) {
   const Figure& f = figure();
   const skeleton::Joint& knee = *f.skeleton.joint(JointId::RightKnee);
-  const Eigen::Vector3d& c = knee.centre;
-  const Eigen::Vector3d axis = knee.axis(skeleton::Dof::Flexion).normalized();
-  const Eigen::Vector3d e1 = (knee.anterior - knee.anterior.dot(axis) * axis).normalized(), e2 = axis.cross(e1);
-  const Eigen::Vector3d down = (knee.longAxis - knee.longAxis.dot(axis) * axis).normalized();
-  const auto at = [&](double r, double degrees, double a) {
-    const double phi = degrees * std::numbers::pi / 180.0;
-    return Eigen::Vector3d(c + a * axis + r * (std::cos(phi) * e1 + std::sin(phi) * e2));
-  };
+  const KneeFrame k(knee);
+  const Eigen::Vector3d &c = k.c, &e1 = k.e1, &e2 = k.e2, &down = k.down;
+  const auto at = [&](double r, double degrees, double a) { return k.at(r, degrees, a); };
   const auto mesh = [&](const std::function<double(double)>& profile) {
     ArticulatedMesh m;
-    const auto add = [&](const Eigen::Vector3d& p, int segment) {
-      m.mesh.positions.push_back(p);
-      m.role.push_back(VertexRole::Rigid);
-      m.vertexPart.push_back(Part(segment));
-      m.vertexBody.push_back(-1);
-      ++m.rigidVertices[std::size_t(segment)];
-    };
+    const auto add = [&](const Eigen::Vector3d& p, int segment) { addRigid(m, p, segment); };
     for (int d = -180; d < 180; ++d)
       for (const double a : {-12.0, 0.0, 12.0}) {
         add(at(profile(d), d, a), int(Part::RightThigh));
@@ -836,11 +850,7 @@ TEST(ArticulatedPose, APatellaSlidesAlongTheFemurKeepingItsLigament) {
   // straight knees otherwise lifted their patellae and moved the tissue
   // about them in poses that leave the legs alone).
   ArticulatedMesh deep = mesh(receding);
-  deep.mesh.positions.push_back(at(receding(3.0) - 2.0, 3.0, 0.0));
-  deep.role.push_back(VertexRole::Rigid);
-  deep.vertexPart.push_back(Part(kRightPatella));
-  deep.vertexBody.push_back(-1);
-  ++deep.rigidVertices[std::size_t(kRightPatella)];
+  addRigid(deep, at(receding(3.0) - 2.0, 3.0, 0.0), kRightPatella);
   const skeleton::PartMotions straight = figureMotions(f.skeleton, {jointAngles(JointId::RightKnee, 0.0)});
   EXPECT_TRUE(segmentMotions(straight, f.skeleton, deep)[std::size_t(kRightPatella)].isApprox(Eigen::Isometry3d::Identity(), 1e-9));
 }
@@ -852,22 +862,11 @@ TEST(ArticulatedPose, APatellaSlidesAlongTheFemurKeepingItsLigament) {
 TEST(ArticulatedPose, APatellaKeepsClearOfTheTibia) {
   const Figure& f = figure();
   const skeleton::Joint& knee = *f.skeleton.joint(JointId::RightKnee);
-  const Eigen::Vector3d& c = knee.centre;
-  const Eigen::Vector3d axis = knee.axis(skeleton::Dof::Flexion).normalized();
-  const Eigen::Vector3d e1 = (knee.anterior - knee.anterior.dot(axis) * axis).normalized(), e2 = axis.cross(e1);
-  const Eigen::Vector3d down = (knee.longAxis - knee.longAxis.dot(axis) * axis).normalized();
-  const auto at = [&](double r, double degrees, double a) {
-    const double phi = degrees * std::numbers::pi / 180.0;
-    return Eigen::Vector3d(c + a * axis + r * (std::cos(phi) * e1 + std::sin(phi) * e2));
-  };
+  const KneeFrame k(knee);
+  const Eigen::Vector3d &c = k.c, &e1 = k.e1, &down = k.down;
+  const auto at = [&](double r, double degrees, double a) { return k.at(r, degrees, a); };
   ArticulatedMesh m;
-  const auto add = [&](const Eigen::Vector3d& p, int segment) {
-    m.mesh.positions.push_back(p);
-    m.role.push_back(VertexRole::Rigid);
-    m.vertexPart.push_back(Part(segment));
-    m.vertexBody.push_back(-1);
-    ++m.rigidVertices[std::size_t(segment)];
-  };
+  const auto add = [&](const Eigen::Vector3d& p, int segment) { addRigid(m, p, segment); };
   // A femur receding from 30 mm in front to 18 mm a quarter turn either
   // way, a patella in front of it, the tuberosity below it and the
   // plateau's front rim behind and level with its lower end.
@@ -1105,9 +1104,6 @@ TEST(ArticulatedMesh, TissueTheBoneGapCutClosesOffMovesWithTheNearestBone) {
   EXPECT_TRUE(options.cutOffTissueRigid);
   options.boneGapMm = 3.0 * spacing;
   options.boneGapReachMm = 6.0 * spacing;
-  options.boneGapJoints = {JointId::RightWrist, JointId::LeftWrist, JointId::RightElbow, JointId::LeftElbow, JointId::RightHip, JointId::LeftHip};
-  options.boneGapBesideCuts = true;
-  options.cutOffTissueRigid = true;
   const ArticulatedMesh m = buildArticulatedMesh(f.grid, f.organs, f.skeleton, options);
   EXPECT_NO_THROW(m.mesh.validate("bone-gap cut beside the cuts"));
   EXPECT_GT(m.cutOffTissueVertices, 0u);
@@ -1129,7 +1125,9 @@ TEST(ArticulatedMesh, TissueTheBoneGapCutClosesOffMovesWithTheNearestBone) {
   EXPECT_EQ(r.invertedTets, 0u);
   const std::vector<Eigen::Vector3d>& p = poser.positions();
   for (std::size_t v = 0; v < p.size(); ++v)
-    if (m.role[v] == VertexRole::Rigid) EXPECT_LT((p[v] - motions[std::size_t(m.vertexPart[v])] * m.mesh.positions[v]).norm(), 1e-6) << v;
+    if (m.role[v] == VertexRole::Rigid) {
+      EXPECT_LT((p[v] - motions[std::size_t(m.vertexPart[v])] * m.mesh.positions[v]).norm(), 1e-6) << v;
+    }
 }
 
 }  // namespace
