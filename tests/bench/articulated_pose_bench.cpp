@@ -76,7 +76,7 @@ double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>
 int usage() {
   std::fprintf(stderr,
                "usage: articulated_pose_bench GRID ORGANS POSE [--steps N] [--bone-weight W] [--sliding-weight W] [--max-iterations N] "
-               "[--volume-weight L] [--direct-limit N] [--scapulae] [--wrist-bodies] [--bone-gap MM] [--bone-gap-reach MM] [--bone-gap-joints J,J...] [--bone-gap-opens-skin] [--bone-gap-beside-cuts] [--cut-off-tissue-rigid] [--leg-trunk-cut none|front|all] [--leg-trunk-behind MM] [--no-tissue-bones-held] [--yielding-shell V] [--yielding-hips] [--squeezed F] [--dump PREFIX] [--mesh-only] "
+               "[--volume-weight L] [--direct-limit N] [--scapulae] [--wrist-bodies] [--bone-gap MM] [--bone-gap-reach MM] [--bone-gap-joints J,J...] [--bone-gap-opens-skin] [--bone-gap-beside-cuts] [--cut-off-tissue-rigid] [--cut-off-tissue-held] [--bone-gap-keeps-cut-faces] [--leg-trunk-cut none|front|all] [--leg-trunk-behind MM] [--no-tissue-bones-held] [--yielding-shell V] [--yielding-hips] [--squeezed F] [--dump PREFIX] [--mesh-only] "
                "[--knee-forward MM] [--trunk-reach MM] [--pelvis-reach MM] [--joint-clearance MM] [--still-beyond MM] [--hold-unmoved-bones] [--no-untangle] [--contact-rounds N] [--no-contact-sides] [--contact-radius MM] [--contact-weight W] [--owner-shell V] [--attachment-angle DEG] [--elbow-attachment-angle DEG] [--untangle-radius MM] [--whole-part-bone-clearance MM] [--whole-part-own-bone-clearance MM]\n"
                "       articulated_pose_bench --figure POSE [options]\n");
   return 2;
@@ -220,6 +220,8 @@ int main(int argc, char** argv) {
       meshOptions.boneGapBesideCuts = true;
       meshOptions.cutOffTissueRigid = true;
     }
+    else if (arg == "--cut-off-tissue-held") meshOptions.cutOffTissueRigid = false;
+    else if (arg == "--bone-gap-keeps-cut-faces") meshOptions.boneGapBesideCuts = false;
     else if (arg == "--bone-gap-joints") {
       meshOptions.boneGapJoints.clear();
       std::stringstream names(value());
