@@ -6,7 +6,10 @@
 // state instead of that pre-processing). Without a pose the grid is shown at
 // rest through an identity transfer mesh (six tets over the foreground's box). The GPU kernel
 // renders by default; --cpu uses the CPU reference and --verify runs both and
-// fails when they disagree beyond the stated tolerance.
+// fails when they disagree beyond the stated tolerance. With --articulated a
+// joint pose is applied to the transfer mesh that resolves the skeleton
+// (deform --articulated's solve, without its checks and the rasterization),
+// and --step shows where any step of the way left it.
 
 #include "app/command_line.h"
 #include "geometry/deform/pipeline.h"
@@ -27,6 +30,7 @@
 #include "geometry/render/rest_transfer_mesh.h"
 #include "geometry/deform/pose/joint_pose.h"
 #include "geometry/deform/prepared_state.h"
+#include "geometry/deform/run/deform_run.h"
 #include "gpu/context.h"
 #include "gpu/kernels/raycast.h"
 
@@ -58,6 +62,9 @@ struct RenderOptions {
   std::string parts;
   std::string prepared;  // voxmorph prepare's rest state, with --pose
   std::string shading = surfaceNormalsName(RaycastShading{}.normals);
+  bool articulated = false;
+  double boneGapMm = ArticulatedMeshOptions{}.boneGapMm;
+  int step = 0;  // with articulated: the step of the way shown (1-based; 0: the posed mesh)
   bool cpu = false;
   bool verify = false;
   bool legend = false;
@@ -103,6 +110,16 @@ void render(const RenderOptions& o) {
     const bool skeletal = !worldPose->joints.empty() || usesBodyParts(*worldPose) || !o.parts.empty();
     if (skeletal) requireOrganTable(organs.has_value(), OrganTableNeed::Bones, o.pose);
     if (skeletal) skeleton::requireBones(*organs, o.organs);
+    if (o.articulated) {
+      if (worldPose->joints.empty()) throw InputError(o.pose, "--articulated poses joints: the pose has no \"joints\"");
+      if (!worldPose->selections.empty() || !worldPose->separations.empty())
+        throw InputError(o.pose, "--articulated poses joints only: the pose's selections and separations have no place there");
+      if (!o.parts.empty()) throw UsageError("--articulated", "cannot be combined with --parts");
+      if (o.step > articulatedStepCount(*worldPose))
+        throw UsageError("--step", std::to_string(o.step) + " is beyond the pose's " + std::to_string(articulatedStepCount(*worldPose)) + " steps");
+    }
+  } else if (o.articulated) {
+    throw UsageError("--articulated", "needs a --pose");
   } else if (!o.parts.empty()) {
     throw UsageError("--parts", "needs a --pose");
   } else if (!o.prepared.empty()) {
@@ -124,6 +141,28 @@ void render(const RenderOptions& o) {
   if (o.pose.empty()) {
     restMesh = boxTransferMesh(grid, o.input);
     posed = restMesh.positions;
+  } else if (o.articulated) {
+    ArticulatedStepsRequest request{grid, *organs};
+    request.pose = poseInGridFrame(*worldPose, grid.geometry(), o.pose);
+    request.gridSource = o.input;
+    request.organsSource = o.organs;
+    request.poseSource = o.pose;
+    request.boneGapMm = o.boneGapMm;
+    std::shared_ptr<PreparedState> prepared;
+    if (!o.prepared.empty()) {
+      prepared = std::make_shared<PreparedState>(PreparedState::read(o.prepared));
+      const std::string note = prepared->check(preparedInputs(o.input, organs, o.organs, "", 1, grid.dims()));
+      if (!note.empty() && !o.quiet) std::fprintf(stderr, "voxmorph: warning: %s\n", note.c_str());
+      request.prepared = prepared.get();
+    }
+    if (!o.quiet) request.warn = [](const std::string& w) { std::fprintf(stderr, "voxmorph: warning: %s\n", w.c_str()); };
+    ArticulatedSteps steps = poseArticulatedSteps(request);
+    const std::size_t shown = o.step > 0 ? std::min<std::size_t>(std::size_t(o.step), steps.steps.size()) : steps.steps.size();
+    if (!o.quiet)
+      std::fprintf(stderr, "articulated: step %zu of %zu, %zu tets inverted in the posed mesh (smallest det J on the way %.4f)\n", shown,
+                   steps.steps.size(), steps.report.invertedTets, steps.report.minRelativeVolume);
+    restMesh = std::move(steps.rest);
+    posed = std::move(steps.steps[shown - 1]);
   } else {
     const Pose pose = poseInGridFrame(*worldPose, grid.geometry(), o.pose);
     // A prepared state (voxmorph prepare) gives the skeleton, cage and
@@ -214,6 +253,19 @@ void addRenderCommand(CLI::App& app) {
   cmd->add_option("--pose", o->pose, "Pose file (JSON, docs/POSES.md): render the grid posed through its transfer mesh (a pose with "
                                      "joints needs --organs)");
   cmd->add_option("--parts", o->parts, "Body-part grid (voxmorph parts) for a joint pose instead of the assignment from the bones");
+  CLI::Option* articulated =
+      cmd->add_flag("--articulated", o->articulated,
+                    "A joint pose on the transfer mesh that resolves the skeleton, as deform --articulated poses it (without its checks; "
+                    "the posed grid is not rasterized)");
+  cmd->add_option("--bone-gap", o->boneGapMm, "With --articulated: the bone-gap cut at the wrists, elbows and hips, as deform --bone-gap, mm")
+      ->capture_default_str()
+      ->check(numberIn(0, 100, "mm"))
+      ->needs(articulated);
+  cmd->add_option("--step", o->step,
+                  "With --articulated: show where step N of the way from rest left the mesh (1 to the pose's steps: the approach's, "
+                  "then the last with the bones on their motions; default the posed mesh)")
+      ->check(integerIn(1, 100000, ""))
+      ->needs(articulated);
   cmd->add_option("--prepared", o->prepared,
                   "With --pose: the rest state saved by voxmorph prepare (.vxprep) instead of building the cage and transfer mesh "
                   "(same image); refused when made from another grid, organ table or --parts, or without this pose's separations");

@@ -53,6 +53,26 @@ void JointsPanel::draw(Viewer& viewer) {
   }
   scrolledTo_ = editor.state().joint;
   ImGui::EndChild();
+  // The joints on the articulated mesh (deform --articulated's solve), and
+  // its steps from rest to the posed mesh.
+  ArticulatedView& articulated = viewer.articulated();
+  if (articulated.running()) {
+    ImGui::Text("Articulated: step %d of %d", articulated.stepsDone(), articulated.stepCount());
+    ImGui::SameLine();
+    if (ImGui::Button("Cancel##articulated")) articulated.cancel();
+  } else if (ImGui::Button("Solve on the articulated mesh")) {
+    viewer.startArticulated();
+  }
+  if (articulated.held()) {
+    if (articulated.shows(editor.pose().joints) || !articulated.shown()) {
+      if (ImGui::Checkbox("Show the articulated steps", &articulated.shown())) viewer.redraw();
+      ImGui::SetNextItemWidth(170);
+      if (articulated.shown() && ImGui::SliderInt("step", &articulated.step(), 1, articulated.steps(), "%d", ImGuiSliderFlags_AlwaysClamp))
+        viewer.redraw();
+    } else {
+      ImGui::TextWrapped("The joints changed since the articulated solve: solve again to see their steps.");
+    }
+  }
   // What an export of this pose is refused for, while it lasts.
   if (const auto& fault = editor.figures().bonesThroughEachOther) {
     ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0f, 0.35f, 0.3f, 1.0f));

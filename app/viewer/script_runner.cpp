@@ -159,6 +159,21 @@ void ScriptRunner::runStep(const ScriptStep& s, Viewer& viewer) {
       viewer.status(job.message());
       if (job.message().rfind("exported", 0) != 0) throw RuntimeFailure("view: " + job.message());
     }
+  } else if (k == "articulated") {
+    // The solve, waited for: its steps are shown from the next frame.
+    viewer.startArticulated();
+    ArticulatedView& a = viewer.articulated();
+    a.wait();
+    if (!a.collect(viewer.gpuContext(), viewer.grid())) throw RuntimeFailure("view: " + a.message());
+    viewer.status(a.message());
+    viewer.redraw();
+  } else if (k == "articulated_step") {
+    ArticulatedView& a = viewer.articulated();
+    if (!a.held()) throw InputError("script", "articulated_step: no articulated solve to show (an 'articulated' step first)");
+    if (s.count > a.steps()) throw InputError("script", "articulated_step: index " + std::to_string(s.count) + " is beyond the solve's " + std::to_string(a.steps()) + " steps");
+    a.step() = s.count;
+    a.shown() = true;
+    viewer.redraw();
   } else if (k == "cancel_export") {
     viewer.exportJob().cancel();
     viewer.exportJob().wait();

@@ -126,16 +126,20 @@ void Viewer::renderView(bool interactive) {
   const int w = std::max(16, int(viewW * scale)), h = std::max(16, int(viewH * scale));
   if (!view_.valid() || int(view_.width()) != w || int(view_.height()) != h) {
     kernel_->wait();  // the last frame may still write the old image
+    if (articulated_.held()) articulated_.kernel().wait();
     view_ = gpu::Image2D(window_->context(), std::uint32_t(w), std::uint32_t(h));
   }
   const auto t0 = std::chrono::steady_clock::now();
   const CuttingPlanes& cuts = cuts_.planes(editor_->state().cuts);
-  const std::vector<Eigen::Vector3d>& positions = editor_->transferMeshPositions();
-  const RaycastFrame frame = placeRaycastFrame(*mesh_, positions);
+  // The articulated solve's step while it belongs to the joints edited,
+  // else the cage pipeline's frame.
+  const bool articulated = articulated_.shows(editor_->pose().joints);
+  const std::vector<Eigen::Vector3d>& positions = articulated ? articulated_.positions() : editor_->transferMeshPositions();
+  const RaycastFrame frame = placeRaycastFrame(articulated ? articulated_.mesh() : *mesh_, positions);
   const RaycastView view = makeRaycastView(frame, orbit_.camera(w, h), cuts);
   RaycastShading shading;
   shading.normals = panels_->surfaceNormals();
-  kernel_->renderTo(view_, frame, positions, view, palette_, shading);
+  (articulated ? articulated_.kernel() : *kernel_).renderTo(view_, frame, positions, view, palette_, shading);
   frame_.raycastMs = msSince(t0);
   frame_.renderWidth = w;
   frame_.renderHeight = h;
@@ -190,6 +194,16 @@ void Viewer::startExport(const std::string& path, const std::string& report, con
   }
   export_.start(std::move(request), report);
   status("exporting " + path);
+}
+
+void Viewer::startArticulated() {
+  if (!editor_->turnsJoints() || editor_->pose().joints.empty() || !editor_->organs()) {
+    status("the articulated mesh poses joints: open a joint pose with --organs");
+    return;
+  }
+  articulated_.start(grid_, *editor_->organs(), editor_->pose(), options_.grid, options_.organs);
+  articulatedRunning_ = true;
+  status(articulated_.message());
 }
 
 void Viewer::handleKeys() {
@@ -252,6 +266,11 @@ void Viewer::run() {
     const auto tDeform = std::chrono::steady_clock::now();
     const bool moved = editor_->update();
     if (moved) frame_.deformMs = msSince(tDeform);
+    if (articulatedRunning_ && !articulated_.running()) {
+      articulatedRunning_ = false;
+      if (articulated_.collect(window_->context(), grid_)) viewDirty_ = true;
+      status(articulated_.message());
+    }
     const bool dragging = gizmo_->drag() != DragKind::None;
     if (!(editor_->state() == lastState)) {
       lastState = editor_->state();

@@ -5,6 +5,7 @@
 // runner) and runs the frame loop. The panels and the script act through
 // its public members.
 
+#include "app/viewer/articulated_view.h"
 #include "app/viewer/cut_controls.h"
 #include "app/viewer/export_job.h"
 #include "app/viewer/gizmo.h"
@@ -54,9 +55,11 @@ public:
   OrbitCamera& orbit() { return orbit_; }
   const Gizmo& gizmo() const { return *gizmo_; }
   ExportJob& exportJob() { return export_; }
+  ArticulatedView& articulated() { return articulated_; }
   const FrameTimes& frameTimes() const { return frame_; }
   const std::string& statusText() const { return status_; }
   void framebufferSize(int& width, int& height) const { window_->framebufferSize(width, height); }
+  gpu::Context& gpuContext() { return window_->context(); }
   // The rays of the view area as the window is now.
   CameraRays viewRays() const;
 
@@ -76,6 +79,10 @@ public:
   void startExport(const std::string& path, const std::string& report, const std::string& png, bool preserveVolumes);
   void status(const std::string& message);
   void quit() { quit_ = true; }
+  // Solves the joints being edited on the articulated transfer mesh in the
+  // background (a running solve is cancelled); its steps are shown once it
+  // ends. Without turned joints only the status is set.
+  void startArticulated();
 
 private:
   void buildScene();
@@ -106,6 +113,10 @@ private:
   FrameTimes frame_;
   std::unique_ptr<std::ofstream> frameLog_;
   ExportJob export_;
+  // Last, so that its solve stops and its kernel goes before the grid, the
+  // editor and the window.
+  ArticulatedView articulated_;
+  bool articulatedRunning_ = false;
   bool quit_ = false;
   int frameCount_ = 0;
 };

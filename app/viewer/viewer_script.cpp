@@ -19,7 +19,8 @@ using nlohmann::json;
 const std::set<std::string> kSteps = {"mouse_move", "mouse_down", "mouse_up", "scroll",      "key",       "select_group", "pick_rect",
                                       "pick_clear", "fix",        "move",     "gizmo_rotate", "gizmo_translate", "toggle", "cut", "cut_drag",
                                       "hide",       "arap",       "undo",     "redo",        "save_pose", "load_pose",    "export",       "cancel_export",
-                                      "screenshot", "camera",     "wait",     "quit",        "select_joint", "set_joint"};
+                                      "screenshot", "camera",     "wait",     "quit",        "select_joint", "set_joint",
+                                      "articulated", "articulated_step"};
 const std::set<std::string> kGizmoAxes = {"x", "y", "z", "flexion", "abduction", "lateral_flexion", "rotation"};
 
 struct Reader {
@@ -65,7 +66,7 @@ struct Reader {
       } else if (key == "rect" || key == "center") s.numbers = numbers(v, k);
       else if (key == "degrees" || key == "mm" || key == "dy" || key == "azimuth" || key == "iterations") s.value = number(v, k);
       else if (key == "elevation") s.numbers = {number(v, k)};
-      else if (key == "count") s.count = int(number(v, k));
+      else if (key == "count" || key == "index") s.count = int(number(v, k));
       else if (key == "button") s.button = int(number(v, k));
       else if (key == "steps") s.substeps = int(number(v, k));
       else if (key == "add" || key == "ctrl" || key == "window" || key == "preserve_volumes" || key == "on") {
@@ -83,6 +84,7 @@ struct Reader {
     if (s.count < 0 || s.substeps < 1 || s.substeps > 10000) fail(what + ": 'count' or 'steps' out of range");
     if ((s.step == "mouse_move" || s.step == "mouse_down" || s.step == "mouse_up") && s.numbers.size() != 2 && s.step == "mouse_move")
       fail(what + " needs 'x' and 'y'");
+    if (s.step == "articulated_step" && (!j.contains("index") || s.count < 1)) fail(what + ": articulated_step needs 'index', the step shown (1 or more)");
     if (s.step == "pick_rect" && s.numbers.size() != 4) fail(what + " needs 'rect': [x0, y0, x1, y1]");
     if ((s.step == "screenshot" || s.step == "save_pose" || s.step == "load_pose" || s.step == "export") && s.path.empty())
       fail(what + " needs a 'path'");

@@ -29,6 +29,8 @@
 //   {"step": "select_joint", "joint": "right_shoulder"}     the Joints panel's click: the gizmo's target
 //   {"step": "set_joint", "joint": "right_shoulder", "dof": "abduction", "degrees": 60}   its slider
 //   {"step": "gizmo_rotate", "axis": "abduction", "degrees": 15}   the selected joint's ring
+//   {"step": "articulated"}                 the Joints panel's "Solve on the articulated mesh", waited for
+//   {"step": "articulated_step", "index": 3}   its step slider (1 to the solve's steps; the last: the posed mesh)
 // A joint or degree of freedom that does not exist, or an angle outside the
 // joint's range, is an error naming the joint when the script is read. An
 // export waits for its end unless "background": true; cancel_export cancels

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 
 namespace vox {
 namespace {
@@ -107,6 +108,59 @@ TEST(RenderCommand, AGridWithoutForegroundIsRefused) {
   EXPECT_EQ(r.exitCode, 1);
   EXPECT_NE(r.err.find("empty.mha: has no foreground voxels"), std::string::npos) << r.err;
   EXPECT_EQ(test::listFiles(dir), "empty.mha\n");
+}
+
+// --articulated: the joint pose on the transfer mesh that resolves the
+// skeleton, ray-cast without rasterizing. The skeleton figure's elbow bent
+// 90 degrees shows the silhouette of the grid `deform --articulated` writes
+// (4 pixels of 4,147 differ on the figure: grazing rays); the first of its
+// steps shows the forearm hardly turned; a step beyond the pose's and
+// options without their pose are refused with one line, no image.
+TEST(RenderCommand, ArticulatedPoseShowsTheDeformedGridAndItsSteps) {
+  VOX_REQUIRE_VOXMORPH();
+  const std::string dir = test::tempDir();
+  const std::string grid = dir + "/skeleton.nii.gz", organs = dir + "/skeleton.dat", pose = dir + "/elbow.json";
+  auto r = test::runCommand(voxmorph("synth skeleton --size 96 -o " + test::quote(grid) + " --organs " + test::quote(organs)));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  std::ofstream(pose) << R"({"joints": {"right_elbow": {"flexion": 90}}})";
+  r = test::runCommand(voxmorph("deform " + test::quote(grid) + " --organs " + test::quote(organs) + " --pose " + test::quote(pose) +
+                                " --articulated --cpu -q -o " + test::quote(dir + "/posed.nii.gz")));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const std::string view = " --cpu --size 160x200 --camera eye=57,-500,96,target=57,28,96,up=0,0,1,fov=30 --organs " + test::quote(organs);
+  ASSERT_EQ(test::runCommand(voxmorph("render " + test::quote(dir + "/posed.nii.gz") + view + " -q -o " + test::quote(dir + "/grid.png"))).exitCode, 0);
+  const std::string articulated = "render " + test::quote(grid) + view + " --pose " + test::quote(pose) + " --articulated";
+  r = test::runCommand(voxmorph(articulated + " -o " + test::quote(dir + "/mesh.png")));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NE(r.err.find("articulated: step 17 of 17, 0 tets inverted"), std::string::npos) << r.err;
+  r = test::runCommand(voxmorph(articulated + " --step 1 -q -o " + test::quote(dir + "/step1.png")));
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const RgbImage posed = readPng(dir + "/grid.png"), mesh = readPng(dir + "/mesh.png"), first = readPng(dir + "/step1.png");
+  const auto silhouetteDiffers = [](const RgbImage& a, const RgbImage& b) {
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < a.pixels.size(); ++i) n += (a.pixels[i] == kBackground) != (b.pixels[i] == kBackground);
+    return n;
+  };
+  const std::size_t body = countNotBackground(posed, kBackground);
+  EXPECT_GT(body, 3000u);
+  EXPECT_LE(silhouetteDiffers(posed, mesh), body / 100);
+  EXPECT_GT(silhouetteDiffers(first, mesh), 100u);
+
+  const std::string out = " -o " + test::quote(dir + "/bad.png");
+  const std::string selections = dir + "/selections.json";
+  std::ofstream(selections) << R"({"selections": [{"name": "a", "box": {"min": [0, 0, 0], "max": [50, 50, 50]}, "fixed": true}]})";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {articulated + " --step 18" + out, "--step: 18 is beyond the pose's 17 steps"},
+      {"render " + test::quote(grid) + view + " --articulated" + out, "--articulated: needs a --pose"},
+      {"render " + test::quote(grid) + view + " --step 2" + out, "--step"},
+      {"render " + test::quote(grid) + view + " --pose " + test::quote(selections) + " --articulated" + out, "poses joints"},
+  };
+  for (const auto& [args, message] : cases) {
+    r = test::runCommand(voxmorph(args));
+    EXPECT_NE(r.exitCode, 0) << args;
+    EXPECT_NE(r.err.find(message), std::string::npos) << args << "\n" << r.err;
+    EXPECT_EQ(r.err.find("voxmorph: error: "), r.err.rfind("voxmorph: error: ")) << "one error line: " << r.err;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir + "/bad.png"));
 }
 
 }  // namespace

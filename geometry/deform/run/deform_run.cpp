@@ -378,6 +378,29 @@ PosedMesh poseByCage(const DeformGridRequest& o, const Source& source, RasterEng
   return out;
 }
 
+// The articulated transfer mesh of `grid` with `options`: the prepared
+// state's when it holds one, else built (with a warning when the state
+// holds none).
+ArticulatedMesh articulatedMeshOf(const LabelGrid& grid, const OrganTable& organs, const skeleton::Skeleton& sk,
+                                  const ArticulatedMeshOptions& options, const PreparedState* prepared,
+                                  const std::function<void(const std::string&)>& warn) {
+  const PreparedArticulatedMesh* stored = prepared ? prepared->findArticulatedMesh(articulatedMeshOptionsKey(options)) : nullptr;
+  if (prepared && !stored && warn)
+    warn(prepared->source + ": holds no articulated transfer mesh (voxmorph prepare --articulated adds it); building it");
+  return stored ? stored->mesh : buildArticulatedMesh(grid, organs, sk, options);
+}
+
+// The posing of a joint pose on `mesh`: its steps, the limb cuts' sides for
+// the contact, the pelvis' bones left to the tissue.
+ArticulatedPoseOptions articulatedPoseOptionsFor(const Pose& pose, const ArticulatedMesh& mesh, const LabelGrid& grid, const OrganTable& organs,
+                                                 const skeleton::Skeleton& sk, const ArticulatedMeshOptions& meshOptions) {
+  ArticulatedPoseOptions options;
+  options.steps = articulatedPoseSteps(pose.joints, options);
+  options.contact.side = limbGroupSides(mesh, sk);
+  options.tissueBoneParts = tissueBoneParts(mesh, grid, organs, sk, meshOptions);
+  return options;
+}
+
 // The joint pose on the transfer mesh that resolves the skeleton.
 PosedMesh poseArticulated(const DeformGridRequest& o, const Source& source, DeformationReport& report, const PreparedState* prepared) {
   PosedMesh out;
@@ -392,18 +415,11 @@ PosedMesh poseArticulated(const DeformGridRequest& o, const Source& source, Defo
   StageTimer meshTimer("articulated transfer mesh");
   ArticulatedMeshOptions meshOptions;
   meshOptions.boneGapMm = o.boneGapMm;
-  const PreparedArticulatedMesh* stored = prepared ? prepared->findArticulatedMesh(articulatedMeshOptionsKey(meshOptions)) : nullptr;
-  if (prepared && !stored)
-    warn(o, prepared->source + ": holds no articulated transfer mesh (voxmorph prepare --articulated adds it); building it");
-  ArticulatedMesh mesh = stored ? stored->mesh : buildArticulatedMesh(grid, *o.organs, sk, meshOptions);
+  ArticulatedMesh mesh = articulatedMeshOf(grid, *o.organs, sk, meshOptions, prepared, [&](const std::string& w) { warn(o, w); });
   const std::vector<Eigen::Isometry3d> motions = segmentMotions(partMotions, sk, mesh);
   report.stages.push_back(meshTimer.stop());
   StageTimer poseTimer("articulated pose");
-  ArticulatedPoseOptions poseOptions;
-  poseOptions.steps = articulatedPoseSteps(o.pose.joints, poseOptions);
-  poseOptions.contact.side = limbGroupSides(mesh, sk);
-  poseOptions.tissueBoneParts = tissueBoneParts(mesh, grid, *o.organs, sk, meshOptions);
-  ArticulatedPoser poser(mesh, poseOptions);
+  ArticulatedPoser poser(mesh, articulatedPoseOptionsFor(o.pose, mesh, grid, *o.organs, sk, meshOptions));
   const ArticulatedPoseReport r = poser.pose(jointMotionPath(sk, joints, o.pose.joints, mesh));
   report.stages.push_back(poseTimer.stop());
   DeformationReport::Articulated a;
@@ -654,5 +670,27 @@ DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines)
   output->commit();
   return report;
 }
+
+ArticulatedSteps poseArticulatedSteps(const ArticulatedStepsRequest& o) {
+  const skeleton::Skeleton sk = o.prepared && o.prepared->skeleton
+                                    ? *o.prepared->skeleton
+                                    : skeleton::buildSkeleton(o.grid, o.organs, {o.gridSource, o.organsSource, ""});
+  const std::vector<skeleton::Joint> joints = skeleton::posedJoints(sk, o.pose.joints, o.poseSource);
+  ArticulatedMeshOptions meshOptions;
+  meshOptions.boneGapMm = o.boneGapMm;
+  ArticulatedMesh mesh = articulatedMeshOf(o.grid, o.organs, sk, meshOptions, o.prepared, o.warn);
+  ArticulatedPoseOptions poseOptions = articulatedPoseOptionsFor(o.pose, mesh, o.grid, o.organs, sk, meshOptions);
+  ArticulatedSteps out;
+  poseOptions.onStep = [&](int, std::span<const Eigen::Vector3d> positions) {
+    out.steps.emplace_back(positions.begin(), positions.end());
+    if (o.onStep) o.onStep(int(out.steps.size()));
+  };
+  ArticulatedPoser poser(mesh, poseOptions);
+  out.report = poser.pose(jointMotionPath(sk, joints, o.pose.joints, mesh));
+  out.rest = std::move(mesh.mesh);
+  return out;
+}
+
+int articulatedStepCount(const Pose& pose) { return articulatedPoseSteps(pose.joints, ArticulatedPoseOptions{}) + 1; }
 
 }  // namespace vox

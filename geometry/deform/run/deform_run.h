@@ -17,6 +17,7 @@
 // rasterized from source windows under the budget.
 
 #include "geometry/deform/articulated_mesh.h"
+#include "geometry/deform/articulated_pose.h"
 #include "geometry/deform/solve/adaptive_refinement.h"
 #include "geometry/deform/report/deformation_report.h"
 #include "geometry/deform/pose/joint_pose.h"
@@ -143,5 +144,35 @@ DeformationReport deformGrid(const DeformGridRequest& request, RasterEngines& en
 PipelineOptions deformPipelineOptions(const DeformGridRequest& request, const LabelGrid& working, int factor,
                                       const PreparedState* prepared = nullptr,
                                       std::optional<std::string>* bonesFault = nullptr);
+
+// A joint pose on the articulated transfer mesh, every step of the way kept:
+// what deformGrid runs with `articulated` before its checks, the collisions
+// and the rasterization, for a caller that shows the posed mesh rather than
+// writing a grid (`voxmorph render --articulated`). Nothing is refused here:
+// the report tells what the steps did.
+struct ArticulatedStepsRequest {
+  const LabelGrid& grid;
+  const OrganTable& organs;
+  Pose pose;  // in the grid frame, joints only
+  std::string gridSource = "grid", organsSource = "organ table", poseSource = "pose";
+  double boneGapMm = ArticulatedMeshOptions{}.boneGapMm;
+  const PreparedState* prepared = nullptr;  // its skeleton and articulated mesh, when it holds them
+  std::function<void(const std::string&)> warn;
+  std::function<void(int step)> onStep;  // after each step (1-based), on the solving thread
+};
+
+struct ArticulatedSteps {
+  TetMesh rest;  // the articulated transfer mesh at rest (grid frame)
+  // Where each step left every vertex (ArticulatedPoseOptions::onStep): the
+  // approach's steps, then the last one with the bones on their motions,
+  // untangled and in contact; the last is the posed mesh deformGrid rasterizes.
+  std::vector<std::vector<Eigen::Vector3d>> steps;
+  ArticulatedPoseReport report;
+};
+
+ArticulatedSteps poseArticulatedSteps(const ArticulatedStepsRequest& request);
+
+// The steps poseArticulatedSteps gives `pose` (the approach's and the last).
+int articulatedStepCount(const Pose& pose);
 
 }  // namespace vox
