@@ -119,6 +119,7 @@ printf '{"joints": {"left_hip": {"flexion": 45}, "left_knee": {"flexion": 60}}, 
 "$bin" synth skeleton --size 20 -o "$tmp/sk20.nii" --organs "$tmp/sk20.dat" >/dev/null
 "$bin" parts "$tmp/sk20.nii" --organs "$tmp/sk20.dat" -o "$out/parts/other_dims.nii" -q
 cp ../app/data/viewer_session.json "$out/viewer_script/session.json"
+cp ../app/data/viewer_articulated_session.json "$out/viewer_script/articulated_session.json"
 # Prepared states (fuzz_prepared): the stick figure without a skeleton, the
 # skeleton figure with its skeleton and a separated arm, and one with the
 # articulated transfer mesh.
