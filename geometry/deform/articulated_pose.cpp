@@ -527,34 +527,54 @@ void ArticulatedPoser::resolveContacts(std::span<const Eigen::Isometry3d> motion
   for (int round = 0; round <= options_.contactRounds; ++round) {
     throwIfCancelled();
     const std::vector<Penetration> found = findPenetrations(m.positions, m.tets, positions_, candidate, penetrable, options_.contact);
+    // The report counts the vertices through the tissue across; a face's
+    // centroid there (ContactOptions::faceCentroids) moves its vertices.
+    std::size_t vertices = 0;
     double deepest = 0.0;
-    for (const Penetration& p : found) deepest = std::max(deepest, p.depth);
+    for (const Penetration& p : found)
+      if (p.vertex >= 0) {
+        ++vertices;
+        deepest = std::max(deepest, p.depth);
+      }
     if (round == 0) {
-      report.penetratingBeforeContact = found.size();
+      report.penetratingBeforeContact = vertices;
       report.deepestPenetrationBeforeMm = deepest;
     }
-    report.penetratingAfterContact = found.size();
+    report.penetratingAfterContact = vertices;
     report.deepestPenetrationAfterMm = deepest;
     if (found.empty() || round == options_.contactRounds) break;
     for (auto& [v, target] : held) target = positions_[std::size_t(v)];
     std::vector<double> dist(nv, std::numeric_limits<double>::infinity());
-    for (const Penetration& p : found) dist[std::size_t(p.vertex)] = 0.0;
+    for (const Penetration& p : found)
+      for (const std::int32_t u : p.vertex >= 0 ? std::array<std::int32_t, 3>{p.vertex, -1, -1} : p.of)
+        if (u >= 0) dist[std::size_t(u)] = 0.0;
     for (const auto& h : held) dist[std::size_t(h.first)] = 0.0;
     edgeDistances(edges_, dist);
+    // Per vertex this round: the depth of what moves it (its own
+    // penetration before any face's, else the deepest face's).
+    std::vector<double> moveDepth(nv, -1.0);
     for (const Penetration& p : found) {
       // Halfway where the crossed boundary moves too: its own vertices,
       // inside this side, are drawn back the other half.
       bool across = true;
       for (const std::int32_t u : p.face) across = across && movable[std::size_t(u)] && dist[std::size_t(u)] <= options_.contactRadiusMm;
-      const Eigen::Vector3d& x = positions_[std::size_t(p.vertex)];
-      const Eigen::Vector3d out = (p.surface - x) / p.depth;
-      const Eigen::Vector3d target = x + ((across ? 0.5 : 1.0) * p.depth + options_.contactMarginMm) * out;
-      std::int32_t& k = heldIndex[std::size_t(p.vertex)];
-      if (k < 0) {
-        k = std::int32_t(held.size());
-        held.emplace_back(p.vertex, target);
-      } else {
-        held[std::size_t(k)].second = target;
+      const Eigen::Vector3d x = p.vertex >= 0 ? positions_[std::size_t(p.vertex)]
+                                              : (positions_[std::size_t(p.of[0])] + positions_[std::size_t(p.of[1])] + positions_[std::size_t(p.of[2])]) / 3.0;
+      const Eigen::Vector3d shift = ((across ? 0.5 : 1.0) * p.depth + options_.contactMarginMm) * (p.surface - x) / p.depth;
+      for (const std::int32_t u : p.vertex >= 0 ? std::array<std::int32_t, 3>{p.vertex, -1, -1} : p.of) {
+        if (u < 0) continue;
+        double& depth = moveDepth[std::size_t(u)];
+        const double own = p.vertex >= 0 ? std::numeric_limits<double>::infinity() : p.depth;
+        if (depth >= own) continue;
+        depth = own;
+        const Eigen::Vector3d target = positions_[std::size_t(u)] + shift;
+        std::int32_t& k = heldIndex[std::size_t(u)];
+        if (k < 0) {
+          k = std::int32_t(held.size());
+          held.emplace_back(u, target);
+        } else {
+          held[std::size_t(k)].second = target;
+        }
       }
     }
     std::vector<std::uint8_t> free;

@@ -100,7 +100,14 @@ struct ArticulatedPoseOptions {
   double contactRadiusMm = 20.0;
   double contactWeight = 1000.0;
   double contactMarginMm = 1.0;
-  ContactOptions contact;
+  // The boundary faces' centroids are probed too (ContactOptions::
+  // faceCentroids; a face found moves its three vertices): where the two
+  // sides' surfaces cross between their vertices (the seated groin).
+  ContactOptions contact = [] {
+    ContactOptions c;
+    c.faceCentroids = true;
+    return c;
+  }();
   // Called after each step of the approach (1-based) and after the last,
   // hard step (steps + 1) with every vertex of the mesh where that step left
   // it: what a viewer shows of the way, or a benchmark inspects.

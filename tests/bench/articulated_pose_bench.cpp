@@ -26,7 +26,8 @@
 // --still-beyond MM (tissue this far from every moved bone held at rest;
 // 0: none; default the pose's), --hold-unmoved-bones (the unmoved parts'
 // bones held at rest in the steps, not soft targets), --no-untangle (no
-// untangling after the last step), --contact-rounds N, --no-contact-sides
+// untangling after the last step), --contact-rounds N, --no-contact-faces
+// (the contact by the boundary's vertices alone, not its faces' centroids), --no-contact-sides
 // (the contact by rest distance alone, not across the limb cuts' sides), --contact-radius
 // MM, --contact-weight W (the contact after it; 0 rounds: none),
 // --owner-shell V (ownerShellVoxels), --wrist-bodies (a sphere body at each wrist),
@@ -77,7 +78,7 @@ int usage() {
   std::fprintf(stderr,
                "usage: articulated_pose_bench GRID ORGANS POSE [--steps N] [--bone-weight W] [--sliding-weight W] [--max-iterations N] "
                "[--volume-weight L] [--direct-limit N] [--scapulae] [--wrist-bodies] [--bone-gap MM] [--bone-gap-reach MM] [--bone-gap-joints J,J...] [--bone-gap-opens-skin] [--bone-gap-beside-cuts] [--cut-off-tissue-rigid] [--cut-off-tissue-held] [--bone-gap-keeps-cut-faces] [--leg-trunk-cut none|front|all] [--leg-trunk-behind MM] [--no-tissue-bones-held] [--yielding-shell V] [--yielding-hips] [--squeezed F] [--dump PREFIX] [--mesh-only] "
-               "[--knee-forward MM] [--trunk-reach MM] [--pelvis-reach MM] [--joint-clearance MM] [--still-beyond MM] [--hold-unmoved-bones] [--no-untangle] [--contact-rounds N] [--no-contact-sides] [--contact-radius MM] [--contact-weight W] [--owner-shell V] [--attachment-angle DEG] [--elbow-attachment-angle DEG] [--untangle-radius MM] [--whole-part-bone-clearance MM] [--whole-part-own-bone-clearance MM]\n"
+               "[--knee-forward MM] [--trunk-reach MM] [--pelvis-reach MM] [--joint-clearance MM] [--still-beyond MM] [--hold-unmoved-bones] [--no-untangle] [--contact-rounds N] [--no-contact-faces] [--no-contact-sides] [--contact-radius MM] [--contact-weight W] [--owner-shell V] [--attachment-angle DEG] [--elbow-attachment-angle DEG] [--untangle-radius MM] [--whole-part-bone-clearance MM] [--whole-part-own-bone-clearance MM]\n"
                "       articulated_pose_bench --figure POSE [options]\n");
   return 2;
 }
@@ -244,6 +245,7 @@ int main(int argc, char** argv) {
     else if (arg == "--hold-unmoved-bones") poseOptions.holdUnmovedBones = true;
     else if (arg == "--no-untangle") poseOptions.untangleRadiiMm.clear();
     else if (arg == "--contact-rounds") poseOptions.contactRounds = std::stoi(value());
+    else if (arg == "--no-contact-faces") poseOptions.contact.faceCentroids = false;
     else if (arg == "--no-contact-sides") noContactSides = true;
     else if (arg == "--contact-radius") poseOptions.contactRadiusMm = std::stod(value());
     else if (arg == "--contact-weight") poseOptions.contactWeight = std::stod(value());

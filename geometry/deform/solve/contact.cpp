@@ -85,9 +85,23 @@ std::vector<Penetration> findPenetrations(std::span<const Eigen::Vector3d> rest,
       if (penetrable[t]) faces.push_back({f[0], f[1], f[2]});
     }
   }
-  std::vector<std::int32_t> queries;
+  // Queries: the candidate boundary vertices, then (faceCentroids) the
+  // centroids of the boundary faces of three candidates.
+  struct Query {
+    Eigen::Vector3d p;
+    std::array<std::int32_t, 3> of;  // the vertex (then -1, -1), or the face's vertices
+  };
+  std::vector<Query> queries;
   for (std::size_t v = 0; v < nv; ++v)
-    if (candidate[v] && onBoundary[v]) queries.push_back(std::int32_t(v));
+    if (candidate[v] && onBoundary[v]) queries.push_back({positions[v], {std::int32_t(v), -1, -1}});
+  if (options.faceCentroids)
+    for (std::size_t t = 0; t < tets.size(); ++t)
+      for (int k = 0; k < 4; ++k) {
+        if (neighbours[t][std::size_t(k)] >= 0) continue;
+        const Tri f = tetFace(tets[t], k);
+        if (!candidate[std::size_t(f[0])] || !candidate[std::size_t(f[1])] || !candidate[std::size_t(f[2])]) continue;
+        queries.push_back({(positions[std::size_t(f[0])] + positions[std::size_t(f[1])] + positions[std::size_t(f[2])]) / 3.0, {f[0], f[1], f[2]}});
+      }
   if (queries.empty() || penetrableTets.empty()) return {};
 
   // Cells about the mean edge of the penetrable tets.
@@ -100,9 +114,9 @@ std::vector<Penetration> findPenetrations(std::span<const Eigen::Vector3d> rest,
     }
     edgeSum += (positions[std::size_t(t[1])] - positions[std::size_t(t[0])]).norm();
   }
-  for (const std::int32_t v : queries) {
-    lo = lo.cwiseMin(positions[std::size_t(v)]);
-    hi = hi.cwiseMax(positions[std::size_t(v)]);
+  for (const Query& q : queries) {
+    lo = lo.cwiseMin(q.p);
+    hi = hi.cwiseMax(q.p);
   }
   const double cell = std::max({2.0 * edgeSum / double(penetrableTets.size()), (hi - lo).maxCoeff() / double(1 << 19), 1e-6});
   CellIndex tetCells(cell, lo), faceCells(cell, lo);
@@ -126,15 +140,23 @@ std::vector<Penetration> findPenetrations(std::span<const Eigen::Vector3d> rest,
   };
   std::vector<std::optional<Penetration>> found(queries.size());
   parallelFor(std::int64_t(queries.size()), 0, [&](std::int64_t q) {
-    const std::int32_t v = queries[std::size_t(q)];
-    const Eigen::Vector3d& p = positions[std::size_t(v)];
+    const Query& query = queries[std::size_t(q)];
+    const Eigen::Vector3d& p = query.p;
+    const bool isVertex = query.of[1] < 0;
+    const std::int32_t v = query.of[0];
+    // Apart at rest from u: the vertex, or each of the face's vertices.
+    const auto apartFrom = [&](std::int32_t u) {
+      for (const std::int32_t w : query.of)
+        if (w >= 0 && !apart(w, u)) return false;
+      return true;
+    };
     // A tet it lies in (closed; the first by index), apart from it at rest.
     std::int32_t inside = -1;
     tetCells.forEachIn(p, p, [&](std::int32_t i) {
       if (inside >= 0 && penetrableIndex[std::size_t(i)] >= inside) return;
       const Tet& t = penetrableTets[std::size_t(i)];
       for (const std::int32_t u : t)
-        if (!apart(v, u)) return;
+        if (!apartFrom(u)) return;
       std::array<Eigen::Vector3d, 4> x;
       for (std::size_t c = 0; c < 4; ++c) x[c] = positions[std::size_t(t[c])];
       if (depthInside(p, x) >= -1e-9 * cell) inside = penetrableIndex[std::size_t(i)];
@@ -143,12 +165,13 @@ std::vector<Penetration> findPenetrations(std::span<const Eigen::Vector3d> rest,
     // The nearest boundary face apart from v at rest, in growing boxes.
     double best2 = std::numeric_limits<double>::infinity();
     Penetration pen;
-    pen.vertex = v;
+    pen.vertex = isVertex ? v : -1;
+    if (!isVertex) pen.of = query.of;
     pen.tet = inside;
     for (double r = cell; r <= 2.0 * options.searchMm; r *= 2.0) {
       faceCells.forEachIn(p - Eigen::Vector3d::Constant(r), p + Eigen::Vector3d::Constant(r), [&](std::int32_t i) {
         const auto& f = faces[std::size_t(i)];
-        if (!apart(v, f[0]) || !apart(v, f[1]) || !apart(v, f[2])) return;
+        if (!apartFrom(f[0]) || !apartFrom(f[1]) || !apartFrom(f[2])) return;
         const Eigen::Vector3d s =
             nearestPointOnTriangle(p, positions[std::size_t(f[0])], positions[std::size_t(f[1])], positions[std::size_t(f[2])]);
         const double d2 = (s - p).squaredNorm();

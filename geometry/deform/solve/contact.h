@@ -5,7 +5,8 @@
 // of the knee against the thigh, the front of the thigh against the belly).
 // Each such boundary vertex gets the nearest point of the boundary it
 // crossed, which a solve then uses as its target (the two sides meet on a
-// contact surface instead of overlapping).
+// contact surface instead of overlapping); so can a boundary face's
+// centroid, for surfaces that cross between their vertices.
 //
 // "Apart at rest": every vertex of the tet it lies in is farther than
 // restSeparationMm from it at rest, or on another side (ContactOptions::
@@ -34,10 +35,16 @@ struct ContactOptions {
   // into each other where a crease closes (the back of the thigh against
   // the buttock, the arm against the chest's side).
   std::vector<std::int32_t> side;
+  // Also the centroids of the boundary faces whose three vertices are
+  // candidates: two sides' surfaces that cross between their vertices
+  // (each vertex outside the tissue across) overlap in a lens no vertex
+  // lies in.
+  bool faceCentroids = false;
 };
 
 struct Penetration {
-  std::int32_t vertex = -1;
+  std::int32_t vertex = -1;     // -1: a face's centroid (faceCentroids), the face's vertices in `of`
+  std::array<std::int32_t, 3> of{-1, -1, -1};
   std::int32_t tet = -1;        // a tet it lies in
   Eigen::Vector3d surface = Eigen::Vector3d::Zero();  // the nearest point of the boundary apart from it at rest
   std::array<std::int32_t, 3> face{};  // that point's boundary face
@@ -51,7 +58,8 @@ std::vector<std::array<std::int32_t, 3>> boundaryFaces(std::span<const Tet> tets
 // posed at `positions`, inside a tet t with penetrable[t] that they lay
 // apart from at `rest`; each with the nearest point of a boundary face of
 // a penetrable tet whose three vertices all lay apart from it at rest.
-// Sorted by vertex; deterministic.
+// Sorted by vertex, then the faces' centroids (faceCentroids) in the order
+// of the boundary; deterministic.
 std::vector<Penetration> findPenetrations(std::span<const Eigen::Vector3d> rest, std::span<const Tet> tets,
                                           std::span<const Eigen::Vector3d> positions, std::span<const std::uint8_t> candidate,
                                           std::span<const std::uint8_t> penetrable, const ContactOptions& options = {});

@@ -77,6 +77,58 @@ TEST(Contact, FindsEachSidesVerticesThroughTheOtherAndTheBoundaryTheyCrossed) {
   EXPECT_TRUE(std::is_sorted(found.begin(), found.end(), [](const Penetration& a, const Penetration& c) { return a.vertex < c.vertex; }));
 }
 
+// Two surfaces that cross between their vertices: a wedge (a triangular
+// prism, 40 above at rest) let down so that its lower edge runs 1 below the
+// block's top along y = 2.5, 0.8 wide at the top's height (the top's
+// vertices at y = 2 and 3 outside it), no vertex of either inside the other. The vertices see nothing; the centroids of the
+// block's top faces beside the edge (y = 2 1/3 and 2 2/3) lie inside the
+// wedge (faceCentroids), each with its face's three vertices, as do the
+// wedge's long side faces' inside the block.
+TEST(Contact, FaceCentroidsFindTheLensBetweenTheVertices) {
+  TwoBlocks b;
+  TetMesh mesh;
+  mesh.positions.assign(b.mesh.positions.begin(), b.mesh.positions.begin() + std::ptrdiff_t(b.lowerVertices));
+  mesh.tets.assign(b.mesh.tets.begin(), b.mesh.tets.begin() + std::ptrdiff_t(b.mesh.tets.size() / 2));
+  std::vector<Eigen::Vector3d> posed = mesh.positions;
+  const auto w = std::int32_t(mesh.positions.size());
+  for (const double x : {-1.0, 5.0})
+    for (const Eigen::Vector3d& p : {Eigen::Vector3d(x, 2.5, 3.0), Eigen::Vector3d(x, 1.5, 5.5), Eigen::Vector3d(x, 3.5, 5.5)}) {
+      posed.push_back(p);
+      mesh.positions.push_back(p + Eigen::Vector3d(0, 0, 40));
+    }
+  // The prism (a0 l0 r0, a1 l1 r1) as three tets of positive volume.
+  for (Tet t : {Tet{0, 1, 2, 3}, Tet{1, 2, 3, 4}, Tet{2, 3, 4, 5}}) {
+    for (auto& v : t) v += w;
+    if ((posed[std::size_t(t[1])] - posed[std::size_t(t[0])]).cross(posed[std::size_t(t[2])] - posed[std::size_t(t[0])]).dot(
+            posed[std::size_t(t[3])] - posed[std::size_t(t[0])]) < 0)
+      std::swap(t[2], t[3]);
+    mesh.tets.push_back(t);
+  }
+  const std::vector<std::uint8_t> all(mesh.positions.size(), 1), penetrable(mesh.tets.size(), 1);
+  EXPECT_TRUE(findPenetrations(mesh.positions, mesh.tets, posed, all, penetrable).empty());
+  ContactOptions options;
+  options.faceCentroids = true;
+  const std::vector<Penetration> found = findPenetrations(mesh.positions, mesh.tets, posed, all, penetrable, options);
+  ASSERT_FALSE(found.empty());
+  int blockTop = 0;
+  for (const Penetration& p : found) {
+    EXPECT_EQ(p.vertex, -1);
+    const Eigen::Vector3d c = (posed[std::size_t(p.of[0])] + posed[std::size_t(p.of[1])] + posed[std::size_t(p.of[2])]) / 3.0;
+    const bool block = p.of[0] < w;
+    for (const std::int32_t u : p.of) EXPECT_EQ(u < w, block);
+    for (const std::int32_t u : p.face) EXPECT_NE(u < w, block);  // the other body's boundary
+    EXPECT_GT(p.depth, 0.1);
+    EXPECT_LT(p.depth, 1.0);
+    if (block) {
+      // The block's top faces beside the wedge's edge.
+      EXPECT_NEAR(c.z(), 4.0, 1e-12);
+      EXPECT_NEAR(std::abs(c.y() - 2.5), 1.0 / 6.0, 1e-12);
+      ++blockTop;
+    }
+  }
+  EXPECT_GT(blockTop, 0);
+}
+
 TEST(Contact, TwoSidesOfACutThatTouchAtRestPressedIntoEachOther) {
   // The blocks touch at rest (a cut's two faces, coincident): within the
   // rest separation, so by distance alone nothing is found; as two sides,
