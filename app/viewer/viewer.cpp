@@ -285,7 +285,9 @@ void Viewer::run() {
     lastDragging = dragging;
 
     const auto tUi2 = std::chrono::steady_clock::now();
-    gizmo_->draw(rays, input_, overlays_, *mesh_);
+    // The cage, the envelope, the transfer mesh and the gizmo belong to the
+    // live frame, not to the articulated solve's steps.
+    if (!articulated_.shows(editor_->pose().joints)) gizmo_->draw(rays, input_, overlays_, *mesh_);
     ImGui::Render();
     frame_.uiMs += msSince(tUi2);
 
