@@ -546,7 +546,7 @@ void ArticulatedPoser::resolveContacts(std::span<const Eigen::Isometry3d> motion
     for (auto& [v, target] : held) target = positions_[std::size_t(v)];
     std::vector<double> dist(nv, std::numeric_limits<double>::infinity());
     for (const Penetration& p : found)
-      for (const std::int32_t u : p.vertex >= 0 ? std::array<std::int32_t, 3>{p.vertex, -1, -1} : p.of)
+      for (const std::int32_t u : p.of)
         if (u >= 0) dist[std::size_t(u)] = 0.0;
     for (const auto& h : held) dist[std::size_t(h.first)] = 0.0;
     edgeDistances(edges_, dist);
@@ -558,10 +558,8 @@ void ArticulatedPoser::resolveContacts(std::span<const Eigen::Isometry3d> motion
       // inside this side, are drawn back the other half.
       bool across = true;
       for (const std::int32_t u : p.face) across = across && movable[std::size_t(u)] && dist[std::size_t(u)] <= options_.contactRadiusMm;
-      const Eigen::Vector3d x = p.vertex >= 0 ? positions_[std::size_t(p.vertex)]
-                                              : (positions_[std::size_t(p.of[0])] + positions_[std::size_t(p.of[1])] + positions_[std::size_t(p.of[2])]) / 3.0;
-      const Eigen::Vector3d shift = ((across ? 0.5 : 1.0) * p.depth + options_.contactMarginMm) * (p.surface - x) / p.depth;
-      for (const std::int32_t u : p.vertex >= 0 ? std::array<std::int32_t, 3>{p.vertex, -1, -1} : p.of) {
+      const Eigen::Vector3d shift = ((across ? 0.5 : 1.0) * p.depth + options_.contactMarginMm) * (p.surface - p.at) / p.depth;
+      for (const std::int32_t u : p.of) {
         if (u < 0) continue;
         double& depth = moveDepth[std::size_t(u)];
         const double own = p.vertex >= 0 ? std::numeric_limits<double>::infinity() : p.depth;

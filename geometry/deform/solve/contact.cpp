@@ -166,7 +166,8 @@ std::vector<Penetration> findPenetrations(std::span<const Eigen::Vector3d> rest,
     double best2 = std::numeric_limits<double>::infinity();
     Penetration pen;
     pen.vertex = isVertex ? v : -1;
-    if (!isVertex) pen.of = query.of;
+    pen.of = query.of;
+    pen.at = p;
     pen.tet = inside;
     for (double r = cell; r <= 2.0 * options.searchMm; r *= 2.0) {
       faceCells.forEachIn(p - Eigen::Vector3d::Constant(r), p + Eigen::Vector3d::Constant(r), [&](std::int32_t i) {

@@ -43,8 +43,9 @@ struct ContactOptions {
 };
 
 struct Penetration {
-  std::int32_t vertex = -1;     // -1: a face's centroid (faceCentroids), the face's vertices in `of`
-  std::array<std::int32_t, 3> of{-1, -1, -1};
+  std::int32_t vertex = -1;     // -1: a face's centroid (faceCentroids)
+  std::array<std::int32_t, 3> of{-1, -1, -1};  // the vertices it moves: `vertex` (then -1, -1), or the face's
+  Eigen::Vector3d at = Eigen::Vector3d::Zero();  // where it lies: the vertex, or the face's centroid
   std::int32_t tet = -1;        // a tet it lies in
   Eigen::Vector3d surface = Eigen::Vector3d::Zero();  // the nearest point of the boundary apart from it at rest
   std::array<std::int32_t, 3> face{};  // that point's boundary face
