@@ -20,6 +20,7 @@
 #include "geometry/organ_table.h"
 #include "geometry/skeleton/bones.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -65,7 +66,7 @@ void prepare(const PrepareOptions& o) {
       skeleton::requireBones(*request.organs, o.organs);
     }
   }
-  if (request.articulated) {
+  if (request.articulated || std::any_of(request.poses.begin(), request.poses.end(), [](const Pose& p) { return p.articulated; })) {
     if (!o.run.parts.empty()) throw UsageError("--articulated", "cannot be combined with --parts (deform --articulated takes none)");
     requireOrganTable(request.organs.has_value(), OrganTableNeed::Bones, "--articulated");
     skeleton::requireBones(*request.organs, o.organs);

@@ -110,7 +110,7 @@ void render(const RenderOptions& o) {
     const bool skeletal = !worldPose->joints.empty() || usesBodyParts(*worldPose) || !o.parts.empty();
     if (skeletal) requireOrganTable(organs.has_value(), OrganTableNeed::Bones, o.pose);
     if (skeletal) skeleton::requireBones(*organs, o.organs);
-    if (o.articulated) {
+    if (o.articulated || worldPose->articulated) {
       if (worldPose->joints.empty()) throw InputError(o.pose, "--articulated poses joints: the pose has no \"joints\"");
       if (!worldPose->selections.empty() || !worldPose->separations.empty())
         throw InputError(o.pose, "--articulated poses joints only: the pose's selections and separations have no place there");
@@ -141,7 +141,7 @@ void render(const RenderOptions& o) {
   if (o.pose.empty()) {
     restMesh = boxTransferMesh(grid, o.input);
     posed = restMesh.positions;
-  } else if (o.articulated) {
+  } else if (o.articulated || worldPose->articulated) {
     ArticulatedStepsRequest request{grid, *organs};
     request.pose = poseInGridFrame(*worldPose, grid.geometry(), o.pose);
     request.gridSource = o.input;

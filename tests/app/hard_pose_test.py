@@ -1,9 +1,9 @@
 #!/usr/bin/python3
-"""A hard posture of assets/poses/hard through `voxmorph deform --articulated`, its figures against the bounds and its renders against golden images.
+"""A hard posture of assets/poses (an "articulated": true joint pose) through `voxmorph deform`, its figures against the bounds and its renders against golden images.
 
     tests/app/hard_pose_test.py VOXMORPH SOURCE_DIR WORK_DIR PHANTOM POSE [--update]
 
-PHANTOM is am or af, POSE the stem of assets/poses/hard/PHANTOM_POSE_joints.json
+PHANTOM is am or af, POSE the stem of assets/poses/PHANTOM_POSE_joints.json
 (phone_call, seated, walking_stride). Runs `voxmorph parts` and `voxmorph deform
 --articulated --preserve-volumes --cpu` (no --force: the command's own checks must
 pass), then checks what docs/POSES.md's hard-postures section bounds:
@@ -96,13 +96,13 @@ def main(argv):
 
     grid = os.path.join(src, "assets", f"icrp110_{phantom}.nii.gz")
     organs = os.path.join(src, "assets", f"icrp110_{phantom}_organs.dat")
-    pose_file = os.path.join(src, "assets", "poses", "hard", f"{phantom}_{pose}_joints.json")
+    pose_file = os.path.join(src, "assets", "poses", f"{phantom}_{pose}_joints.json")
     shutil.rmtree(work, ignore_errors=True)
     os.makedirs(work)
     w = lambda name: os.path.join(work, name)  # noqa: E731
 
     run([voxmorph, "parts", grid, "--organs", organs, "-o", w("parts.nii.gz"), "--report", w("parts.json")], w("parts.log"))
-    cmd, env = pinned([voxmorph, "deform", grid, "--organs", organs, "--pose", pose_file, "--articulated",
+    cmd, env = pinned([voxmorph, "deform", grid, "--organs", organs, "--pose", pose_file,
                        "--preserve-volumes", "--cpu", "-o", w("posed.nii.gz"), "--report", w("report.json")])
     run(cmd, w("deform.log"), env)
     py = sys.executable

@@ -327,6 +327,30 @@ TEST(PartsCommand, ArticulatedJointPose) {
   EXPECT_GT(built, 0.0);
   EXPECT_GE(taken, 0.0);
   EXPECT_LT(taken, 0.5 * built);
+  // A pose file that says "articulated": true takes the same way without
+  // the flag, and `prepare --pose` with it stores the articulated mesh.
+  {
+    const std::string marked = writeFile(f.dir + "/marked.json", R"({"articulated": true, "joints": {"right_elbow": {"flexion": 90}}})");
+    const std::string markedOut = f.dir + "/marked.nii.gz", markedState = f.dir + "/marked.vxprep";
+    const auto markedRun = test::runCommand(voxmorph("deform " + test::quote(f.grid) + " --organs " + test::quote(f.organs) + " --pose " +
+                                                     test::quote(marked) + " -o " + test::quote(markedOut) + " --cpu -q --preserve-volumes"));
+    ASSERT_EQ(markedRun.exitCode, 0) << markedRun.err;
+    EXPECT_TRUE(test::readText(markedOut) == test::readText(out));
+    const auto markedPrepare = test::runCommand(voxmorph("prepare " + test::quote(f.grid) + " --organs " + test::quote(f.organs) + " --pose " +
+                                                         test::quote(marked) + " -q -o " + test::quote(markedState)));
+    ASSERT_EQ(markedPrepare.exitCode, 0) << markedPrepare.err;
+    const auto markedFromState = test::runCommand(voxmorph("deform " + test::quote(f.grid) + " --organs " + test::quote(f.organs) + " --pose " +
+                                                           test::quote(marked) + " -o " + test::quote(markedOut) +
+                                                           " --cpu -q --preserve-volumes --prepared " + test::quote(markedState)));
+    ASSERT_EQ(markedFromState.exitCode, 0) << markedFromState.err;
+    EXPECT_EQ(markedFromState.err.find("holds no articulated transfer mesh"), std::string::npos) << markedFromState.err;
+    EXPECT_TRUE(test::readText(markedOut) == test::readText(out));
+    // It has no cage: a cage option is a usage error naming the file.
+    const auto markedCage = test::runCommand(voxmorph("deform " + test::quote(f.grid) + " --organs " + test::quote(f.organs) + " --pose " +
+                                                      test::quote(marked) + " -o " + test::quote(f.dir + "/x.nii.gz") + " --cpu -q --rigid-bones"));
+    EXPECT_EQ(markedCage.exitCode, 2);
+    EXPECT_NE(markedCage.err.find("marked.json (\"articulated\")"), std::string::npos) << markedCage.err;
+  }
   // The bone-gap cut is one of the mesh's options: a state prepared with the
   // default holds no mesh for a run without the cut (built, with a
   // warning; the report counts no cut face); without --articulated the

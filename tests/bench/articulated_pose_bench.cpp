@@ -6,7 +6,7 @@
 // approach, and the inverted tets by nearest joint.
 //
 //   build/release/bench/articulated_pose_bench assets/icrp110_am.nii.gz
-//       assets/icrp110_am_organs.dat assets/poses/hard/am_phone_call_joints.json [options]
+//       assets/icrp110_am_organs.dat assets/poses/am_phone_call_joints.json [options]
 //   build/release/bench/articulated_pose_bench --figure POSE [options]   # the synthetic figure (96)
 //
 // Options: --steps N (pose steps; default the run's, articulatedPoseSteps),

@@ -232,7 +232,7 @@ void BM_FrameUpdatePipeline(benchmark::State& state) {
   static const OrganTable organs = OrganTable::read(std::string(VOX_ASSETS_DIR) + "/icrp110_am_organs.dat");
   if (!pipeline) {
     const LabelGrid grid = readGrid(std::string(VOX_ASSETS_DIR) + "/icrp110_am.nii.gz");
-    const std::string path = std::string(VOX_ASSETS_DIR) + (phone ? "/poses/hard/am_phone_call_joints.json"
+    const std::string path = std::string(VOX_ASSETS_DIR) + (phone ? "/poses/am_phone_call_joints.json"
                                                             : arm ? "/poses/am_right_arm_raised_45.json"
                                                                   : "/poses/am_head_turned_20.json");
     PipelineOptions options;

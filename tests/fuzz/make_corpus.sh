@@ -103,9 +103,9 @@ printf 'OFF\n4 4 6\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2
 cp ../../assets/poses/*.json "$out/pose/"
 printf '{"selections": [{"name": "all", "sphere": {"center": [0, 0, 0], "radius": 5}, "transform": {"rotation": {"axis": [0, 0, 1], "angle_deg": 10, "center": [0, 0, 0]}, "translation": [1, 2, 3]}}]}' > "$out/pose/sphere.json"
 # Joint poses for fuzz_joint_pose (compiled against the skeleton figure):
-# the shipped ones, the hard postures, and the overrides of joint_options,
+# the shipped ones (the hard postures among them), and the overrides of joint_options,
 # a joint centre and an axis.
-cp ../../assets/poses/*_joints.json ../../assets/poses/hard/*_joints.json "$out/joint_pose/"
+cp ../../assets/poses/*_joints.json "$out/joint_pose/"
 # The figure's joints: right_shoulder, right_elbow, right_wrist, right_hip,
 # left_hip, left_knee.
 printf '{"joints": {"right_shoulder": {"flexion": 90, "abduction": 30, "rotation": 20}, "right_elbow": {"flexion": 120}, "right_wrist": {"flexion": 30, "abduction": 10}}}' > "$out/joint_pose/figure_arm.json"

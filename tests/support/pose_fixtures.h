@@ -34,14 +34,19 @@ struct PosedPhantom {
   LabelGrid cpu;         // CPU reference rasterization of the posed grid
 };
 
-// Pose files in assets/poses, sorted by name.
-inline std::vector<std::string> poseFiles() {
+// Pose files in assets/poses, sorted by name: those the cage pipeline poses
+// (poseFiles), those marked "articulated" (the transfer mesh that resolves
+// the skeleton poses them: articulatedPoseFiles).
+inline std::vector<std::string> assetPoseFiles(bool articulated) {
   std::vector<std::string> names;
   for (const auto& e : std::filesystem::directory_iterator(assetPath("poses")))
-    if (e.path().extension() == ".json") names.push_back(e.path().filename().string());
+    if (e.path().extension() == ".json" && readPose(e.path().string()).articulated == articulated)
+      names.push_back(e.path().filename().string());
   std::sort(names.begin(), names.end());
   return names;
 }
+inline std::vector<std::string> poseFiles() { return assetPoseFiles(false); }
+inline std::vector<std::string> articulatedPoseFiles() { return assetPoseFiles(true); }
 
 inline std::string phantomOfPose(const std::string& pose) {
   return pose.rfind("af_", 0) == 0 ? "icrp110_af" : "icrp110_am";

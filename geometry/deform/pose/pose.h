@@ -30,6 +30,8 @@
 //       "right_elbow": {"flexion": 120} },               "selections" may then be left out
 //     "joint_options": {"zone": "parent",              optional: how joints compile (PoseJointOptions)
 //                       "margin_mm": 50, "groups": "parts"},
+//     "articulated": true,                             optional: pose the joints on the transfer mesh that
+//                                                      resolves the skeleton (no selections or separations)
 //     "separations": [                                 optional: limb separation (cage and TM)
 //       { "groups": ["right_arm", "trunk"],            two label groups (label_groups.h names)
 //         "region": {"min": [x, y, z], "max": [x, y, z]},    optional; the whole grid when absent
@@ -171,6 +173,11 @@ struct Pose {
   // against the grid's skeleton before the pipeline (deform/pose/joint_pose.h).
   std::vector<PoseJoint> joints;
   PoseJointOptions jointOptions;
+  // "articulated": true: a joint pose for the transfer mesh that resolves
+  // the skeleton (deform/articulated_pose.h); `deform`, `render` and
+  // `prepare` pose it there as with --articulated. Joints only: no
+  // selections or separations.
+  bool articulated = false;
 };
 
 // Reading and writing (pose_json.cpp). Throws InputError(source, ...) on

@@ -31,6 +31,7 @@ bool hasJoint(const skeleton::Skeleton* s, int joint) {
 
 bool EditState::operator==(const EditState& o) const {
   if (cuts != o.cuts || hidden != o.hidden || active != o.active || joint != o.joint || pose.arapIterations != o.pose.arapIterations ||
+      pose.articulated != o.pose.articulated ||
       pose.joints != o.pose.joints || !(pose.jointOptions == o.pose.jointOptions) || !sameHandleSets(pose, o.pose))
     return false;
   for (std::size_t k = 0; k < pose.selections.size(); ++k) {
@@ -119,6 +120,7 @@ int PoseEditor::addPickedSelection(const std::string& name, bool fixed) {
   s.fixed = fixed;
   if (!fixed) s.transform.center = centre / double(picked_.size());
   push();
+  state_.pose.articulated = false;  // selections are the cage pipeline's
   state_.pose.selections.push_back(std::move(s));
   const int index = int(state_.pose.selections.size()) - 1;
   if (!fixed) {
@@ -144,6 +146,7 @@ int PoseEditor::addGroupSelection(const std::string& group, bool fixed) {
   for (std::int32_t v : vertices) centre += pipeline_->builtCage().positions[std::size_t(v)];
   if (!fixed) s.transform.center = centre / double(vertices.size());
   push();
+  state_.pose.articulated = false;  // selections are the cage pipeline's
   state_.pose.selections.push_back(std::move(s));
   const int index = int(state_.pose.selections.size()) - 1;
   if (!fixed) {

@@ -37,7 +37,7 @@ public:
       fail(std::string("invalid JSON: ") + e.what());
     }
     requireObject(root, "the pose");
-    allowKeys(root, "the pose", {"name", "frame", "arap_iterations", "selections", "separations", "joints", "joint_options"});
+    allowKeys(root, "the pose", {"name", "frame", "arap_iterations", "selections", "separations", "joints", "joint_options", "articulated"});
     Pose pose;
     if (root.contains("name")) pose.name = text(root["name"], "'name'");
     if (root.contains("frame")) {
@@ -63,6 +63,13 @@ public:
       const json& separations = root["separations"];
       if (!separations.is_array()) fail("'separations' must be an array");
       for (std::size_t k = 0; k < separations.size(); ++k) pose.separations.push_back(separation(separations[k], k));
+    }
+    if (root.contains("articulated")) {
+      if (!root["articulated"].is_boolean()) fail("'articulated' must be true or false");
+      pose.articulated = root["articulated"].get<bool>();
+      if (pose.articulated && pose.joints.empty()) fail("'articulated' poses joints: the pose has no 'joints'");
+      if (pose.articulated && (!pose.selections.empty() || !pose.separations.empty()))
+        fail("'articulated' poses joints only: the pose's selections and separations have no place there");
     }
     return pose;
   }
@@ -294,6 +301,7 @@ std::string poseToJson(const Pose& pose) {
   if (!pose.name.empty()) root["name"] = pose.name;
   if (pose.frame == PoseFrame::Grid) root["frame"] = "grid";
   root["arap_iterations"] = pose.arapIterations;
+  if (pose.articulated) root["articulated"] = true;
   json selections = json::array();
   for (const PoseSelection& s : pose.selections) {
     json j;

@@ -506,13 +506,15 @@ void checkDeformGridRequest(const DeformGridRequest& o) {
   if (!o.pose.separations.empty() || !o.extraSeparations.empty())
     requireOrganTable(o.organs.has_value(), OrganTableNeed::Separation, o.poseSource);
   if (usesLabelGroups(o.pose)) requireOrganTable(o.organs.has_value(), OrganTableNeed::LabelGroup, o.poseSource);
-  if (o.articulated) {
+  if (posesArticulated(o)) {
     if (o.pose.joints.empty()) throw InputError(o.poseSource, "--articulated poses joints: the pose has no \"joints\"");
     if (!o.pose.selections.empty() || !o.pose.separations.empty())
       throw InputError(o.poseSource, "--articulated poses joints only: the pose's selections and separations have no place there");
-    if (o.maxMemoryMb > 0) throw UsageError("--articulated", "cannot be combined with --max-memory");
+    if (o.maxMemoryMb > 0)
+      throw UsageError(o.articulated ? "--articulated" : o.poseSource + " (\"articulated\")", "cannot be combined with --max-memory");
     if (o.cage || !o.posedCage.empty() || !o.extraSeparations.empty() || o.rigidBones || !o.parts.empty())
-      throw UsageError("--articulated", "has no cage: it cannot be combined with --cage, --posed-cage, --separate, --rigid-bones or --parts");
+      throw UsageError(o.articulated ? "--articulated" : o.poseSource + " (\"articulated\")",
+                       "has no cage: it cannot be combined with --cage, --posed-cage, --separate, --rigid-bones or --parts");
   }
   const bool skeletal = !o.pose.joints.empty() || usesBodyParts(o.pose) || !o.parts.empty();
   if (skeletal) {
@@ -555,7 +557,7 @@ DeformationReport deformGrid(const DeformGridRequest& o, RasterEngines& engines)
     if (!note.empty()) warn(o, note);
     report.stages.push_back(preparedTimer.stop());
   }
-  PosedMesh posedMesh = o.articulated ? poseArticulated(o, source, report, prepared.get()) : poseByCage(o, source, engines, report, prepared);
+  PosedMesh posedMesh = posesArticulated(o) ? poseArticulated(o, source, report, prepared.get()) : poseByCage(o, source, engines, report, prepared);
   const TetMesh& rest = posedMesh.rest;
   const std::vector<Eigen::Vector3d>& deformed = posedMesh.deformed;
   LabelGrid& collisionMask = posedMesh.collisionMask;

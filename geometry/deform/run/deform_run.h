@@ -79,6 +79,7 @@ struct DeformGridRequest {
   // bones on their parts' motions, sliding shoulders, hips, elbows and knees,
   // the soft tissue by the injective solve; no cage, no refinement. A pose
   // the solve cannot reach without inverting a tet is refused (unless force).
+  // A pose file's "articulated": true asks for it as well (posesArticulated).
   bool articulated = false;
   // With articulated: the bone-gap cuts (ArticulatedMeshOptions
   // boneGapMm, mm; 0: none). Part of the prepared mesh's key.
@@ -144,6 +145,10 @@ DeformationReport deformGrid(const DeformGridRequest& request, RasterEngines& en
 PipelineOptions deformPipelineOptions(const DeformGridRequest& request, const LabelGrid& working, int factor,
                                       const PreparedState* prepared = nullptr,
                                       std::optional<std::string>* bonesFault = nullptr);
+
+// Whether the run poses on the articulated transfer mesh: --articulated, or
+// the pose file asks for it.
+inline bool posesArticulated(const DeformGridRequest& request) { return request.articulated || request.pose.articulated; }
 
 // A joint pose on the articulated transfer mesh, every step of the way kept:
 // what deformGrid runs with `articulated` before its checks, the collisions

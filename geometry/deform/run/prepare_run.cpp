@@ -8,6 +8,7 @@
 #include "geometry/skeleton/bones.h"
 #include "geometry/skeleton/skeleton.h"
 
+#include <algorithm>
 #include <memory>
 
 namespace vox {
@@ -63,6 +64,7 @@ PrepareResult prepareRestState(const PrepareRequest& o) {
     result.stages.push_back(timer.stop());
   }
   for (std::size_t i = 0; i < poses.size(); ++i) {
+    if (poses[i].articulated) continue;  // no cage: the articulated transfer mesh below
     DeformGridRequest r;
     r.input = o.input;
     r.pose = poses[i];
@@ -92,7 +94,7 @@ PrepareResult prepareRestState(const PrepareRequest& o) {
       result.stages.push_back(std::move(t));
     }
   }
-  if (o.articulated) {
+  if (o.articulated || std::any_of(poses.begin(), poses.end(), [](const Pose& p) { return p.articulated; })) {
     StageTimer timer("articulated transfer mesh");
     if (!state->skeleton) throw InputError("--articulated", "needs an organ table that names the bones the grid holds (or a --parts grid)");
     ArticulatedMeshOptions options;

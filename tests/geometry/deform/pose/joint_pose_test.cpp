@@ -280,5 +280,30 @@ TEST(JointPose, RoundTrip) {
   EXPECT_EQ(again.selections[0].shape, SelectionShape::Sphere);
 }
 
+// "articulated": true marks a joint pose for the transfer mesh that
+// resolves the skeleton; it round-trips, and a pose with selections or
+// separations, or without joints, cannot carry it.
+TEST(JointPose, ArticulatedKey) {
+  const Pose pose = parsePose(R"({"articulated": true, "joints": {"right_elbow": {"flexion": 90}}})", "p.json");
+  EXPECT_TRUE(pose.articulated);
+  EXPECT_TRUE(parsePose(poseToJson(pose), "again.json").articulated);
+  EXPECT_FALSE(parsePose(R"({"joints": {"right_elbow": {"flexion": 90}}})", "p.json").articulated);
+  EXPECT_FALSE(parsePose(R"({"articulated": false, "joints": {"right_elbow": {"flexion": 90}}})", "p.json").articulated);
+  const auto fault = [](const std::string& json) {
+    try {
+      parsePose(json, "p.json");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(fault(R"({"articulated": 1, "joints": {"right_elbow": {"flexion": 90}}})"), "p.json: 'articulated' must be true or false");
+  EXPECT_EQ(fault(R"({"articulated": true, "selections": [{"box": {"min": [0,0,0], "max": [1,1,1]}, "fixed": true}]})"),
+            "p.json: 'articulated' poses joints: the pose has no 'joints'");
+  EXPECT_EQ(fault(R"({"articulated": true, "joints": {"right_elbow": {"flexion": 90}},
+                      "selections": [{"body_parts": ["right_hand"], "fixed": true}]})"),
+            "p.json: 'articulated' poses joints only: the pose's selections and separations have no place there");
+}
+
 }  // namespace
 }  // namespace vox::skeleton

@@ -14,6 +14,7 @@
 #include "geometry/parallel.h"
 #include "geometry/synth.h"
 #include "geometry/voxel_tetrahedralization.h"
+#include "tests/support/pose_fixtures.h"
 #include "tests/support/test_environment.h"
 
 #include <gtest/gtest.h>
@@ -262,7 +263,7 @@ TEST(Collisions, PartsMovedAgainstEachOtherMeetOnAContact) {
 namespace vox::skeleton {
 namespace {
 
-// The hard postures of assets/poses/hard (docs/POSES.md) stay valid pose
+// The hard postures of assets/poses (docs/POSES.md) stay valid pose
 // files that compile against their phantom's skeleton (am_*, af_*), press
 // no bones through each other, and the phone call puts the right hand
 // beside the head by its kinematics: above the shoulder, clear of the head,
@@ -272,18 +273,19 @@ void expectHardPostures(const std::string& phantom) {
   const OrganTable organs = OrganTable::read(test::assetPath("icrp110_" + phantom + "_organs.dat"));
   const Skeleton s = buildSkeleton(grid, organs, {});
   std::vector<std::string> files;
-  for (const auto& e : std::filesystem::directory_iterator(test::assetPath("poses/hard")))
-    if (e.path().extension() == ".json" && e.path().filename().string().rfind(phantom + "_", 0) == 0) files.push_back(e.path().string());
+  for (const std::string& name : test::articulatedPoseFiles())
+    if (name.rfind(phantom + "_", 0) == 0) files.push_back(test::assetPath("poses/" + name));
   ASSERT_GE(files.size(), 2u) << phantom;
   for (const std::string& f : files) {
     const Pose pose = readPose(f);
     EXPECT_FALSE(pose.joints.empty()) << f;
+    EXPECT_TRUE(pose.articulated) << f;
     const Pose compiled = compileJointPose(pose, s, f);
     EXPECT_FALSE(compiled.selections.empty()) << f;
     const auto fault = bonesThroughEachOther(s, posedJoints(s, pose.joints, f), pose.joints, 2.0);
     EXPECT_FALSE(fault) << f << ": " << *fault;
   }
-  const Pose phone = readPose(test::assetPath("poses/hard/" + phantom + "_phone_call_joints.json"));
+  const Pose phone = readPose(test::assetPath("poses/" + phantom + "_phone_call_joints.json"));
   const PartMotions m = partMotions(posedJoints(s, phone.joints, "phone"), phone.joints);
   const GridGeometry& g = grid.geometry();
   std::vector<Eigen::Vector3d> hand, head;
